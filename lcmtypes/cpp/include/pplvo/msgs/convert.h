@@ -1,0 +1,66 @@
+#pragma once
+/// Conversions between LCM messages and library types. The only place where image encodings
+/// are known; every function validates sizes and throws MessageError on inconsistent input.
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include <pplvo_msgs/camera_info_t.hpp>
+#include <pplvo_msgs/depth_map_t.hpp>
+#include <pplvo_msgs/image_t.hpp>
+#include <pplvo_msgs/node_status_t.hpp>
+#include <pplvo_msgs/rgbd_frame_t.hpp>
+
+#include "pplvo/core/camera.h"
+#include "pplvo/core/rgbd_frame.h"
+#include "pplvo/core/stage_timer.h"
+
+namespace pplvo::msgs {
+
+/// A message whose content is inconsistent (sizes disagree, corrupt payload, bad encoding).
+class MessageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+pplvo_msgs::camera_info_t toMsg(const PinholeCamera& camera);
+/// Throws MessageError if the intrinsics are not finite or the size is not positive.
+PinholeCamera fromMsg(const pplvo_msgs::camera_info_t& msg);
+
+/// Encodes an image. Supported: CV_8UC3/CV_8UC1 as RAW_BGR8/RAW_GRAY8/JPEG/PNG, CV_16UC1 as
+/// RAW_U16/ZLIB_U16/PNG_U16, CV_32FC1 as RAW_F32/ZLIB_F32, CV_8UC1 as RAW_U8.
+/// jpeg_quality applies to JPEG, zlib_level (1..9) to the zlib encodings.
+pplvo_msgs::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality = 90,
+                                int zlib_level = 1);
+/// Decodes an image_t into a cv::Mat of the natural type of its encoding (colour JPEG/PNG
+/// decode to CV_8UC3). Throws MessageError when size, dimensions or payload disagree.
+cv::Mat decodeImage(const pplvo_msgs::image_t& msg);
+std::string encodingName(int8_t encoding);
+
+/// Frame message -> library frame (depth in metres; depth units above max_depth_units
+/// count as missing). Throws MessageError on inconsistent messages.
+RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units = 65535);
+/// Library frame -> message. Depth is quantised to 1/depth_scale m.
+pplvo_msgs::rgbd_frame_t toMsg(const RgbdFrame& frame, double depth_scale, int8_t rgb_encoding,
+                               int8_t depth_encoding, const std::string& source = "");
+
+pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& depth, const PinholeCamera& camera,
+                              int64_t utime, int64_t seq, const std::string& stamp, int8_t stage,
+                              bool compress = false);
+DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& msg);
+
+/// Counters every node keeps; published as node_status_t.
+struct NodeCounters {
+  int64_t last_seq = -1;
+  int64_t frames_in = 0;
+  int64_t frames_out = 0;
+  int64_t frames_dropped = 0;
+  int64_t frames_skipped = 0;
+  int64_t errors = 0;
+  std::string last_warning;
+};
+pplvo_msgs::node_status_t toStatusMsg(const std::string& node, const NodeCounters& counters,
+                                      const StageTimings& timings, int64_t utime);
+
+}  // namespace pplvo::msgs

@@ -1,0 +1,59 @@
+#pragma once
+/// What every pplvo process shares: LCM construction, clean shutdown on SIGINT/SIGTERM, a
+/// handle loop with a periodic callback, and a guard that keeps exceptions inside handlers
+/// (in LCM 1.3.1 an exception leaving a handler leaves lcm_handle's mutex locked).
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "pplvo/msgs/convert.h"
+
+namespace pplvo::msgs {
+
+/// Installs SIGINT/SIGTERM handlers that request shutdown (idempotent).
+void installShutdownHandlers();
+bool shutdownRequested();
+void requestShutdown();
+
+/// Opens LCM at `url` (empty: $LCM_DEFAULT_URL or LCM's default). Throws std::runtime_error
+/// naming the URL when LCM cannot be initialised.
+std::unique_ptr<lcm::LCM> openLcm(const std::string& url);
+
+/// Handles messages until shutdown is requested or `done()` returns true, calling `periodic`
+/// about every `period_s` seconds. Returns the number of handled messages.
+int64_t spin(lcm::LCM& lcm, const std::function<bool()>& done,
+             const std::function<void()>& periodic, double period_s = 1.0);
+
+/// Runs `body`; any exception is counted in `counters` (as a skipped frame when it is a
+/// MessageError, as an error otherwise), remembered as the last warning and printed
+/// (rate-limited to the first few and then every 100th). Never throws.
+template <typename Body>
+bool guarded(NodeCounters& counters, const char* node, Body&& body) noexcept {
+  auto report = [&](const char* kind, const char* what) {
+    counters.last_warning = std::string(kind) + ": " + what;
+    const int64_t n = counters.errors + counters.frames_skipped;
+    if (n <= 5 || n % 100 == 0) {
+      std::fprintf(stderr, "[%s] %s (%lld so far)\n", node, counters.last_warning.c_str(),
+                   static_cast<long long>(n));
+    }
+  };
+  try {
+    body();
+    return true;
+  } catch (const MessageError& e) {
+    ++counters.frames_skipped;
+    report("skipped bad message", e.what());
+  } catch (const std::exception& e) {
+    ++counters.errors;
+    report("error", e.what());
+  } catch (...) {
+    ++counters.errors;
+    report("error", "unknown exception");
+  }
+  return false;
+}
+
+}  // namespace pplvo::msgs

@@ -1,0 +1,303 @@
+#include "pplvo/msgs/convert.h"
+
+#include <cmath>
+#include <cstring>
+
+#include <opencv2/imgcodecs.hpp>
+#include <zlib.h>
+
+namespace pplvo::msgs {
+namespace {
+using Img = pplvo_msgs::image_t;
+
+void setData(Img& msg, const uchar* data, size_t n) {
+  msg.data.assign(data, data + n);
+  msg.size = static_cast<int32_t>(msg.data.size());
+}
+
+std::vector<uint8_t> zlibCompress(const cv::Mat& m, int level) {
+  const uLong src_len = static_cast<uLong>(m.total() * m.elemSize());
+  uLongf dst_len = compressBound(src_len);
+  std::vector<uint8_t> out(dst_len);
+  if (compress2(out.data(), &dst_len, m.ptr(), src_len, level) != Z_OK) {
+    throw MessageError("zlib compression failed");
+  }
+  out.resize(dst_len);
+  return out;
+}
+
+void zlibDecompress(const Img& msg, cv::Mat& out) {
+  uLongf dst_len = static_cast<uLongf>(out.total() * out.elemSize());
+  const uLongf expected = dst_len;
+  const int rc = uncompress(out.ptr(), &dst_len, msg.data.data(), static_cast<uLong>(msg.data.size()));
+  if (rc != Z_OK || dst_len != expected) {
+    throw MessageError("corrupt zlib image payload (" + std::to_string(msg.data.size()) +
+                       " bytes, expected " + std::to_string(expected) + " decompressed)");
+  }
+}
+
+int bytesPerPixel(int8_t encoding) {
+  switch (encoding) {
+    case Img::ENCODING_RAW_BGR8: return 3;
+    case Img::ENCODING_RAW_GRAY8: return 1;
+    case Img::ENCODING_RAW_U8: return 1;
+    case Img::ENCODING_RAW_U16: return 2;
+    case Img::ENCODING_RAW_F32: return 4;
+    default: return 0;
+  }
+}
+
+bool isContinuousCopy(const cv::Mat& m) { return m.isContinuous(); }
+
+}  // namespace
+
+std::string encodingName(int8_t e) {
+  switch (e) {
+    case Img::ENCODING_NONE: return "none";
+    case Img::ENCODING_RAW_BGR8: return "raw_bgr8";
+    case Img::ENCODING_RAW_GRAY8: return "raw_gray8";
+    case Img::ENCODING_JPEG: return "jpeg";
+    case Img::ENCODING_PNG: return "png";
+    case Img::ENCODING_RAW_U16: return "raw_u16";
+    case Img::ENCODING_ZLIB_U16: return "zlib_u16";
+    case Img::ENCODING_PNG_U16: return "png_u16";
+    case Img::ENCODING_RAW_F32: return "raw_f32";
+    case Img::ENCODING_ZLIB_F32: return "zlib_f32";
+    case Img::ENCODING_RAW_U8: return "raw_u8";
+    default: return "unknown(" + std::to_string(static_cast<int>(e)) + ")";
+  }
+}
+
+pplvo_msgs::camera_info_t toMsg(const PinholeCamera& c) {
+  pplvo_msgs::camera_info_t m;
+  m.width = c.width;
+  m.height = c.height;
+  m.fx = c.fx;
+  m.fy = c.fy;
+  m.cx = c.cx;
+  m.cy = c.cy;
+  for (int i = 0; i < 5; ++i) m.distortion[i] = c.distortion[i];
+  return m;
+}
+
+PinholeCamera fromMsg(const pplvo_msgs::camera_info_t& m) {
+  PinholeCamera c;
+  c.width = m.width;
+  c.height = m.height;
+  c.fx = m.fx;
+  c.fy = m.fy;
+  c.cx = m.cx;
+  c.cy = m.cy;
+  for (int i = 0; i < 5; ++i) {
+    if (!std::isfinite(m.distortion[i])) throw MessageError("camera distortion is not finite");
+    c.distortion[i] = m.distortion[i];
+  }
+  if (!c.valid()) throw MessageError("camera intrinsics are invalid (size, zero or NaN focal)");
+  return c;
+}
+
+pplvo_msgs::image_t encodeImage(const cv::Mat& image_in, int8_t encoding, int jpeg_quality,
+                                int zlib_level) {
+  Img msg;
+  msg.width = image_in.cols;
+  msg.height = image_in.rows;
+  msg.encoding = encoding;
+  msg.size = 0;
+  if (encoding == Img::ENCODING_NONE) {
+    msg.width = msg.height = 0;
+    return msg;
+  }
+  const cv::Mat image = isContinuousCopy(image_in) ? image_in : image_in.clone();
+  const int type = image.type();
+  auto require = [&](bool ok) {
+    if (!ok) {
+      throw MessageError("cannot encode image of type " + std::to_string(type) + " as " +
+                         encodingName(encoding));
+    }
+  };
+  switch (encoding) {
+    case Img::ENCODING_RAW_BGR8: require(type == CV_8UC3); break;
+    case Img::ENCODING_RAW_GRAY8:
+    case Img::ENCODING_RAW_U8: require(type == CV_8UC1); break;
+    case Img::ENCODING_RAW_U16:
+    case Img::ENCODING_ZLIB_U16:
+    case Img::ENCODING_PNG_U16: require(type == CV_16UC1); break;
+    case Img::ENCODING_RAW_F32:
+    case Img::ENCODING_ZLIB_F32: require(type == CV_32FC1); break;
+    case Img::ENCODING_JPEG:
+    case Img::ENCODING_PNG: require(type == CV_8UC3 || type == CV_8UC1); break;
+    default: throw MessageError("unknown image encoding " + encodingName(encoding));
+  }
+  if (bytesPerPixel(encoding) > 0) {
+    setData(msg, image.ptr(), image.total() * image.elemSize());
+  } else if (encoding == Img::ENCODING_ZLIB_U16 || encoding == Img::ENCODING_ZLIB_F32) {
+    msg.data = zlibCompress(image, zlib_level);
+    msg.size = static_cast<int32_t>(msg.data.size());
+  } else {
+    std::vector<uchar> buf;
+    std::vector<int> params;
+    const char* ext = ".png";
+    if (encoding == Img::ENCODING_JPEG) {
+      ext = ".jpg";
+      params = {cv::IMWRITE_JPEG_QUALITY, jpeg_quality};
+    } else {
+      params = {cv::IMWRITE_PNG_COMPRESSION, 1};
+    }
+    if (!cv::imencode(ext, image, buf, params)) throw MessageError("image encoding failed");
+    msg.data = std::move(buf);
+    msg.size = static_cast<int32_t>(msg.data.size());
+  }
+  return msg;
+}
+
+cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
+  if (msg.size != static_cast<int32_t>(msg.data.size())) {
+    throw MessageError("image size field " + std::to_string(msg.size) + " disagrees with " +
+                       std::to_string(msg.data.size()) + " data bytes");
+  }
+  if (msg.encoding == Img::ENCODING_NONE) return cv::Mat();
+  if (msg.width <= 0 || msg.height <= 0 || msg.width > 16384 || msg.height > 16384) {
+    throw MessageError("image dimensions " + std::to_string(msg.width) + "x" +
+                       std::to_string(msg.height) + " are invalid");
+  }
+  const int bpp = bytesPerPixel(msg.encoding);
+  if (bpp > 0) {
+    const size_t expected = static_cast<size_t>(msg.width) * msg.height * bpp;
+    if (msg.data.size() != expected) {
+      throw MessageError(encodingName(msg.encoding) + " image " + std::to_string(msg.width) + "x" +
+                         std::to_string(msg.height) + " needs " + std::to_string(expected) +
+                         " bytes, got " + std::to_string(msg.data.size()));
+    }
+    int type = CV_8UC1;
+    if (msg.encoding == Img::ENCODING_RAW_BGR8) type = CV_8UC3;
+    if (msg.encoding == Img::ENCODING_RAW_U16) type = CV_16UC1;
+    if (msg.encoding == Img::ENCODING_RAW_F32) type = CV_32FC1;
+    cv::Mat out(msg.height, msg.width, type);
+    std::memcpy(out.ptr(), msg.data.data(), expected);
+    return out;
+  }
+  if (msg.encoding == Img::ENCODING_ZLIB_U16 || msg.encoding == Img::ENCODING_ZLIB_F32) {
+    cv::Mat out(msg.height, msg.width, msg.encoding == Img::ENCODING_ZLIB_U16 ? CV_16UC1 : CV_32FC1);
+    zlibDecompress(msg, out);
+    return out;
+  }
+  int flags = 0;
+  switch (msg.encoding) {
+    case Img::ENCODING_JPEG:
+    case Img::ENCODING_PNG: flags = cv::IMREAD_COLOR; break;
+    case Img::ENCODING_PNG_U16: flags = cv::IMREAD_ANYDEPTH; break;
+    default: throw MessageError("unknown image encoding " + encodingName(msg.encoding));
+  }
+  cv::Mat out;
+  try {
+    out = cv::imdecode(msg.data, flags);
+  } catch (const cv::Exception& e) {
+    throw MessageError("corrupt " + encodingName(msg.encoding) + " payload: " + e.what());
+  }
+  if (out.empty()) throw MessageError("corrupt " + encodingName(msg.encoding) + " payload");
+  if (out.cols != msg.width || out.rows != msg.height) {
+    throw MessageError(encodingName(msg.encoding) + " payload is " + std::to_string(out.cols) + "x" +
+                       std::to_string(out.rows) + " but the message says " +
+                       std::to_string(msg.width) + "x" + std::to_string(msg.height));
+  }
+  if (msg.encoding == Img::ENCODING_PNG_U16 && out.type() != CV_16UC1) {
+    throw MessageError("png_u16 payload is not a 16-bit grey image");
+  }
+  return out;
+}
+
+RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units) {
+  RgbdFrame f;
+  f.utime = msg.utime;
+  f.seq = msg.seq;
+  f.stamp = msg.stamp;
+  f.camera = fromMsg(msg.camera);
+  if (!(msg.depth_scale > 0) || !std::isfinite(msg.depth_scale)) {
+    throw MessageError("depth_scale must be positive, got " + std::to_string(msg.depth_scale));
+  }
+  f.bgr = decodeImage(msg.rgb);
+  if (f.bgr.empty()) throw MessageError("frame has no colour image");
+  const cv::Mat depth = decodeImage(msg.depth);
+  if (depth.empty()) throw MessageError("frame has no depth image");
+  if (depth.type() != CV_16UC1) throw MessageError("depth must be a 16-bit encoding");
+  if (depth.size() != f.bgr.size() || f.bgr.cols != f.camera.width || f.bgr.rows != f.camera.height) {
+    throw MessageError("colour " + std::to_string(f.bgr.cols) + "x" + std::to_string(f.bgr.rows) +
+                       ", depth " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+                       " and camera " + std::to_string(f.camera.width) + "x" +
+                       std::to_string(f.camera.height) + " sizes disagree");
+  }
+  f.depth_m = depthUnitsToMetres(depth, msg.depth_scale, max_depth_units);
+  return f;
+}
+
+pplvo_msgs::rgbd_frame_t toMsg(const RgbdFrame& f, double depth_scale, int8_t rgb_encoding,
+                               int8_t depth_encoding, const std::string& source) {
+  pplvo_msgs::rgbd_frame_t m;
+  m.utime = f.utime;
+  m.seq = f.seq;
+  m.stamp = f.stamp;
+  m.source = source;
+  m.camera = toMsg(f.camera);
+  m.depth_scale = depth_scale;
+  m.rgb = encodeImage(f.bgr, rgb_encoding);
+  m.depth = encodeImage(depthMetresToUnits(f.depth_m, depth_scale), depth_encoding);
+  return m;
+}
+
+pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& d, const PinholeCamera& camera,
+                              int64_t utime, int64_t seq, const std::string& stamp, int8_t stage,
+                              bool compress) {
+  pplvo_msgs::depth_map_t m;
+  m.utime = utime;
+  m.seq = seq;
+  m.stamp = stamp;
+  m.stage = stage;
+  m.camera = toMsg(camera);
+  m.window_length = d.window_length;
+  const int8_t enc = compress ? Img::ENCODING_ZLIB_F32 : Img::ENCODING_RAW_F32;
+  m.depth = encodeImage(d.depth_m, enc);
+  m.variance = encodeImage(d.var_m2, enc);
+  return m;
+}
+
+DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& m) {
+  DepthWithVariance d;
+  d.window_length = m.window_length;
+  d.depth_m = decodeImage(m.depth);
+  d.var_m2 = decodeImage(m.variance);
+  if (d.depth_m.type() != CV_32FC1 || d.var_m2.type() != CV_32FC1) {
+    throw MessageError("depth map planes must be float32");
+  }
+  if (d.depth_m.size() != d.var_m2.size() || d.depth_m.cols != m.camera.width ||
+      d.depth_m.rows != m.camera.height) {
+    throw MessageError("depth, variance and camera sizes disagree");
+  }
+  return d;
+}
+
+pplvo_msgs::node_status_t toStatusMsg(const std::string& node, const NodeCounters& c,
+                                      const StageTimings& timings, int64_t utime) {
+  pplvo_msgs::node_status_t m;
+  m.utime = utime;
+  m.node = node;
+  m.last_seq = c.last_seq;
+  m.frames_in = c.frames_in;
+  m.frames_out = c.frames_out;
+  m.frames_dropped = c.frames_dropped;
+  m.frames_skipped = c.frames_skipped;
+  m.errors = c.errors;
+  for (const auto& s : timings.stages()) {
+    pplvo_msgs::stage_timing_t t;
+    t.name = s.name;
+    t.count = s.count;
+    t.last_ms = s.last_ms;
+    t.mean_ms = s.meanMs();
+    t.max_ms = s.max_ms;
+    m.stages.push_back(t);
+  }
+  m.n_stages = static_cast<int32_t>(m.stages.size());
+  m.last_warning = c.last_warning;
+  return m;
+}
+
+}  // namespace pplvo::msgs

@@ -1,0 +1,57 @@
+#include "pplvo/msgs/node_runtime.h"
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace pplvo::msgs {
+namespace {
+// Signal handlers can only reach process-wide state; this flag is the one global of the nodes.
+std::atomic<bool> g_shutdown{false};
+extern "C" void onSignal(int) { g_shutdown.store(true); }
+}  // namespace
+
+void installShutdownHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = onSignal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+bool shutdownRequested() { return g_shutdown.load(); }
+void requestShutdown() { g_shutdown.store(true); }
+
+std::unique_ptr<lcm::LCM> openLcm(const std::string& url) {
+  auto lcm = std::make_unique<lcm::LCM>(url);
+  if (!lcm->good()) {
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    throw std::runtime_error("cannot initialise LCM at '" +
+                             (url.empty() ? std::string(env ? env : "(LCM default)") : url) +
+                             "': check the URL, and for udpm that a multicast route exists "
+                             "(see docs/networking.md)");
+  }
+  return lcm;
+}
+
+int64_t spin(lcm::LCM& lcm, const std::function<bool()>& done,
+             const std::function<void()>& periodic, double period_s) {
+  using Clock = std::chrono::steady_clock;
+  auto next = Clock::now() + std::chrono::duration<double>(period_s);
+  int64_t handled = 0;
+  while (!shutdownRequested() && !(done && done())) {
+    const int rc = lcm.handleTimeout(50);
+    if (rc > 0) ++handled;
+    if (rc < 0) throw std::runtime_error("LCM handle failed");
+    if (periodic && Clock::now() >= next) {
+      periodic();
+      next = Clock::now() + std::chrono::duration<double>(period_s);
+    }
+  }
+  if (periodic) periodic();
+  return handled;
+}
+
+}  // namespace pplvo::msgs

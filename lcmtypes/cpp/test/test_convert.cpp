@@ -1,0 +1,145 @@
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "pplvo/msgs/convert.h"
+
+namespace pplvo::msgs {
+namespace {
+using Img = pplvo_msgs::image_t;
+
+PinholeCamera vga() {
+  PinholeCamera c;
+  c.width = 64;
+  c.height = 48;
+  c.fx = 52.5;
+  c.fy = -52.0;
+  c.cx = 31.5;
+  c.cy = 23.5;
+  c.distortion = {0.1, -0.01, 0.001, 0.002, 0.0};
+  return c;
+}
+
+RgbdFrame makeFrame() {
+  RgbdFrame f;
+  f.utime = 1341845688561749;
+  f.seq = 7;
+  f.stamp = "1341845688.561749";
+  f.camera = vga();
+  f.bgr = cv::Mat(48, 64, CV_8UC3);
+  cv::randu(f.bgr, 0, 255);
+  f.depth_m = cv::Mat(48, 64, CV_32FC1);
+  cv::randu(f.depth_m, 0.5f, 4.0f);
+  f.depth_m.at<float>(3, 4) = 0.0f;
+  return f;
+}
+
+template <typename Msg>
+Msg roundTripBytes(const Msg& msg) {
+  std::vector<uint8_t> buf(msg.getEncodedSize());
+  EXPECT_EQ(msg.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  Msg out;
+  EXPECT_EQ(out.decode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  return out;
+}
+
+TEST(Convert, CameraRoundTrip) {
+  const PinholeCamera c = vga();
+  EXPECT_EQ(fromMsg(roundTripBytes(toMsg(c))), c);
+}
+
+TEST(Convert, InvalidCameraThrows) {
+  auto m = toMsg(vga());
+  m.fx = 0;
+  EXPECT_THROW(fromMsg(m), MessageError);
+}
+
+class EncodingRoundTrip : public ::testing::TestWithParam<int8_t> {};
+
+TEST_P(EncodingRoundTrip, LosslessEncodingsReproduceDepth) {
+  const RgbdFrame f = makeFrame();
+  const auto msg = roundTripBytes(toMsg(f, 5000.0, Img::ENCODING_PNG, GetParam(), "test"));
+  const RgbdFrame back = fromMsg(msg);
+  EXPECT_EQ(back.seq, f.seq);
+  EXPECT_EQ(back.stamp, f.stamp);
+  EXPECT_EQ(back.camera, f.camera);
+  EXPECT_EQ(cv::norm(back.bgr, f.bgr, cv::NORM_INF), 0.0);
+  // Depth is quantised to 1/5000 m.
+  EXPECT_LE(cv::norm(back.depth_m, f.depth_m, cv::NORM_INF), 0.5 / 5000.0 + 1e-6);
+  EXPECT_EQ(back.depth_m.at<float>(3, 4), 0.0f);
+}
+
+INSTANTIATE_TEST_SUITE_P(DepthEncodings, EncodingRoundTrip,
+                         ::testing::Values(Img::ENCODING_RAW_U16, Img::ENCODING_ZLIB_U16,
+                                           Img::ENCODING_PNG_U16));
+
+TEST(Convert, JpegIsCloseAndRawIsExact) {
+  const RgbdFrame f = makeFrame();
+  cv::Mat smooth;
+  cv::GaussianBlur(f.bgr, smooth, cv::Size(9, 9), 3);
+  const auto jpg = decodeImage(encodeImage(smooth, Img::ENCODING_JPEG, 95));
+  EXPECT_LT(cv::norm(jpg, smooth, cv::NORM_L1) / smooth.total() / 3, 4.0);
+  const auto raw = decodeImage(encodeImage(f.bgr, Img::ENCODING_RAW_BGR8));
+  EXPECT_EQ(cv::norm(raw, f.bgr, cv::NORM_INF), 0.0);
+}
+
+TEST(Convert, SizeFieldDisagreeingWithDataThrows) {
+  auto m = encodeImage(cv::Mat(4, 4, CV_16UC1, cv::Scalar(1000)), Img::ENCODING_RAW_U16);
+  m.size = 10;
+  EXPECT_THROW(decodeImage(m), MessageError);
+  m.size = static_cast<int32_t>(m.data.size());
+  m.width = 5;  // dimensions disagree with the payload
+  EXPECT_THROW(decodeImage(m), MessageError);
+}
+
+TEST(Convert, CorruptCompressedPayloadsThrow) {
+  const cv::Mat depth(16, 16, CV_16UC1, cv::Scalar(2000));
+  for (int8_t enc : {Img::ENCODING_ZLIB_U16, Img::ENCODING_PNG_U16}) {
+    auto m = encodeImage(depth, enc);
+    m.data.resize(m.data.size() / 2);
+    m.size = static_cast<int32_t>(m.data.size());
+    EXPECT_THROW(decodeImage(m), MessageError) << encodingName(enc);
+  }
+}
+
+TEST(Convert, FrameWithMismatchedDepthSizeThrows) {
+  RgbdFrame f = makeFrame();
+  auto m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);
+  m.depth = encodeImage(cv::Mat(10, 10, CV_16UC1, cv::Scalar(0)), Img::ENCODING_RAW_U16);
+  EXPECT_THROW(fromMsg(m), MessageError);
+  m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);
+  m.depth_scale = 0;
+  EXPECT_THROW(fromMsg(m), MessageError);
+}
+
+TEST(Convert, DepthMapRoundTrip) {
+  DepthWithVariance d;
+  d.depth_m = cv::Mat(48, 64, CV_32FC1);
+  cv::randu(d.depth_m, 0.5f, 4.0f);
+  d.var_m2 = d.depth_m.mul(d.depth_m) * 1e-4;
+  d.window_length = 7;
+  for (bool compress : {false, true}) {
+    const auto m = roundTripBytes(toMsg(d, vga(), 5, 3, "3", pplvo_msgs::depth_map_t::STAGE_OGM, compress));
+    const auto back = fromMsg(m);
+    EXPECT_EQ(back.window_length, 7);
+    EXPECT_EQ(cv::norm(back.depth_m, d.depth_m, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(back.var_m2, d.var_m2, cv::NORM_INF), 0.0);
+  }
+}
+
+TEST(Convert, StatusCarriesStages) {
+  NodeCounters c;
+  c.frames_in = 3;
+  c.frames_skipped = 1;
+  StageTimings t;
+  t.add("cgm", 1.5);
+  t.add("cgm", 2.5);
+  const auto m = roundTripBytes(toStatusMsg("depth_filter", c, t, 42));
+  ASSERT_EQ(m.n_stages, 1);
+  EXPECT_EQ(m.stages[0].count, 2);
+  EXPECT_DOUBLE_EQ(m.stages[0].mean_ms, 2.0);
+  EXPECT_EQ(m.frames_skipped, 1);
+}
+
+}  // namespace
+}  // namespace pplvo::msgs

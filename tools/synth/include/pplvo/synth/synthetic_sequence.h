@@ -1,0 +1,86 @@
+#pragma once
+/// Ray-cast synthetic RGB-D sequences with known ground truth (no LCM, no I/O except
+/// writeTumFolder). Deterministic for a given SynthOptions (seed included).
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "pplvo/core/camera.h"
+#include "pplvo/core/geometry.h"
+#include "pplvo/core/rgbd_frame.h"
+#include "pplvo/core/trajectory.h"
+
+namespace pplvo::synth {
+
+/// Depth noise of a Kinect-like structured-light sensor.
+struct DepthNoiseOptions {
+  bool enabled = true;
+  double sigma_z_coeff_per_m = 1.425e-3;  ///< sigma_z = coeff * z^2 (paper eq. 1: 1.425e-6 mm^-1)
+  bool quantise_disparity = true;         ///< Kinect disparity steps (1/8 px, f*b = 0.075 m baseline)
+  double max_range_m = 6.0;               ///< beyond: missing
+  double min_range_m = 0.4;               ///< closer: missing
+  double grazing_angle_deg = 80.0;        ///< incidence angles above this: missing
+  bool edge_dropout = true;               ///< drop pixels at depth discontinuities
+  double edge_jump_m = 0.1;               ///< neighbour depth jump that counts as a discontinuity
+  double rgb_noise_sigma = 2.0;           ///< additive Gaussian noise on colour, grey levels
+};
+
+struct SynthOptions {
+  std::string scene = "room";   ///< "room" (textured room with boxes, posters, a cabinet)
+                                ///< "textureless" (mostly plain walls), "lines" (line-rich)
+  int frames = 300;
+  uint64_t seed = 1;
+  double fps = 30.0;
+  int width = 640;
+  int height = 480;
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  double trajectory_scale = 1.0;  ///< scales the hand-held motion amplitude
+  bool moving_object = false;     ///< a box that moves independently of the room
+  DepthNoiseOptions noise;
+};
+
+/// One rendered frame with its truth.
+struct SynthFrame {
+  RgbdFrame frame;          ///< noisy colour and depth as a sensor would give them
+  cv::Mat depth_true_m;     ///< CV_32FC1 noiseless depth (0 where no surface is hit)
+  cv::Mat surface_id;       ///< CV_32SC1 id of the surface hit (-1: none), for plane truth
+  cv::Mat dynamic_mask;     ///< CV_8UC1 255 where the moving object is seen
+  Pose3 T_w_c = Pose3::Identity();
+};
+
+/// A procedural indoor scene and a smooth hand-held trajectory through it.
+class SyntheticSequence {
+ public:
+  explicit SyntheticSequence(const SynthOptions& options);
+  ~SyntheticSequence();
+  SyntheticSequence(SyntheticSequence&&) noexcept;
+  SyntheticSequence& operator=(SyntheticSequence&&) noexcept;
+
+  int size() const;
+  const PinholeCamera& camera() const;
+  const SynthOptions& options() const;
+  /// Ground-truth camera-to-world pose of frame i.
+  Pose3 pose(int i) const;
+  /// Stamp text of frame i as written to rgb.txt / groundtruth.txt ("%.6f", starting at 1.0 s).
+  std::string stamp(int i) const;
+  /// Renders frame i (independent of the order frames are rendered in).
+  SynthFrame render(int i) const;
+  /// Plane [n; d] (n.p + d = 0, world frame) of a surface id, if that surface is planar.
+  bool surfacePlane(int surface_id, Eigen::Vector4d* plane_w) const;
+  /// The ground-truth trajectory (stamps as stamp(i)).
+  Trajectory groundTruth() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Writes a TUM-layout folder: rgb/, depth/ (16-bit PNG, scale 5000), rgb.txt, depth.txt,
+/// associations.txt (depth first, like the shared ICL folder), groundtruth.txt and
+/// calib_params.xml. Optionally depth_true/ with the noiseless depth.
+void writeTumFolder(const SyntheticSequence& sequence, const std::string& dir,
+                    bool write_true_depth = false);
+
+}  // namespace pplvo::synth
