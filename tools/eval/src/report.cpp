@@ -82,8 +82,11 @@ EvalReport evaluateTrajectories(const TumFile& gt, const TumFile& est,
   report.ate = evaluateAte(gt, est, options.ate);
   report.rpe = evaluateRpe(gt, est, options.rpe);
   if (options.fps <= 0.0) {
-    for (const TumFile* f : {&gt, &est}) {
-      if (f == &est && est.name == gt.name && gt.all_stamps_integer) continue;  // said once
+    const TumFile* files[2] = {&gt, &est};
+    // The same file given twice: say it once.
+    const int n_files = (est.name == gt.name) ? 1 : 2;
+    for (int k = 0; k < n_files; ++k) {
+      const TumFile* f = files[k];
       if (f->all_stamps_integer) {
         report.notes.push_back("hint: all stamps of '" + f->name +
                                "' are integers; if they are frame indices (ICL-NUIM), pass "
