@@ -100,7 +100,7 @@ int run(int argc, char** argv) {
   std::cout << (json ? pplvo::eval::formatJson(report) : pplvo::eval::formatText(report));
   std::cout.flush();
   if (!report.ate.ok) std::cerr << "pplvo-eval: ATE: " << report.ate.error << '\n';
-  if (!report.rpe.ok) std::cerr << "pplvo-eval: " << report.rpe.error << '\n';
+  if (!report.rpe.ok) std::cerr << "pplvo-eval: RPE: " << report.rpe.error << '\n';
   if (!plot_path.empty()) {
     std::ofstream plot(plot_path);
     plot << pplvo::eval::formatPlotData(report);

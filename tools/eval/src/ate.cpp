@@ -1,13 +1,12 @@
 #include "pplvo/eval/ate.h"
 
+#include <Eigen/LU>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <sstream>
 #include <tuple>
-
-#include <Eigen/LU>
-#include <Eigen/SVD>
 
 namespace pplvo {
 namespace eval {
@@ -105,7 +104,7 @@ AteResult evaluateAte(const TumFile& gt, const TumFile& est, const AteOptions& o
   const auto gt_by_stamp = positionsByStamp(gt, &result.skipped_non_finite_gt);
   const auto est_by_stamp = positionsByStamp(est, &result.skipped_non_finite_est);
   if (gt_by_stamp.empty() || est_by_stamp.empty()) {
-    result.error = "ATE: no usable poses in '" + (gt_by_stamp.empty() ? gt.name : est.name) + "'";
+    result.error = "no usable poses in '" + (gt_by_stamp.empty() ? gt.name : est.name) + "'";
     return result;
   }
   std::vector<double> gt_stamps, est_stamps;

@@ -27,11 +27,21 @@ std::string jsonString(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char buf[8];
@@ -71,8 +81,7 @@ std::string describeStamps(double fps) {
 
 }  // namespace
 
-EvalReport evaluateTrajectories(const TumFile& gt, const TumFile& est,
-                                const EvalOptions& options) {
+EvalReport evaluateTrajectories(const TumFile& gt, const TumFile& est, const EvalOptions& options) {
   EvalReport report;
   report.gt_name = gt.name;
   report.est_name = est.name;
@@ -143,9 +152,10 @@ std::string formatText(const EvalReport& r) {
 std::string formatJson(const EvalReport& r) {
   std::ostringstream out;
   out << "{\n  \"gt\": " << jsonString(r.gt_name) << ",\n  \"est\": " << jsonString(r.est_name)
-      << ",\n  \"fps\": " << full(r.fps) << ",\n  \"max_difference_s\": "
-      << full(r.max_difference_s) << ",\n  \"delta_s\": " << full(r.delta_s)
-      << ",\n  \"ok\": " << (r.ok() ? "true" : "false") << ",\n  \"ate\": {";
+      << ",\n  \"fps\": " << full(r.fps)
+      << ",\n  \"max_difference_s\": " << full(r.max_difference_s)
+      << ",\n  \"delta_s\": " << full(r.delta_s) << ",\n  \"ok\": " << (r.ok() ? "true" : "false")
+      << ",\n  \"ate\": {";
   if (r.ate.ok) {
     out << "\"ok\": true, \"pairs\": " << r.ate.error_m.count;
     for (const auto& kv : statFields(r.ate.error_m, "m")) {
@@ -180,12 +190,10 @@ std::string formatPlotData(const EvalReport& r) {
     for (int k = 0; k < 3; ++k) out << ' ' << full(p.p_est_aligned_m[k]);
     out << ' ' << full(p.error_m) << '\n';
   }
-  out << "\n\n# RPE: est0_s est1_s gt0_s gt1_s trans_m rot_deg (per delta " << r.delta_s
-      << " s)\n";
+  out << "\n\n# RPE: est0_s est1_s gt0_s gt1_s trans_m rot_deg (per delta " << r.delta_s << " s)\n";
   for (const RpePair& p : r.rpe.pairs) {
-    out << full(p.est0_s) << ' ' << full(p.est1_s) << ' ' << full(p.gt0_s) << ' '
-        << full(p.gt1_s) << ' ' << full(p.trans_m) << ' ' << full(p.rot_rad * kRadToDeg)
-        << '\n';
+    out << full(p.est0_s) << ' ' << full(p.est1_s) << ' ' << full(p.gt0_s) << ' ' << full(p.gt1_s)
+        << ' ' << full(p.trans_m) << ' ' << full(p.rot_rad * kRadToDeg) << '\n';
   }
   return out.str();
 }

@@ -1,13 +1,12 @@
 #include "pplvo/eval/rpe.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <set>
 #include <sstream>
-
-#include <Eigen/LU>
 
 namespace pplvo {
 namespace eval {
@@ -101,8 +100,8 @@ RpeResult evaluateRpe(const TumFile& gt, const TumFile& est, const RpeOptions& o
   const auto traj_gt = posesByStamp(gt, &result.skipped_rows_gt);
   const auto traj_est = posesByStamp(est, &result.skipped_rows_est);
   if (traj_gt.size() < 2 || traj_est.size() < 2) {
-    result.error = "RPE: fewer than 2 usable poses in '" +
-                   (traj_gt.size() < 2 ? gt.name : est.name) + "'";
+    result.error =
+        "fewer than 2 usable poses in '" + (traj_gt.size() < 2 ? gt.name : est.name) + "'";
     return result;
   }
   std::vector<double> stamps_gt, stamps_est;
@@ -117,8 +116,9 @@ RpeResult evaluateRpe(const TumFile& gt, const TumFile& est, const RpeOptions& o
     stamps_est_return.insert(stamps_est[findClosestIndex(stamps_est, t_gt - offset)]);
   }
   if (stamps_est_return.size() < 2) {
-    result.error = "RPE: the time overlap of the two trajectories is too small: are the stamps "
-                   "in the same clock?";
+    result.error =
+        "the time overlap of the two trajectories is too small: are the stamps "
+        "in the same clock?";
     return result;
   }
 
@@ -166,7 +166,7 @@ RpeResult evaluateRpe(const TumFile& gt, const TumFile& est, const RpeOptions& o
     result.pairs.push_back(out);
   }
   if (result.pairs.size() < 2) {
-    result.error = "RPE: only " + std::to_string(result.pairs.size()) + " pose pair(s) " +
+    result.error = "only " + std::to_string(result.pairs.size()) + " pose pair(s) " +
                    num(options.delta_s) + " s apart with ground truth within " +
                    num(result.gt_max_time_difference_s) +
                    " s (need at least 2): is the estimate longer than the delta and in the same "

@@ -38,6 +38,16 @@ bool parseDouble(const std::string& text, double* value) {
   return true;
 }
 
+// A field quoted in a message: printable ASCII only, at most 40 characters.
+std::string printable(const std::string& text) {
+  std::string out;
+  for (char c : text.substr(0, 40)) {
+    out +=
+        (static_cast<unsigned char>(c) >= 0x20 && static_cast<unsigned char>(c) < 0x7f) ? c : '?';
+  }
+  return text.size() > 40 ? out + "..." : out;
+}
+
 }  // namespace
 
 TumReadResult parseTumFile(std::istream& in, const std::string& name,
@@ -73,14 +83,15 @@ TumReadResult parseTumFile(std::istream& in, const std::string& name,
     row.line_no = line_no;
     double stamp = 0.0;
     if (!parseDouble(fields[0], &stamp)) {
-      result.error = "'" + name + "' line " + std::to_string(line_no) + ": stamp '" + fields[0] +
-                     "' is not a number";
+      result.error = "'" + name + "' line " + std::to_string(line_no) + ": stamp '" +
+                     printable(fields[0]) + "' is not a number";
       return result;
     }
     for (int k = 0; k < 7; ++k) {
       if (!parseDouble(fields[k + 1], &row.values[k])) {
         result.error = "'" + name + "' line " + std::to_string(line_no) + ": field " +
-                       std::to_string(k + 2) + " '" + fields[k + 1] + "' is not a number";
+                       std::to_string(k + 2) + " '" + printable(fields[k + 1]) +
+                       "' is not a number";
         return result;
       }
     }

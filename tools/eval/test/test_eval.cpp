@@ -1,14 +1,13 @@
 // Hand-computed cases for the TUM ATE / RPE definitions (docs/evaluation.md).
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "pplvo/eval/ate.h"
 #include "pplvo/eval/report.h"
@@ -50,7 +49,9 @@ Eigen::Isometry3d pose(const Eigen::Vector3d& t, const Eigen::Matrix3d& R) {
   return T;
 }
 
-Eigen::Matrix3d rotZ(double rad) { return Eigen::AngleAxisd(rad, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
+Eigen::Matrix3d rotZ(double rad) {
+  return Eigen::AngleAxisd(rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
 
 // A curved trajectory with rotation, stamps every dt_s (binary-exact steps).
 std::vector<Stamped> curvedTrajectory(int n, double dt_s) {
@@ -196,7 +197,9 @@ TEST(Ate, IdentityGivesZero) {
 
 TEST(AteRpe, ConstantRigidOffsetIsInvisible) {
   const auto gt = curvedTrajectory(60, 0.125);
-  const Eigen::Isometry3d A = pose({3.0, -1.0, 0.5}, (Eigen::AngleAxisd(1.1, Eigen::Vector3d(0.3, -0.5, 0.8).normalized())).toRotationMatrix());
+  const Eigen::Isometry3d A = pose(
+      {3.0, -1.0, 0.5},
+      (Eigen::AngleAxisd(1.1, Eigen::Vector3d(0.3, -0.5, 0.8).normalized())).toRotationMatrix());
   std::vector<Stamped> est;
   for (const auto& s : gt) est.push_back({s.stamp_s, A * s.T_w_c});
   const AteResult ate = evaluateAte(fileFrom("gt", gt), fileFrom("est", est));
@@ -221,7 +224,8 @@ TEST(Ate, SingleDisplacedPoseOnAStraightLine) {
   std::vector<Stamped> gt, est;
   for (int i = 0; i < n; ++i) {
     gt.push_back({i * 0.125, pose({0.5 * i, 0, 0}, Eigen::Matrix3d::Identity())});
-    est.push_back({i * 0.125, pose({0.5 * i + (i == k ? d : 0.0), 0, 0}, Eigen::Matrix3d::Identity())});
+    est.push_back(
+        {i * 0.125, pose({0.5 * i + (i == k ? d : 0.0), 0, 0}, Eigen::Matrix3d::Identity())});
   }
   const AteResult r = evaluateAte(fileFrom("gt", gt), fileFrom("est", est));
   ASSERT_TRUE(r.ok) << r.error;
@@ -293,7 +297,8 @@ TEST(Rpe, SkipsZeroQuaternionAndNanRowsAndFarGroundTruth) {
   for (const auto& s : curvedTrajectory(80, 0.125)) {
     if (s.stamp_s - 100.0 < 4.0 || s.stamp_s - 100.0 > 7.0) holed.push_back(s);
   }
-  const RpeResult h = evaluateRpe(fileFrom("gt", holed), fileFrom("est", curvedTrajectory(80, 0.125)));
+  const RpeResult h =
+      evaluateRpe(fileFrom("gt", holed), fileFrom("est", curvedTrajectory(80, 0.125)));
   ASSERT_TRUE(h.ok) << h.error;
   EXPECT_GT(h.skipped_gt_time, 0);
   EXPECT_EQ(h.pairs.size() + h.skipped_gt_time, static_cast<std::size_t>(h.candidate_pairs));
@@ -324,7 +329,8 @@ TEST(Errors, NoOverlapAndTooShort) {
 
 TEST(Report, TextJsonAndIntegerStampHint) {
   std::vector<Stamped> traj;
-  for (int i = 1; i <= 90; ++i) traj.push_back({double(i), pose({0.01 * i, 0, 0}, rotZ(0.001 * i))});
+  for (int i = 1; i <= 90; ++i)
+    traj.push_back({double(i), pose({0.01 * i, 0, 0}, rotZ(0.001 * i))});
   TumFile f = fileFrom("icl_gt", traj);
   f.all_stamps_integer = true;
   const EvalReport r = evaluateTrajectories(f, f);

@@ -2,10 +2,10 @@
 // tools/eval/tum_reference_eval.py on perturbed copies of the shared ground truths
 // (smooth drift + noise + dropped poses + stamp jitter), within 1 %.
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,8 +13,6 @@
 #include <random>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "pplvo/eval/report.h"
 #include "pplvo/eval/tum_file.h"
@@ -67,16 +65,15 @@ bool number(const std::string& text, const std::string& key, double* value) {
 }
 
 struct Perturbation {
-  int keep_every = 1;            ///< subsample the ground truth (TUM: 100 Hz -> ~33 Hz)
-  double stamp_jitter_s = 0.0;   ///< uniform +- jitter on written stamps (seconds)
-  bool integer_stamps = false;   ///< keep frame-index stamps verbatim (ICL)
+  int keep_every = 1;           ///< subsample the ground truth (TUM: 100 Hz -> ~33 Hz)
+  double stamp_jitter_s = 0.0;  ///< uniform +- jitter on written stamps (seconds)
+  bool integer_stamps = false;  ///< keep frame-index stamps verbatim (ICL)
 };
 
 // Writes a perturbed copy of `gt`: a rigid offset of the whole trajectory, a smooth drift
 // growing with time (rotation about z and translation), Gaussian noise on position and
 // orientation, and dropped poses (every 41st, plus a block of 6). Fixed seed.
-void writePerturbed(const TumFile& gt, const std::string& path, const Perturbation& p,
-                    double fps) {
+void writePerturbed(const TumFile& gt, const std::string& path, const Perturbation& p, double fps) {
   std::mt19937 rng(20240611);
   std::normal_distribution<double> noise(0.0, 1.0);
   std::uniform_real_distribution<double> jitter(-1.0, 1.0);
@@ -94,8 +91,7 @@ void writePerturbed(const TumFile& gt, const std::string& path, const Perturbati
     const bool dropped = (i % 41 == 17) || (i >= n / 2 && i < n / 2 + 6 * p.keep_every);
     const Eigen::Isometry3d G =
         Eigen::Translation3d(row.values[0], row.values[1], row.values[2]) *
-        Eigen::Quaterniond(row.values[6], row.values[3], row.values[4], row.values[5])
-            .normalized();
+        Eigen::Quaterniond(row.values[6], row.values[3], row.values[4], row.values[5]).normalized();
     const Eigen::Isometry3d drift =
         Eigen::Translation3d(Eigen::Vector3d(0.012, -0.006, 0.004) * t) *
         Eigen::AngleAxisd(0.015 * t, Eigen::Vector3d::UnitZ());
@@ -105,7 +101,8 @@ void writePerturbed(const TumFile& gt, const std::string& path, const Perturbati
     if (dropped) continue;
     Eigen::Isometry3d E = offset * drift * G;
     E.translation() += 0.004 * dp;
-    E.linear() = E.linear() * Eigen::AngleAxisd(0.003 * dr.norm(), dr.normalized()).toRotationMatrix();
+    E.linear() =
+        E.linear() * Eigen::AngleAxisd(0.003 * dr.norm(), dr.normalized()).toRotationMatrix();
     const Eigen::Quaterniond q(E.linear());
     char line[256];
     if (p.integer_stamps) {
@@ -120,8 +117,8 @@ void writePerturbed(const TumFile& gt, const std::string& path, const Perturbati
   }
 }
 
-void expectAgreement(const std::string& ours, const std::string& reference,
-                     const std::string& name, const std::vector<std::string>& keys) {
+void expectAgreement(const std::string& ours, const std::string& reference, const std::string& name,
+                     const std::vector<std::string>& keys) {
   const std::string a = section(ours, name), b = section(reference, name);
   ASSERT_FALSE(a.empty()) << ours;
   ASSERT_FALSE(b.empty()) << reference;
@@ -148,11 +145,10 @@ class ReferenceAgreement : public ::testing::Test {
     struct stat st {};
     ASSERT_EQ(stat(kPython, &st), 0) << kPython << " is missing: this check needs python3 with "
                                      << "numpy (scripts/install_deps.sh installs python3-numpy)";
-    const CommandOutput numpy =
-        runCommand(std::string(kPython) + " -c 'import numpy' 2>&1");
-    ASSERT_EQ(numpy.exit_code, 0)
-        << "numpy is not importable by " << kPython
-        << ": install python3-numpy (scripts/install_deps.sh); output: " << numpy.out;
+    const CommandOutput numpy = runCommand(std::string(kPython) + " -c 'import numpy' 2>&1");
+    ASSERT_EQ(numpy.exit_code, 0) << "numpy is not importable by " << kPython
+                                  << ": install python3-numpy (scripts/install_deps.sh); output: "
+                                  << numpy.out;
     work_dir_ = env("PPLVO_BINARY_DIR", "/tmp") + "/eval_reference";
     mkdir(work_dir_.c_str(), 0755);
   }
@@ -169,8 +165,8 @@ class ReferenceAgreement : public ::testing::Test {
     const CommandOutput ours = runCommand(std::string(PPLVO_EVAL_BINARY) + " " + quote(gt_path) +
                                           " " + quote(est_path) + fps_arg + " --json");
     const CommandOutput reference =
-        runCommand(std::string(kPython) + " " + PPLVO_EVAL_REFERENCE_SCRIPT + " " +
-                   quote(gt_path) + " " + quote(est_path) + fps_arg);
+        runCommand(std::string(kPython) + " " + PPLVO_EVAL_REFERENCE_SCRIPT + " " + quote(gt_path) +
+                   " " + quote(est_path) + fps_arg);
     ASSERT_EQ(ours.exit_code, 0) << ours.out;
     ASSERT_EQ(reference.exit_code, 0) << reference.out;
     const std::vector<std::string> stats = {"rmse", "mean", "median", "std", "min", "max"};
@@ -199,23 +195,21 @@ TEST_F(ReferenceAgreement, TumGroundTruthPerturbed) {
   Perturbation p;
   p.keep_every = 3;
   p.stamp_jitter_s = 0.004;
-  compare(env("PPLVO_SHARED_DATA", "../shared/data") +
-              "/tum_fr3_sitting_static_short/groundtruth.txt",
-          "tum", 0.0, p);
+  compare(
+      env("PPLVO_SHARED_DATA", "../shared/data") + "/tum_fr3_sitting_static_short/groundtruth.txt",
+      "tum", 0.0, p);
 }
 
 TEST_F(ReferenceAgreement, IclGroundTruthPerturbedWithFps) {
   Perturbation p;
   p.integer_stamps = true;
-  compare(env("PPLVO_SHARED_DATA", "../shared/data") +
-              "/icl_living_room_kt0_short/groundtruth.txt",
+  compare(env("PPLVO_SHARED_DATA", "../shared/data") + "/icl_living_room_kt0_short/groundtruth.txt",
           "icl", 30.0, p);
 }
 
 TEST(Cli, ErrorsExitWithCodeTwoAndNameTheFile) {
   const std::string bin = PPLVO_EVAL_BINARY;
-  const CommandOutput missing =
-      runCommand(bin + " /nonexistent/gt.txt /nonexistent/est.txt 2>&1");
+  const CommandOutput missing = runCommand(bin + " /nonexistent/gt.txt /nonexistent/est.txt 2>&1");
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.out.find("cannot read '/nonexistent/gt.txt'"), std::string::npos)
       << missing.out;
@@ -240,8 +234,8 @@ TEST(Cli, ErrorsExitWithCodeTwoAndNameTheFile) {
   EXPECT_NE(clocks.out.find("no pose pairs within 0.02 s: are the stamps in the same clock?"),
             std::string::npos)
       << clocks.out;
-  const CommandOutput same = runCommand(bin + " " + a + " " + a + " --plot-data " + dir +
-                                        "/eval_cli_plot.txt");
+  const CommandOutput same =
+      runCommand(bin + " " + a + " " + a + " --plot-data " + dir + "/eval_cli_plot.txt");
   EXPECT_EQ(same.exit_code, 0) << same.out;
   EXPECT_NE(same.out.find("ate.pairs 50\n"), std::string::npos) << same.out;
   EXPECT_NE(same.out.find("rpe.pairs "), std::string::npos) << same.out;

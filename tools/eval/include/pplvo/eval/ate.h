@@ -2,10 +2,9 @@
 /// Absolute trajectory error as defined by the TUM RGB-D benchmark's evaluate_ate.py:
 /// stamp association, rigid (no scale) Horn alignment of the estimate onto the ground truth,
 /// per-pose position error norms. See docs/evaluation.md.
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pplvo/eval/error_stats.h"
 #include "pplvo/eval/tum_file.h"
@@ -56,12 +55,12 @@ struct AtePair {
 
 struct AteResult {
   bool ok = false;
-  std::string error;  ///< set when ok == false (fewer than 2 pairs)
+  std::string error;   ///< set when ok == false (fewer than 2 pairs)
   ErrorStats error_m;  ///< statistics of the per-pair position errors [m]
   std::vector<AtePair> pairs;
   Eigen::Matrix3d R_gt_est = Eigen::Matrix3d::Identity();  ///< alignment rotation
   Eigen::Vector3d t_gt_est = Eigen::Vector3d::Zero();      ///< alignment translation [m]
-  int skipped_non_finite_gt = 0;   ///< rows dropped for a NaN/inf stamp or position
+  int skipped_non_finite_gt = 0;  ///< rows dropped for a NaN/inf stamp or position
   int skipped_non_finite_est = 0;
 };
 

@@ -8,10 +8,10 @@ namespace eval {
 
 struct ErrorStats {
   int count = 0;
-  double rmse = 0.0;    ///< sqrt(sum(e^2) / n)
+  double rmse = 0.0;  ///< sqrt(sum(e^2) / n)
   double mean = 0.0;
   double median = 0.0;
-  double std = 0.0;     ///< population standard deviation (numpy.std, ddof = 0)
+  double std = 0.0;  ///< population standard deviation (numpy.std, ddof = 0)
   double min = 0.0;
   double max = 0.0;
 };

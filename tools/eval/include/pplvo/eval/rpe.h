@@ -1,12 +1,11 @@
 #pragma once
 /// Relative pose error as defined by the TUM RGB-D benchmark's evaluate_rpe.py run with
 /// `--fixed_delta --delta 1 --delta_unit s`. See docs/evaluation.md for the quirks kept.
+#include <Eigen/Core>
 #include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pplvo/eval/error_stats.h"
 #include "pplvo/eval/tum_file.h"
@@ -33,22 +32,22 @@ struct RpeOptions {
 /// One evaluated pair.
 struct RpePair {
   double est0_s = 0.0, est1_s = 0.0, gt0_s = 0.0, gt1_s = 0.0;
-  double trans_m = 0.0;    ///< |translation of the error transform| [m per delta]
-  double rot_rad = 0.0;    ///< rotation angle of the error transform [rad per delta]
+  double trans_m = 0.0;  ///< |translation of the error transform| [m per delta]
+  double rot_rad = 0.0;  ///< rotation angle of the error transform [rad per delta]
 };
 
 struct RpeResult {
   bool ok = false;
-  std::string error;      ///< set when ok == false
+  std::string error;  ///< set when ok == false
   std::vector<RpePair> pairs;
-  ErrorStats trans_m;     ///< over pairs, metres per delta
-  ErrorStats rot_rad;     ///< over pairs, radians per delta
-  int candidate_pairs = 0;          ///< (i, j) pairs before the ground-truth time check
-  int skipped_gt_time = 0;          ///< pairs dropped by the gt_max_time_difference check
+  ErrorStats trans_m;                     ///< over pairs, metres per delta
+  ErrorStats rot_rad;                     ///< over pairs, radians per delta
+  int candidate_pairs = 0;                ///< (i, j) pairs before the ground-truth time check
+  int skipped_gt_time = 0;                ///< pairs dropped by the gt_max_time_difference check
   double gt_max_time_difference_s = 0.0;  ///< 2 * median ground-truth stamp interval
   /// More candidate pairs than max_pairs: TUM would draw a random subset; we keep all of them.
   bool exceeds_max_pairs = false;
-  int skipped_rows_gt = 0;   ///< rows with an all-zero quaternion or a NaN value
+  int skipped_rows_gt = 0;  ///< rows with an all-zero quaternion or a NaN value
   int skipped_rows_est = 0;
 };
 

@@ -12,7 +12,7 @@ namespace eval {
 /// One data line: `stamp tx ty tz qx qy qz qw` (camera-to-world, T_w_c), fields separated by
 /// any mix of spaces, commas and tabs. Fields after the eighth are ignored (as TUM does).
 struct TumRow {
-  double stamp_s = 0.0;  ///< first column in seconds (divided by fps when fps > 0)
+  double stamp_s = 0.0;            ///< first column in seconds (divided by fps when fps > 0)
   std::array<double, 7> values{};  ///< tx ty tz [m], qx qy qz qw (not normalised)
   int line_no = 0;                 ///< 1-based line number in the file
 };
