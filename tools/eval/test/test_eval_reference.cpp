@@ -200,6 +200,17 @@ TEST_F(ReferenceAgreement, TumGroundTruthPerturbed) {
       "tum", 0.0, p);
 }
 
+// Every ground-truth pose kept, stamps jittered by up to +-9 ms at ~100 Hz: estimates compete for
+// the same ground-truth stamps, so the greedy order of the association decides the pairs.
+TEST_F(ReferenceAgreement, TumDenseEstimateCompetingForStamps) {
+  Perturbation p;
+  p.keep_every = 1;
+  p.stamp_jitter_s = 0.009;
+  compare(env("PPLVO_SHARED_DATA", "../shared/data") +
+              "/tum_fr3_sitting_static_short/groundtruth.txt",
+          "tum_dense", 0.0, p);
+}
+
 TEST_F(ReferenceAgreement, IclGroundTruthPerturbedWithFps) {
   Perturbation p;
   p.integer_stamps = true;
