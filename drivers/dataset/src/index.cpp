@@ -154,7 +154,9 @@ std::optional<int64_t> stampTextToUtime(const std::string& text) {
 
 std::string IndexSummary::text() const {
   std::ostringstream s;
-  s << source << " (" << column_order << "): " << listed << " entries";
+  s << source;
+  if (!column_order.empty()) s << " (" << column_order << ")";
+  s << ": " << listed << " entries";
   if (source != "associations.txt") s << " in rgb.txt, " << listed_depth << " in depth.txt";
   s << "; dropped " << missing_rgb_files << " missing colour and " << missing_depth_files
     << " missing depth files";
@@ -255,7 +257,6 @@ DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options) {
     }
   } else if (fileExists(rgb_path) && fileExists(depth_path)) {
     sum.source = "rgb.txt+depth.txt";
-    sum.column_order = "rgb.txt, depth.txt";
     std::ifstream rin(rgb_path), din(depth_path);
     if (!rin) throw DatasetError("cannot read " + rgb_path);
     if (!din) throw DatasetError("cannot read " + depth_path);
