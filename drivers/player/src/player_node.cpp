@@ -247,8 +247,8 @@ void PlayerNode::drain() {
   // and the queue does not grow (bounded in case a handler keeps republishing).
   for (int i = 0; i < 100000; ++i) {
     const int rc = lcm_.handleTimeout(0);
-    if (rc < 0) throw std::runtime_error("LCM handle failed");
-    if (rc == 0) break;
+    if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
+    if (rc <= 0) break;
   }
 }
 
@@ -257,7 +257,10 @@ void PlayerNode::waitUntil(double target_s) {
     const double remaining = target_s - nowS();
     if (remaining <= 0) break;
     const int ms = static_cast<int>(std::min(100.0, std::ceil(remaining * 1000.0)));
-    if (lcm_.handleTimeout(ms) < 0) throw std::runtime_error("LCM handle failed");
+    // EINTR from Ctrl-C ends the wait; the loop then sees the shutdown request.
+    if (lcm_.handleTimeout(ms) < 0 && !msgs::shutdownRequested()) {
+      throw std::runtime_error("LCM handle failed");
+    }
     periodic(false);
   }
 }
