@@ -1,10 +1,10 @@
 // Camera files: OpenCV FileStorage calib_params.xml and the pplvo YAML camera file.
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
+#include <opencv2/core/persistence.hpp>
 #include <set>
 #include <sstream>
-
-#include <opencv2/core/persistence.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "pplvo/dataset/dataset.h"
 
@@ -90,8 +90,8 @@ DatasetCamera loadCameraYaml(const std::string& path) {
   }
   if (!root.IsMap()) throw DatasetError("camera file " + path + " must be a YAML map");
   std::vector<std::string> errors;
-  const std::set<std::string> known = {"width", "height", "fx", "fy", "cx",
-                                       "cy", "distortion", "depth_scale"};
+  const std::set<std::string> known = {"width", "height", "fx",         "fy",
+                                       "cx",    "cy",     "distortion", "depth_scale"};
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>("?");
     if (!known.count(key)) errors.push_back("unknown key '" + key + "'");

@@ -1,12 +1,11 @@
 // Frame loading and sequential reading.
+#include "pplvo/dataset/dataset.h"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-
 #include <opencv2/imgcodecs.hpp>
-
-#include "pplvo/dataset/dataset.h"
 
 namespace fs = std::filesystem;
 
@@ -54,7 +53,8 @@ RawFrame loadRawFrame(const DatasetEntry& entry, double depth_scale,
   }
   // 65535 is the usual invalid marker; a configured max range removes far depth too.
   double max_units = 65534.0;
-  if (options.max_depth_m > 0) max_units = std::min(max_units, std::floor(options.max_depth_m * depth_scale));
+  if (options.max_depth_m > 0)
+    max_units = std::min(max_units, std::floor(options.max_depth_m * depth_scale));
   if (max_units < 65535.0) f.depth_units.setTo(0, f.depth_units > max_units);
   return f;
 }
@@ -88,8 +88,8 @@ Dataset Dataset::open(const std::string& dir, const DatasetOptions& options) {
       if ((cam.width > 0 && cam.width != f.bgr.cols) ||
           (cam.height > 0 && cam.height != f.bgr.rows)) {
         throw DatasetError("camera file " + d.camera_.source + " says " +
-                           std::to_string(cam.width) + "x" + std::to_string(cam.height) +
-                           " but " + e.rgb_path + " is " + std::to_string(f.bgr.cols) + "x" +
+                           std::to_string(cam.width) + "x" + std::to_string(cam.height) + " but " +
+                           e.rgb_path + " is " + std::to_string(f.bgr.cols) + "x" +
                            std::to_string(f.bgr.rows));
       }
       cam.width = f.bgr.cols;
@@ -106,11 +106,10 @@ RawFrame Dataset::loadRaw(size_t i, const FrameLoadOptions& options) const {
   const DatasetEntry& e = entry(i);
   RawFrame f = loadRawFrame(e, camera_.depth_scale, options);
   if (f.bgr.cols != camera_.camera.width || f.bgr.rows != camera_.camera.height) {
-    throw FrameLoadError(e.rgb_path, "image size " + std::to_string(f.bgr.cols) + "x" +
-                                         std::to_string(f.bgr.rows) + " differs from " +
-                                         std::to_string(camera_.camera.width) + "x" +
-                                         std::to_string(camera_.camera.height) +
-                                         " of the first frame");
+    throw FrameLoadError(
+        e.rgb_path, "image size " + std::to_string(f.bgr.cols) + "x" + std::to_string(f.bgr.rows) +
+                        " differs from " + std::to_string(camera_.camera.width) + "x" +
+                        std::to_string(camera_.camera.height) + " of the first frame");
   }
   return f;
 }
@@ -128,8 +127,8 @@ RgbdFrame Dataset::loadFrame(size_t i, const FrameLoadOptions& options) const {
   return f;
 }
 
-DatasetReader::DatasetReader(const Dataset& dataset, bool skip_bad,
-                             const FrameLoadOptions& options, size_t start)
+DatasetReader::DatasetReader(const Dataset& dataset, bool skip_bad, const FrameLoadOptions& options,
+                             size_t start)
     : dataset_(dataset), skip_bad_(skip_bad), options_(options), pos_(start) {}
 
 std::optional<DatasetReader::Item> DatasetReader::next() {

@@ -208,9 +208,8 @@ DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options) {
         continue;
       }
       ++sum.listed;
-      const bool depth_first =
-          (underDir(p1, "depth") && !underDir(p2, "depth")) ||
-          (underDir(p2, "rgb") && !underDir(p1, "rgb"));
+      const bool depth_first = (underDir(p1, "depth") && !underDir(p2, "depth")) ||
+                               (underDir(p2, "rgb") && !underDir(p1, "rgb"));
       const bool rgb_first = (underDir(p1, "rgb") && !underDir(p1, "depth")) ||
                              (underDir(p2, "depth") && !underDir(p2, "rgb"));
       if (depth_first && !rgb_first) {

@@ -6,10 +6,9 @@
 #include <exception>
 #include <future>
 #include <map>
-#include <sstream>
-
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
+#include <sstream>
 
 #include "pplvo/msgs/node_runtime.h"
 
@@ -80,9 +79,8 @@ Exit status: 0 done (or stopped by Ctrl-C), 1 fatal error, 2 bad command line.
 ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
   ParseResult r;
   PlayerOptions& o = r.options;
-  const std::map<std::string, int> flags = {{"--lockstep", 0}, {"--skip-bad", 1},
-                                            {"--loop", 2},     {"--progress", 3},
-                                            {"--no-progress", 4}};
+  const std::map<std::string, int> flags = {
+      {"--lockstep", 0}, {"--skip-bad", 1}, {"--loop", 2}, {"--progress", 3}, {"--no-progress", 4}};
   for (size_t i = 0; i < args.size(); ++i) {
     std::string key = args[i];
     std::string value;
@@ -100,19 +98,29 @@ ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
     if (auto f = flags.find(key); f != flags.end()) {
       if (has_value) r.errors.push_back(key + " takes no value");
       switch (f->second) {
-        case 0: o.lockstep = true; break;
-        case 1: o.skip_bad = true; break;
-        case 2: o.loop = true; break;
-        case 3: o.progress = true; break;
-        case 4: o.progress = false; break;
+        case 0:
+          o.lockstep = true;
+          break;
+        case 1:
+          o.skip_bad = true;
+          break;
+        case 2:
+          o.loop = true;
+          break;
+        case 3:
+          o.progress = true;
+          break;
+        case 4:
+          o.progress = false;
+          break;
       }
       continue;
     }
-    static const char* kValued[] = {"--dataset", "--camera", "--lcm-url", "--channel",
-                                    "--pose-channel", "--stream-channel", "--status-channel",
-                                    "--rate", "--fps", "--lockstep-timeout", "--start",
-                                    "--max-frames", "--max-depth-m", "--rgb-encoding",
-                                    "--depth-encoding", "--jpeg-quality"};
+    static const char* kValued[] = {
+        "--dataset",      "--camera",           "--lcm-url",        "--channel",
+        "--pose-channel", "--stream-channel",   "--status-channel", "--rate",
+        "--fps",          "--lockstep-timeout", "--start",          "--max-frames",
+        "--max-depth-m",  "--rgb-encoding",     "--depth-encoding", "--jpeg-quality"};
     bool known = false;
     for (const char* k : kValued) known = known || key == k;
     if (!known) {
@@ -144,34 +152,55 @@ ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
         out = v;
       }
     };
-    if (key == "--dataset") o.dataset_dir = value;
-    else if (key == "--camera") o.camera_file = value;
-    else if (key == "--lcm-url") o.lcm_url = value;
-    else if (key == "--channel") o.channel = value;
-    else if (key == "--pose-channel") o.pose_channel = value;
-    else if (key == "--stream-channel") o.stream_channel = value;
-    else if (key == "--status-channel") o.status_channel = value;
-    else if (key == "--rate") number(o.rate, 0.0);
-    else if (key == "--fps") number(o.fps, 0.0);
-    else if (key == "--lockstep-timeout") number(o.lockstep_timeout_s, 0.0);
-    else if (key == "--max-depth-m") number(o.max_depth_m, 0.0);
-    else if (key == "--start") integer(o.start);
-    else if (key == "--max-frames") integer(o.max_frames);
+    if (key == "--dataset")
+      o.dataset_dir = value;
+    else if (key == "--camera")
+      o.camera_file = value;
+    else if (key == "--lcm-url")
+      o.lcm_url = value;
+    else if (key == "--channel")
+      o.channel = value;
+    else if (key == "--pose-channel")
+      o.pose_channel = value;
+    else if (key == "--stream-channel")
+      o.stream_channel = value;
+    else if (key == "--status-channel")
+      o.status_channel = value;
+    else if (key == "--rate")
+      number(o.rate, 0.0);
+    else if (key == "--fps")
+      number(o.fps, 0.0);
+    else if (key == "--lockstep-timeout")
+      number(o.lockstep_timeout_s, 0.0);
+    else if (key == "--max-depth-m")
+      number(o.max_depth_m, 0.0);
+    else if (key == "--start")
+      integer(o.start);
+    else if (key == "--max-frames")
+      integer(o.max_frames);
     else if (key == "--jpeg-quality") {
       int64_t q = 0;
       integer(q);
       if (q < 1 || q > 100) r.errors.push_back("--jpeg-quality must be 1..100");
       o.jpeg_quality = static_cast<int>(q);
     } else if (key == "--rgb-encoding") {
-      if (value == "raw") o.rgb_encoding = Img::ENCODING_RAW_BGR8;
-      else if (value == "jpeg") o.rgb_encoding = Img::ENCODING_JPEG;
-      else if (value == "png") o.rgb_encoding = Img::ENCODING_PNG;
-      else r.errors.push_back("--rgb-encoding must be raw, jpeg or png, got '" + value + "'");
+      if (value == "raw")
+        o.rgb_encoding = Img::ENCODING_RAW_BGR8;
+      else if (value == "jpeg")
+        o.rgb_encoding = Img::ENCODING_JPEG;
+      else if (value == "png")
+        o.rgb_encoding = Img::ENCODING_PNG;
+      else
+        r.errors.push_back("--rgb-encoding must be raw, jpeg or png, got '" + value + "'");
     } else if (key == "--depth-encoding") {
-      if (value == "raw") o.depth_encoding = Img::ENCODING_RAW_U16;
-      else if (value == "zlib") o.depth_encoding = Img::ENCODING_ZLIB_U16;
-      else if (value == "png") o.depth_encoding = Img::ENCODING_PNG_U16;
-      else r.errors.push_back("--depth-encoding must be raw, zlib or png, got '" + value + "'");
+      if (value == "raw")
+        o.depth_encoding = Img::ENCODING_RAW_U16;
+      else if (value == "zlib")
+        o.depth_encoding = Img::ENCODING_ZLIB_U16;
+      else if (value == "png")
+        o.depth_encoding = Img::ENCODING_PNG_U16;
+      else
+        r.errors.push_back("--depth-encoding must be raw, zlib or png, got '" + value + "'");
     }
   }
   if (!r.help && o.dataset_dir.empty()) r.errors.push_back("--dataset DIR is required");
@@ -206,8 +235,7 @@ PlayerNode::~PlayerNode() {
 }
 
 double PlayerNode::nowS() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 void PlayerNode::onPose(const lcm::ReceiveBuffer*, const std::string&,
@@ -270,8 +298,8 @@ void PlayerNode::waitUntil(double target_s) {
 bool PlayerNode::waitForPose(int64_t seq) {
   const double deadline = nowS() + options_.lockstep_timeout_s;
   msgs::spin(
-      lcm_, [&] { return last_pose_seq_ >= seq || nowS() >= deadline; },
-      [&] { periodic(false); }, 0.05);
+      lcm_, [&] { return last_pose_seq_ >= seq || nowS() >= deadline; }, [&] { periodic(false); },
+      0.05);
   return last_pose_seq_ >= seq;
 }
 
@@ -320,10 +348,9 @@ void PlayerNode::runLoop(PlayerResult& result) {
   const auto& entries = dataset_.index().entries;
   const int64_t pass_us =
       (entries.back().utime - entries[start].utime) +
-      (entries.size() - start > 1
-           ? (entries.back().utime - entries[start].utime) /
-                 static_cast<int64_t>(entries.size() - start - 1)
-           : 33333);
+      (entries.size() - start > 1 ? (entries.back().utime - entries[start].utime) /
+                                        static_cast<int64_t>(entries.size() - start - 1)
+                                  : 33333);
   int64_t loop_offset_us = 0;
   int64_t published_this_pass = 0;
   int64_t skipped_before = 0;

@@ -1,16 +1,15 @@
 // Player end to end, in-process on one memq:// instance (no host network).
+#include <gtest/gtest.h>
+#include <lcm/eventlog.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
-
-#include <gtest/gtest.h>
-#include <lcm/eventlog.h>
 #include <opencv2/imgcodecs.hpp>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <pplvo_msgs/node_status_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
@@ -42,20 +41,17 @@ struct Recorder {
     lcm.subscribe("PPLVO_STREAM", &Recorder::onEvent, this);
     lcm.subscribe("PPLVO_STATUS", &Recorder::onStatus, this);
   }
-  void onFrame(const lcm::ReceiveBuffer*, const std::string&,
-               const pplvo_msgs::rgbd_frame_t* m) {
+  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::rgbd_frame_t* m) {
     frames.push_back(*m);
     if (!keep_images && frames.size() > 3) {  // keep memory small: first 3 frames in full
       frames.back().rgb.data.clear();
       frames.back().depth.data.clear();
     }
   }
-  void onEvent(const lcm::ReceiveBuffer*, const std::string&,
-               const pplvo_msgs::stream_event_t* m) {
+  void onEvent(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::stream_event_t* m) {
     events.push_back(*m);
   }
-  void onStatus(const lcm::ReceiveBuffer*, const std::string&,
-                const pplvo_msgs::node_status_t* m) {
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::node_status_t* m) {
     statuses.push_back(*m);
   }
 };
@@ -67,9 +63,10 @@ struct Responder {
   int64_t last_pose_sent = -1;
   int out_of_step = 0;
   int frames = 0;
-  explicit Responder(lcm::LCM& l) : lcm(l) { lcm.subscribe("PPLVO_RGBD", &Responder::onFrame, this); }
-  void onFrame(const lcm::ReceiveBuffer*, const std::string&,
-               const pplvo_msgs::rgbd_frame_t* m) {
+  explicit Responder(lcm::LCM& l) : lcm(l) {
+    lcm.subscribe("PPLVO_RGBD", &Responder::onFrame, this);
+  }
+  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::rgbd_frame_t* m) {
     ++frames;
     if (m->seq != last_pose_sent + 1) ++out_of_step;
     pplvo_msgs::pose_t p{};
@@ -134,7 +131,7 @@ TEST(Player, PublishesAllIclFramesAsFastAsPossible) {
   for (size_t i = 0; i < rec.frames.size(); ++i) {
     const auto& f = rec.frames[i];
     EXPECT_EQ(f.seq, static_cast<int64_t>(i));
-    EXPECT_EQ(f.stamp, std::to_string(i));                 // verbatim ICL frame index
+    EXPECT_EQ(f.stamp, std::to_string(i));  // verbatim ICL frame index
     EXPECT_EQ(f.utime, static_cast<int64_t>(std::llround(i * 1e6 / 30.0)));  // 30 Hz
   }
   // Frame content: camera with the signed fy, raw depth equal to the PNG.
@@ -175,12 +172,12 @@ TEST(Player, LosslessEncodingsRoundTripAndStartMaxFrames) {
   const auto r = node.run();
   ASSERT_EQ(r.published, 3);
   ASSERT_EQ(rec.frames.size(), 3u);
-  EXPECT_EQ(rec.frames[0].seq, 0);       // seq counts published frames from 0
+  EXPECT_EQ(rec.frames[0].seq, 0);        // seq counts published frames from 0
   EXPECT_EQ(rec.frames[0].stamp, "100");  // stamp of dataset frame 100
   const cv::Mat depth = msgs::decodeImage(rec.frames[1].depth);
-  EXPECT_EQ(cv::norm(depth, cv::imread(iclDir() + "/depth/101.png", cv::IMREAD_UNCHANGED),
-                     cv::NORM_INF),
-            0.0);
+  EXPECT_EQ(
+      cv::norm(depth, cv::imread(iclDir() + "/depth/101.png", cv::IMREAD_UNCHANGED), cv::NORM_INF),
+      0.0);
   const cv::Mat bgr = msgs::decodeImage(rec.frames[1].rgb);
   EXPECT_EQ(cv::norm(bgr, cv::imread(iclDir() + "/rgb/101.png"), cv::NORM_INF), 0.0);
 }
@@ -264,7 +261,8 @@ TEST(Player, LoopKeepsSeqAndUtimeIncreasing) {
 }
 
 TEST(Player, CorruptFrameIsFatalUnlessSkipBad) {
-  const fs::path dir = fs::temp_directory_path() / ("pplvo_test_player_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("pplvo_test_player_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir / "rgb");
   fs::create_directories(dir / "depth");
@@ -304,8 +302,8 @@ TEST(Player, CorruptFrameIsFatalUnlessSkipBad) {
     EXPECT_EQ(r.published, 4);
     EXPECT_EQ(r.skipped, 1);
     ASSERT_EQ(rec.frames.size(), 4u);
-    EXPECT_EQ(rec.frames[3].seq, 3);       // seq stays consecutive
-    EXPECT_EQ(rec.frames[3].stamp, "4");   // the stamp of the frame after the bad one
+    EXPECT_EQ(rec.frames[3].seq, 3);      // seq stays consecutive
+    EXPECT_EQ(rec.frames[3].stamp, "4");  // the stamp of the frame after the bad one
     EXPECT_EQ(rec.events.back().event, pplvo_msgs::stream_event_t::EVENT_END);
     EXPECT_EQ(rec.events.back().frames_skipped, 1);
   }

@@ -1,12 +1,12 @@
 #include "pplvo/logging/event_log.h"
 
-#include <cerrno>
-#include <cstring>
-
 #include <lcm/eventlog.h>
 #include <stdio_ext.h>  // __fpurge (glibc)
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 namespace pplvo::logging {
 namespace {
@@ -50,8 +50,8 @@ void EventLogWriter::fail(const std::string& what, int err) {
       // Not possible on character devices such as /dev/full; readers stop at the cut anyway.
     }
   }
-  throw LogWriteError(what + " " + path_ + ": " + sysError(err) + " (" +
-                      std::to_string(events_) + " complete events kept)");
+  throw LogWriteError(what + " " + path_ + ": " + sysError(err) + " (" + std::to_string(events_) +
+                      " complete events kept)");
 }
 
 void EventLogWriter::write(const std::string& channel, int64_t timestamp_us, const void* data,

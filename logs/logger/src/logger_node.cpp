@@ -6,7 +6,6 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
-
 #include <pplvo_msgs/depth_map_t.hpp>
 #include <pplvo_msgs/features_t.hpp>
 #include <pplvo_msgs/node_status_t.hpp>
@@ -110,8 +109,7 @@ LoggerParseResult parseLoggerArgs(const std::vector<std::string>& args) {
       key = key.substr(0, eq);
       has_value = true;
     }
-    if (key == "--force" || key == "--until-end" || key == "--progress" ||
-        key == "--no-progress") {
+    if (key == "--force" || key == "--until-end" || key == "--progress" || key == "--no-progress") {
       if (has_value) r.errors.push_back(key + " takes no value");
       if (key == "--force") o.force = true;
       if (key == "--until-end") o.until_end = true;
@@ -121,17 +119,28 @@ LoggerParseResult parseLoggerArgs(const std::vector<std::string>& args) {
     }
     std::string* str = nullptr;
     double* num = nullptr;
-    if (key == "--output" || key == "-o") str = &o.output;
-    else if (key == "--channels") str = &o.channels;
-    else if (key == "--trajectory") str = &o.trajectory;
-    else if (key == "--summary") str = &o.summary;
-    else if (key == "--pose-channel") str = &o.pose_channel;
-    else if (key == "--stream-channel") str = &o.stream_channel;
-    else if (key == "--status-channel") str = &o.status_channel;
-    else if (key == "--lcm-url") str = &o.lcm_url;
-    else if (key == "--drain") num = &o.drain_s;
-    else if (key == "--timeout") num = &o.timeout_s;
-    else if (key == "--idle-timeout") num = &o.idle_timeout_s;
+    if (key == "--output" || key == "-o")
+      str = &o.output;
+    else if (key == "--channels")
+      str = &o.channels;
+    else if (key == "--trajectory")
+      str = &o.trajectory;
+    else if (key == "--summary")
+      str = &o.summary;
+    else if (key == "--pose-channel")
+      str = &o.pose_channel;
+    else if (key == "--stream-channel")
+      str = &o.stream_channel;
+    else if (key == "--status-channel")
+      str = &o.status_channel;
+    else if (key == "--lcm-url")
+      str = &o.lcm_url;
+    else if (key == "--drain")
+      num = &o.drain_s;
+    else if (key == "--timeout")
+      num = &o.timeout_s;
+    else if (key == "--idle-timeout")
+      num = &o.idle_timeout_s;
     else {
       r.errors.push_back("unknown option '" + args[i] + "'");
       continue;
@@ -172,8 +181,7 @@ std::string LoggerResult::summaryLine() const {
   return s;
 }
 
-LoggerNode::LoggerNode(const LoggerOptions& options, lcm::LCM& lcm)
-    : options_(options), lcm_(lcm) {
+LoggerNode::LoggerNode(const LoggerOptions& options, lcm::LCM& lcm) : options_(options), lcm_(lcm) {
   if (!options_.output.empty()) {
     std::error_code ec;
     if (!options_.force && std::filesystem::exists(options_.output, ec) &&
@@ -189,7 +197,8 @@ LoggerNode::LoggerNode(const LoggerOptions& options, lcm::LCM& lcm)
     summary_.trajectory_path = options_.trajectory;
   }
   subs_.push_back(lcm_.subscribe(options_.channels, &LoggerNode::onRecord, this));
-  if (trajectory_) subs_.push_back(lcm_.subscribe(options_.pose_channel, &LoggerNode::onPose, this));
+  if (trajectory_)
+    subs_.push_back(lcm_.subscribe(options_.pose_channel, &LoggerNode::onPose, this));
   subs_.push_back(lcm_.subscribe(options_.status_channel, &LoggerNode::onStatus, this));
   subs_.push_back(lcm_.subscribe(options_.stream_channel, &LoggerNode::onStream, this));
   for (auto* s : subs_) {
@@ -204,8 +213,7 @@ LoggerNode::~LoggerNode() {
 }
 
 double LoggerNode::nowS() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 void LoggerNode::touch() { last_msg_s_ = nowS(); }
@@ -269,7 +277,8 @@ void LoggerNode::onStatus(const lcm::ReceiveBuffer* rbuf, const std::string& cha
     n.errors = m.errors;
     n.last_warning = m.last_warning;
     n.stages.clear();
-    for (const auto& s : m.stages) n.stages.push_back({s.name, s.count, s.last_ms, s.mean_ms, s.max_ms});
+    for (const auto& s : m.stages)
+      n.stages.push_back({s.name, s.count, s.last_ms, s.mean_ms, s.max_ms});
     ++n.reports;
   });
 }
@@ -324,7 +333,8 @@ LoggerResult LoggerNode::run() {
     return !reason.empty();
   };
   try {
-    msgs::spin(lcm_, done, [&] { progress(false); }, 0.5);
+    msgs::spin(
+        lcm_, done, [&] { progress(false); }, 0.5);
   } catch (const std::exception& e) {
     if (fatal_.empty() && !msgs::shutdownRequested()) fatal_ = e.what();
   }

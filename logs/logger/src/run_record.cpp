@@ -1,10 +1,10 @@
 #include "pplvo/logging/run_record.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-
-#include <yaml-cpp/yaml.h>
 
 namespace pplvo::logging {
 namespace {
@@ -57,7 +57,8 @@ void TrajectoryWriter::close() {
   errno = 0;
   const int rc = std::fclose(f_);
   f_ = nullptr;
-  if (rc != 0) throw LogWriteError("cannot close trajectory file " + path_ + ": " + sysError(errno));
+  if (rc != 0)
+    throw LogWriteError("cannot close trajectory file " + path_ + ": " + sysError(errno));
 }
 
 void ChannelStats::add(int64_t bytes_in, int64_t recv_utime, std::optional<int64_t> seq) {

@@ -1,22 +1,21 @@
 // Event logs, trajectories and the logger node (in-process on memq://, or file:// logs).
-#include <chrono>
-#include <cmath>
-#include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <random>
-#include <sstream>
-
 #include <gtest/gtest.h>
 #include <lcm/eventlog.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <pplvo_msgs/node_status_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
+#include <random>
+#include <sstream>
 
 #include "pplvo/core/trajectory.h"
 #include "pplvo/logging/event_log.h"
@@ -223,8 +222,9 @@ TEST(EventLog, TruncatedCopyIsReadUpToTheCut) {
   {
     std::ofstream out(cut, std::ios::binary | std::ios::trunc);
     out.write(bytes.data(), size);
-    const unsigned char junk[] = {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0, 0, 9, 0, 0, 0, 0,
-                                  0, 0, 0, 1, 0x7f, 0xff, 0xff, 0xff, 0x7f, 0xff, 0xff, 0xff};
+    const unsigned char junk[] = {0xED, 0xA1, 0xDA, 0x01, 0,    0,    0,    0,   0, 0,
+                                  0,    9,    0,    0,    0,    0,    0,    0,   0, 1,
+                                  0x7f, 0xff, 0xff, 0xff, 0x7f, 0xff, 0xff, 0xff};
     out.write(reinterpret_cast<const char*>(junk), sizeof junk);
   }
   const EventLogReadResult g = readEventLog(cut);
@@ -266,9 +266,9 @@ TEST(Trajectory, LinesEqualThePosesSent) {
       EXPECT_TRUE(w.write(poses.back().stamp, poses.back().position, poses.back().orientation));
       // Flushed per line: the file already holds header + i + 1 lines.
       std::ifstream in(path);
-      EXPECT_EQ(std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(),
-                           '\n'),
-                i + 2);
+      EXPECT_EQ(
+          std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'),
+          i + 2);
     }
     const double nan_pos[3] = {NAN, 0, 0};
     EXPECT_FALSE(w.write("99", nan_pos, poses[0].orientation));
@@ -420,7 +420,8 @@ TEST(Logger, FullDiskStopsWithErrorAndKeepsOtherOutputs) {
   o.summary = sum_path;
   o.timeout_s = 10.0;
   LoggerNode node(o, lcm);
-  for (int i = 0; i < 3; ++i) lcm.publish("PPLVO_RGBD", &static_cast<const pplvo_msgs::rgbd_frame_t&>(makeFrame(i)));
+  for (int i = 0; i < 3; ++i)
+    lcm.publish("PPLVO_RGBD", &static_cast<const pplvo_msgs::rgbd_frame_t&>(makeFrame(i)));
   const LoggerResult r = node.run();
   EXPECT_EQ(r.exit_code, kExitFailed);
   EXPECT_EQ(r.summary.stop_reason, "write error");
@@ -505,8 +506,8 @@ TEST(LcmLogplayer, ReplaysOurLogIntoAFileLog) {
   cleanup.paths = {in, out};
   const auto sent = makeEvents(12, 21);
   writeLog(in, sent);
-  const int rc = runCommand("timeout 60 lcm-logplayer -s 1000 -l 'file://" + out +
-                            "?mode=w' " + in + " >/dev/null 2>&1");
+  const int rc = runCommand("timeout 60 lcm-logplayer -s 1000 -l 'file://" + out + "?mode=w' " +
+                            in + " >/dev/null 2>&1");
   EXPECT_EQ(rc, 0);
   const EventLogReadResult r = readEventLog(out);
   EXPECT_FALSE(r.truncated) << r.detail;

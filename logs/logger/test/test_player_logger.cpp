@@ -1,11 +1,10 @@
 // Player -> logger on one memq:// instance: what the player publishes is what the log holds.
-#include <cstdlib>
-#include <filesystem>
-
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 
 #include "pplvo/logging/event_log.h"
@@ -17,7 +16,8 @@ using namespace pplvo;
 
 TEST(PlayerToLogger, AllFramesLoggedInOrderWithVerbatimStamps) {
   const char* env = std::getenv("PPLVO_SHARED_DATA");
-  const std::string dir = std::string(env ? env : "../shared/data") + "/tum_fr3_sitting_static_short";
+  const std::string dir =
+      std::string(env ? env : "../shared/data") + "/tum_fr3_sitting_static_short";
   const std::string base =
       (fs::temp_directory_path() / ("pplvo_test_pl_" + std::to_string(::getpid()))).string();
   const std::string log_path = base + ".lcmlog", sum_path = base + ".yaml";

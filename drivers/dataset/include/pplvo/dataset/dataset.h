@@ -4,12 +4,11 @@
 /// `calib_params.xml`. No LCM here: the player node (drivers/player) wraps this library.
 /// See docs/player.md for the association rules and the camera file formats.
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
 #include "pplvo/core/rgbd_frame.h"
@@ -86,18 +85,18 @@ struct DatasetEntry {
 
 /// How the index was built, for the start-up summary.
 struct IndexSummary {
-  std::string source;             ///< "associations.txt" or "rgb.txt+depth.txt"
-  std::string column_order;       ///< "rgb-first", "depth-first", "rgb-first (assumed)", mixed
-  int listed = 0;                 ///< associations lines, or rgb.txt entries
-  int listed_depth = 0;           ///< depth.txt entries (0 with associations.txt)
+  std::string source;        ///< "associations.txt" or "rgb.txt+depth.txt"
+  std::string column_order;  ///< "rgb-first", "depth-first", "rgb-first (assumed)", mixed
+  int listed = 0;            ///< associations lines, or rgb.txt entries
+  int listed_depth = 0;      ///< depth.txt entries (0 with associations.txt)
   int malformed_lines = 0;
-  int missing_rgb_files = 0;      ///< listed colour images that do not exist (dropped)
-  int missing_depth_files = 0;    ///< listed depth images that do not exist (dropped)
-  int unassociated_rgb = 0;       ///< existing colour images with no depth within the window
-  int unlisted_rgb_files = 0;     ///< files in rgb/ that no index line mentions (not played)
-  bool index_stamps = false;      ///< stamps are integer frame indices (ICL-NUIM)
-  double index_frame_rate_hz = 0; ///< rate used to turn indices into time
-  std::string first_missing;      ///< first missing file, for the message
+  int missing_rgb_files = 0;       ///< listed colour images that do not exist (dropped)
+  int missing_depth_files = 0;     ///< listed depth images that do not exist (dropped)
+  int unassociated_rgb = 0;        ///< existing colour images with no depth within the window
+  int unlisted_rgb_files = 0;      ///< files in rgb/ that no index line mentions (not played)
+  bool index_stamps = false;       ///< stamps are integer frame indices (ICL-NUIM)
+  double index_frame_rate_hz = 0;  ///< rate used to turn indices into time
+  std::string first_missing;       ///< first missing file, for the message
   /// One paragraph for the log, e.g. "rgb.txt+depth.txt: 149 colour, 686 depth entries ...".
   std::string text() const;
 };
@@ -116,9 +115,9 @@ DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options = 
 
 /// Colour camera and depth scale.
 struct DatasetCamera {
-  PinholeCamera camera;        ///< width/height 0 until known (set from the first frame)
-  double depth_scale = 5000.0; ///< depth units per metre (TUM/ICL PNG: 5000)
-  std::string source;          ///< file it was read from
+  PinholeCamera camera;         ///< width/height 0 until known (set from the first frame)
+  double depth_scale = 5000.0;  ///< depth units per metre (TUM/ICL PNG: 5000)
+  std::string source;           ///< file it was read from
 };
 
 /// Reads an OpenCV FileStorage calibration (`RGB_intrinsic_params` 3x3,

@@ -2,13 +2,11 @@
 /// pplvo-player: publishes a TUM-layout RGB-D folder as rgbd_frame_t messages. A thin LCM
 /// node over pplvo_dataset; usage and channels in docs/player.md.
 #include <cstdint>
-#include <string>
-#include <vector>
-
 #include <lcm/lcm-cpp.hpp>
-
 #include <pplvo_msgs/image_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
+#include <string>
+#include <vector>
 
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/dataset/dataset.h"
@@ -18,11 +16,11 @@
 namespace pplvo::player {
 
 struct PlayerOptions {
-  std::string dataset_dir;                       ///< --dataset (required)
-  std::string camera_file;                       ///< --camera: YAML (or .xml) camera file
-  std::string lcm_url;                           ///< --lcm-url; empty: $LCM_DEFAULT_URL
-  std::string channel = channels::kRgbd;         ///< --channel
-  std::string pose_channel = channels::kPose;    ///< --pose-channel (lockstep replies)
+  std::string dataset_dir;                     ///< --dataset (required)
+  std::string camera_file;                     ///< --camera: YAML (or .xml) camera file
+  std::string lcm_url;                         ///< --lcm-url; empty: $LCM_DEFAULT_URL
+  std::string channel = channels::kRgbd;       ///< --channel
+  std::string pose_channel = channels::kPose;  ///< --pose-channel (lockstep replies)
   std::string stream_channel = channels::kStream;
   std::string status_channel = channels::kStatus;
   /// --rate: 1 = real time from the stamps, 2 = twice as fast, 0 = as fast as possible.
@@ -30,18 +28,18 @@ struct PlayerOptions {
   /// --fps: fixed publish rate (Hz) instead of the stamps (still scaled by --rate); also the
   /// frame rate of datasets whose stamps are frame indices. 0 = from the stamps.
   double fps = 0.0;
-  bool lockstep = false;                         ///< --lockstep
-  double lockstep_timeout_s = 5.0;               ///< --lockstep-timeout
-  int64_t start = 0;                             ///< --start: first associated frame
-  int64_t max_frames = 0;                        ///< --max-frames: 0 = all
-  double max_depth_m = 0.0;                      ///< --max-depth-m: 0 = no limit
-  bool skip_bad = false;                         ///< --skip-bad
+  bool lockstep = false;            ///< --lockstep
+  double lockstep_timeout_s = 5.0;  ///< --lockstep-timeout
+  int64_t start = 0;                ///< --start: first associated frame
+  int64_t max_frames = 0;           ///< --max-frames: 0 = all
+  double max_depth_m = 0.0;         ///< --max-depth-m: 0 = no limit
+  bool skip_bad = false;            ///< --skip-bad
   int8_t rgb_encoding = pplvo_msgs::image_t::ENCODING_RAW_BGR8;   ///< --rgb-encoding raw|jpeg|png
   int8_t depth_encoding = pplvo_msgs::image_t::ENCODING_RAW_U16;  ///< --depth-encoding raw|zlib|png
-  int jpeg_quality = 90;                         ///< --jpeg-quality
-  bool loop = false;                             ///< --loop
-  bool progress = false;                         ///< progress line on stderr (main: isatty)
-  double status_period_s = 1.0;                  ///< node_status_t period
+  int jpeg_quality = 90;                                          ///< --jpeg-quality
+  bool loop = false;                                              ///< --loop
+  bool progress = false;         ///< progress line on stderr (main: isatty)
+  double status_period_s = 1.0;  ///< node_status_t period
   /// A frame later than this behind schedule re-anchors the clock (no catch-up burst), s.
   double max_lag_s = 0.5;
   std::string node_name = "pplvo-player";
@@ -59,12 +57,12 @@ std::string playerUsage();
 /// What a run did.
 struct PlayerResult {
   int64_t published = 0;
-  int64_t skipped = 0;            ///< bad frames skipped (--skip-bad) or unencodable
+  int64_t skipped = 0;  ///< bad frames skipped (--skip-bad) or unencodable
   int64_t lockstep_timeouts = 0;
-  int64_t loops = 0;              ///< completed passes over the dataset with --loop
+  int64_t loops = 0;  ///< completed passes over the dataset with --loop
   double elapsed_s = 0.0;
-  bool interrupted = false;       ///< stopped by SIGINT/SIGTERM
-  bool failed = false;            ///< fatal error (e.g. corrupt frame without --skip-bad)
+  bool interrupted = false;  ///< stopped by SIGINT/SIGTERM
+  bool failed = false;       ///< fatal error (e.g. corrupt frame without --skip-bad)
   std::string error;
   /// Exit status of the process: 0 on success or interruption, 1 on a fatal error.
   int exitCode() const { return failed ? 1 : 0; }

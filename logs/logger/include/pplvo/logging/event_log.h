@@ -96,8 +96,8 @@ class EventLogReader {
 /// Result of reading a whole log.
 struct EventLogReadResult {
   std::vector<LogEvent> events;
-  bool truncated = false;       ///< the file ends with an incomplete or garbled event
-  int64_t valid_bytes = 0;      ///< end of the last complete event
+  bool truncated = false;   ///< the file ends with an incomplete or garbled event
+  int64_t valid_bytes = 0;  ///< end of the last complete event
   int64_t file_bytes = 0;
   std::string detail;
 };

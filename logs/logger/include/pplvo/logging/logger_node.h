@@ -2,11 +2,10 @@
 /// pplvo-logger: records LCM channels to an event log, the estimated trajectory to a TUM file
 /// and a run summary. A thin LCM node over pplvo_logging; usage in docs/logger.md.
 #include <cstdint>
+#include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <lcm/lcm-cpp.hpp>
 
 #include "pplvo/logging/event_log.h"
 #include "pplvo/logging/run_record.h"
@@ -25,11 +24,11 @@ struct LoggerOptions {
   std::string pose_channel = channels::kPose;      ///< --pose-channel
   std::string stream_channel = channels::kStream;  ///< --stream-channel
   std::string status_channel = channels::kStatus;  ///< --status-channel
-  bool until_end = false;      ///< --until-end: stop after stream_event_t END plus drain_s
-  double drain_s = 1.0;        ///< --drain: seconds to keep recording after END
-  double timeout_s = 0.0;      ///< --timeout: stop after this many seconds (0 = never)
-  double idle_timeout_s = 0.0; ///< --idle-timeout: stop after this long without messages
-  bool progress = false;       ///< progress line on stderr (main: isatty)
+  bool until_end = false;       ///< --until-end: stop after stream_event_t END plus drain_s
+  double drain_s = 1.0;         ///< --drain: seconds to keep recording after END
+  double timeout_s = 0.0;       ///< --timeout: stop after this many seconds (0 = never)
+  double idle_timeout_s = 0.0;  ///< --idle-timeout: stop after this long without messages
+  bool progress = false;        ///< progress line on stderr (main: isatty)
 };
 
 struct LoggerParseResult {
@@ -42,10 +41,10 @@ std::string loggerUsage();
 
 /// Exit statuses of pplvo-logger.
 enum LoggerExit : int {
-  kExitOk = 0,          ///< stopped by Ctrl-C, --until-end, --timeout, or --idle-timeout alone
-  kExitFailed = 1,      ///< write error (full disk), LCM failure
-  kExitUsage = 2,       ///< bad command line
-  kExitNoEnd = 3,       ///< --until-end given, but the idle timeout fired before any END
+  kExitOk = 0,      ///< stopped by Ctrl-C, --until-end, --timeout, or --idle-timeout alone
+  kExitFailed = 1,  ///< write error (full disk), LCM failure
+  kExitUsage = 2,   ///< bad command line
+  kExitNoEnd = 3,   ///< --until-end given, but the idle timeout fired before any END
 };
 
 struct LoggerResult {

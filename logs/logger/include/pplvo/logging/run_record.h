@@ -41,12 +41,12 @@ struct ChannelStats {
   int64_t bytes = 0;
   int64_t first_recv_utime = 0;
   int64_t last_recv_utime = 0;
-  bool has_seq = false;       ///< the message type carries a frame seq
+  bool has_seq = false;  ///< the message type carries a frame seq
   int64_t first_seq = -1;
   int64_t last_seq = -1;
-  int64_t gaps = 0;           ///< times seq jumped forward by more than 1
-  int64_t missing_seq = 0;    ///< frames those jumps skipped
-  int64_t non_increasing = 0; ///< seq repeated or went back
+  int64_t gaps = 0;            ///< times seq jumped forward by more than 1
+  int64_t missing_seq = 0;     ///< frames those jumps skipped
+  int64_t non_increasing = 0;  ///< seq repeated or went back
   /// Counts one message; seq when its type has one.
   void add(int64_t bytes_in, int64_t recv_utime, std::optional<int64_t> seq);
 };
