@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <regex>
 #include <pplvo_msgs/depth_map_t.hpp>
 #include <pplvo_msgs/features_t.hpp>
 #include <pplvo_msgs/node_status_t.hpp>
@@ -167,6 +168,13 @@ LoggerParseResult parseLoggerArgs(const std::vector<std::string>& args) {
     r.errors.push_back("nothing to record: give --output, --trajectory and/or --summary");
   }
   if (o.channels.empty()) r.errors.push_back("--channels must not be empty");
+  // LCM 1.3.1 only prints a bad regex and then never matches: check it here (ECMAScript
+  // syntax is close enough to GLib's PCRE to catch unbalanced brackets and the like).
+  try {
+    std::regex check(o.channels);
+  } catch (const std::regex_error& e) {
+    r.errors.push_back("--channels: invalid regular expression '" + o.channels + "': " + e.what());
+  }
   return r;
 }
 

@@ -311,6 +311,9 @@ TEST(LoggerArgs, ParsesAndCollectsErrors) {
   EXPECT_TRUE(r.options.until_end);
   EXPECT_DOUBLE_EQ(r.options.drain_s, 0.5);
   EXPECT_DOUBLE_EQ(r.options.idle_timeout_s, 3.0);
+  r = parseLoggerArgs({"--summary", "s.yaml", "--channels", "PPLVO_(POSE"});
+  ASSERT_EQ(r.errors.size(), 1u);
+  EXPECT_NE(r.errors[0].find("invalid regular expression"), std::string::npos);
   r = parseLoggerArgs({"--timeout", "x", "--what"});
   EXPECT_EQ(r.errors.size(), 3u);  // bad number, unknown option, nothing to record
 }
