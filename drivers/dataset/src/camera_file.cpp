@@ -2,6 +2,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <filesystem>
 #include <opencv2/core/persistence.hpp>
 #include <set>
 #include <sstream>
@@ -39,6 +40,10 @@ DatasetCamera loadCalibParamsXml(const std::string& path) {
   DatasetCamera cam;
   cam.source = path;
   std::vector<std::string> errors;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw DatasetError("calibration file does not exist: " + path);
+  }
   try {
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) throw DatasetError("cannot open calibration file " + path);
