@@ -357,8 +357,8 @@ TEST(PlayerProcess, ExitCodesAndCtrlC) {
   EXPECT_EQ(run(exe + " --lcm-url memq:// --dataset " + iclDir() +
                 " --camera /nonexistent/cam.yaml 2>/dev/null"),
             1);
-  // Real-time playback of 251 frames takes 8 s; SIGINT after 1.5 s stops it cleanly.
-  EXPECT_EQ(run("timeout --preserve-status -s INT 1.5 " + exe + " --lcm-url memq:// --dataset " +
+  // Real-time playback of 251 frames takes 8 s; SIGINT after 3 s stops it cleanly (handlers are installed first thing in main).
+  EXPECT_EQ(run("timeout --preserve-status -s INT 3 " + exe + " --lcm-url memq:// --dataset " +
                 iclDir() + " 2>/dev/null"),
             0);
 }

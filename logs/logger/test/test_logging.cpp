@@ -486,7 +486,7 @@ TEST(LoggerProcess, ExitCodesAndCtrlC) {
   EXPECT_TRUE(fs::exists(sum));
   // SIGINT stops it cleanly (exit 0) and the summary says so.
   fs::remove(sum);
-  EXPECT_EQ(runCommand("timeout --preserve-status -s INT 0.5 " + exe +
+  EXPECT_EQ(runCommand("timeout --preserve-status -s INT 2 " + exe +
                        " --lcm-url memq:// --summary " + sum + " 2>/dev/null"),
             0);
   ASSERT_TRUE(fs::exists(sum));
