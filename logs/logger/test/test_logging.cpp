@@ -1,12 +1,14 @@
 // Event logs, trajectories and the logger node (in-process on memq://, or file:// logs).
 #include <gtest/gtest.h>
 #include <lcm/eventlog.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -251,6 +253,43 @@ TEST(EventLog, FullDiskGivesAClearErrorAndNoCrash) {
   RunSummary s;
   EXPECT_THROW(s.writeFile("/dev/full"), LogWriteError);
   EXPECT_THROW(EventLogWriter("/nonexistent_dir/x.lcmlog"), LogWriteError);
+}
+
+TEST(EventLog, FileSizeLimitLeavesAValidLogOfCompleteEvents) {
+  // A real file hitting a size limit (RLIMIT_FSIZE, EFBIG) stands in for a disk filling up:
+  // the partial event is cut away and the log reads back complete, without the truncation flag.
+  Removed cleanup;
+  const std::string path = tmpPath("limited.lcmlog");
+  cleanup.paths.push_back(path);
+  struct rlimit old {};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit lim = old;
+  lim.rlim_cur = 20000;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &lim), 0);
+  const auto sent = makeEvents(40, 17);
+  std::string error;
+  int64_t written = 0;
+  {
+    EventLogWriter w(path);
+    try {
+      for (const auto& e : sent) {
+        w.write(e.channel, 1, e.data.data(), static_cast<int32_t>(e.data.size()));
+      }
+    } catch (const LogWriteError& e) {
+      error = e.what();
+    }
+    written = w.eventsWritten();
+  }
+  setrlimit(RLIMIT_FSIZE, &old);
+  std::signal(SIGXFSZ, old_handler);
+  ASSERT_FALSE(error.empty()) << "40 events of up to 3 kB fit in 20 kB?";
+  EXPECT_NE(error.find(path), std::string::npos) << error;
+  EXPECT_GT(written, 0);
+  const EventLogReadResult r = readEventLog(path);
+  EXPECT_FALSE(r.truncated) << r.detail;  // cut back to the last complete event
+  ASSERT_EQ(static_cast<int64_t>(r.events.size()), written);
+  for (size_t i = 0; i < r.events.size(); ++i) EXPECT_EQ(r.events[i].data, sent[i].data);
 }
 
 TEST(Trajectory, LinesEqualThePosesSent) {
