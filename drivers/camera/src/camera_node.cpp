@@ -1,0 +1,368 @@
+// pplvo-camera: publishes rgbd_frame_t from a live RGB-D sensor (OpenNI2 or libfreenect), the
+// same messages as the dataset player. Thin: the backend copies device buffers, the
+// conversions live in pplvo_camera_convert, and this file only maps to messages and publishes.
+// Channels: out PPLVO_RGBD (rgbd_frame_t), PPLVO_STREAM (stream_event_t START/END),
+// PPLVO_STATUS (node_status_t, about once a second). See docs/cameras.md.
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <optional>
+#include <memory>
+#include <string>
+
+#include <pplvo_msgs/rgbd_frame_t.hpp>
+#include <pplvo_msgs/stream_event_t.hpp>
+
+#include "backend.h"
+#include "pplvo/camera/convert.h"
+#include "pplvo/msgs/channels.h"
+#include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/node_runtime.h"
+
+namespace pc = pplvo::camera;
+namespace pm = pplvo::msgs;
+
+namespace {
+
+constexpr const char* kNode = "pplvo-camera";
+constexpr int kExitUsage = 1;
+constexpr int kExitNoDevice = 2;
+constexpr int kExitRuntime = 3;
+
+struct NodeOptions {
+  std::string backend = "openni2";
+  pc::BackendOptions device;
+  std::string lcm_url;  // empty: $LCM_DEFAULT_URL
+  std::string channel = pplvo::channels::kRgbd;
+  std::string stream_channel = pplvo::channels::kStream;
+  std::string status_channel = pplvo::channels::kStatus;
+  std::string calib;
+  pc::RgbEncoding rgb_encoding = pc::RgbEncoding::Raw;
+  pc::DepthEncoding depth_encoding = pc::DepthEncoding::Raw;
+  int jpeg_quality = 90;
+  double max_fps = 0;        // 0: every frame
+  int64_t max_frames = 0;    // 0: until stopped
+  double lost_after_s = 3.0;       // no frame for this long: device lost
+  double reconnect_period_s = 1.0;
+};
+
+void usage() {
+  std::fprintf(stderr,
+      "usage: pplvo-camera [options]\n"
+      "  --backend openni2|freenect   device library (default openni2)\n"
+      "  --device URI|INDEX           OpenNI2 URI (or .oni file) or index; freenect index\n"
+      "  --lcm-url URL                LCM provider (default $LCM_DEFAULT_URL); e.g.\n"
+      "                               'file:///tmp/cam.lcmlog?mode=w' to record to a log\n"
+      "  --channel NAME               frame channel (default PPLVO_RGBD)\n"
+      "  --stream-channel NAME        stream events (default PPLVO_STREAM)\n"
+      "  --status-channel NAME        node status (default PPLVO_STATUS)\n"
+      "  --width W --height H --fps F colour and depth mode (default 640 480 30)\n"
+      "  --registration on|off        hardware depth-to-colour registration (default on)\n"
+      "  --calib FILE                 calib_params.xml / OpenCV YAML with colour intrinsics\n"
+      "  --rgb-encoding raw|jpeg|png  (default raw)   --jpeg-quality Q (default 90)\n"
+      "  --depth-encoding raw|zlib|png (default raw)\n"
+      "  --max-fps F                  publish at most F frames per second (default: all)\n"
+      "  --max-frames N               stop after N published frames (default: run until ^C)\n"
+      "  --lost-after S               seconds without frames before reconnecting (default 3)\n");
+}
+
+bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      usage();
+      std::exit(0);
+    }
+    if (i + 1 >= argc) {
+      *error = "missing value after " + a;
+      return false;
+    }
+    const std::string v = argv[++i];
+    try {
+      if (a == "--backend") o->backend = v;
+      else if (a == "--device") o->device.device = v;
+      else if (a == "--lcm-url") o->lcm_url = v;
+      else if (a == "--channel") o->channel = v;
+      else if (a == "--stream-channel") o->stream_channel = v;
+      else if (a == "--status-channel") o->status_channel = v;
+      else if (a == "--width") o->device.width = std::stoi(v);
+      else if (a == "--height") o->device.height = std::stoi(v);
+      else if (a == "--fps") o->device.fps = std::stoi(v);
+      else if (a == "--registration") {
+        if (v != "on" && v != "off") {
+          *error = "--registration takes on or off";
+          return false;
+        }
+        o->device.registration = v == "on";
+      } else if (a == "--calib") o->calib = v;
+      else if (a == "--rgb-encoding") {
+        const auto e = pc::parseRgbEncoding(v);
+        if (!e) {
+          *error = "--rgb-encoding takes raw, jpeg or png";
+          return false;
+        }
+        o->rgb_encoding = *e;
+      } else if (a == "--depth-encoding") {
+        const auto e = pc::parseDepthEncoding(v);
+        if (!e) {
+          *error = "--depth-encoding takes raw, zlib or png";
+          return false;
+        }
+        o->depth_encoding = *e;
+      } else if (a == "--jpeg-quality") o->jpeg_quality = std::stoi(v);
+      else if (a == "--max-fps") o->max_fps = std::stod(v);
+      else if (a == "--max-frames") o->max_frames = std::stoll(v);
+      else if (a == "--lost-after") o->lost_after_s = std::stod(v);
+      else {
+        *error = "unknown option " + a;
+        return false;
+      }
+    } catch (const std::exception&) {
+      *error = "bad value '" + v + "' for " + a;
+      return false;
+    }
+  }
+  if (o->backend != "openni2" && o->backend != "freenect") {
+    *error = "--backend takes openni2 or freenect";
+    return false;
+  }
+  if (o->device.width <= 0 || o->device.height <= 0 || o->device.fps <= 0) {
+    *error = "--width, --height and --fps must be positive";
+    return false;
+  }
+  if (o->max_frames < 0 || o->max_fps < 0 || !(o->lost_after_s > 0)) {
+    *error = "--max-frames, --max-fps must be >= 0 and --lost-after > 0";
+    return false;
+  }
+  if (o->jpeg_quality < 1 || o->jpeg_quality > 100) {
+    *error = "--jpeg-quality must be in 1..100";
+    return false;
+  }
+  return true;
+}
+
+int8_t rgbCode(pc::RgbEncoding e) {
+  switch (e) {
+    case pc::RgbEncoding::Jpeg: return pplvo_msgs::image_t::ENCODING_JPEG;
+    case pc::RgbEncoding::Png: return pplvo_msgs::image_t::ENCODING_PNG;
+    default: return pplvo_msgs::image_t::ENCODING_RAW_BGR8;
+  }
+}
+int8_t depthCode(pc::DepthEncoding e) {
+  switch (e) {
+    case pc::DepthEncoding::Zlib: return pplvo_msgs::image_t::ENCODING_ZLIB_U16;
+    case pc::DepthEncoding::Png: return pplvo_msgs::image_t::ENCODING_PNG_U16;
+    default: return pplvo_msgs::image_t::ENCODING_RAW_U16;
+  }
+}
+
+/// The publishing side: converts captured frames to messages and keeps the counters.
+class CameraPublisher {
+ public:
+  CameraPublisher(const NodeOptions& options, lcm::LCM& lcm, pplvo::PinholeCamera camera,
+                  std::string source)
+      : options_(options), lcm_(lcm), camera_(camera), source_(std::move(source)),
+        limiter_(options.max_fps) {}
+
+  void setSource(const std::string& s) { source_ = s; }
+  void resetClock(const pc::DeviceClockOptions& clock) { clock_.emplace(clock); }
+
+  void onFrame(const pc::CapturedFrame& f) {
+    ++counters_.frames_in;
+    pm::guarded(counters_, kNode, [&] {
+      pplvo::Stopwatch watch;
+      const int64_t utime = clock_->map(f.device_ticks, f.host_arrival_utime);
+      if (!limiter_.allow(utime)) {
+        ++counters_.frames_dropped;
+        return;
+      }
+      if (f.bgr.size() != f.depth_u16.size()) {
+        throw pm::MessageError("colour " + std::to_string(f.bgr.cols) + "x" +
+                               std::to_string(f.bgr.rows) + " and depth " +
+                               std::to_string(f.depth_u16.cols) + "x" +
+                               std::to_string(f.depth_u16.rows) + " sizes differ");
+      }
+      if (f.bgr.cols != camera_.width || f.bgr.rows != camera_.height) {
+        throw pm::MessageError("frame size differs from the camera model");
+      }
+      pplvo_msgs::rgbd_frame_t msg;
+      msg.utime = utime;
+      msg.seq = seq_;
+      msg.stamp = pc::stampText(utime);
+      msg.source = source_;
+      msg.camera = pm::toMsg(camera_);
+      msg.depth_scale = f.depth_scale;
+      msg.rgb = pm::encodeImage(f.bgr, rgbCode(options_.rgb_encoding), options_.jpeg_quality);
+      msg.depth = pm::encodeImage(f.depth_u16, depthCode(options_.depth_encoding));
+      lcm_.publish(options_.channel, &msg);
+      ++seq_;
+      ++counters_.frames_out;
+      counters_.last_seq = msg.seq;
+      timings_.add("publish", watch.elapsedMs());
+    });
+  }
+
+  void publishEvent(int8_t event) {
+    pm::guarded(counters_, kNode, [&] {
+      pplvo_msgs::stream_event_t ev;
+      ev.utime = pplvo::hostUtime();
+      ev.source = source_;
+      ev.event = event;
+      ev.frames_published = counters_.frames_out;
+      ev.frames_skipped = counters_.frames_skipped;
+      lcm_.publish(options_.stream_channel, &ev);
+    });
+  }
+
+  void publishStatus(int64_t backend_dropped) {
+    pm::guarded(counters_, kNode, [&] {
+      pm::NodeCounters c = counters_;
+      c.frames_dropped += backend_dropped;
+      auto msg = pm::toStatusMsg(kNode, c, timings_, pplvo::hostUtime());
+      lcm_.publish(options_.status_channel, &msg);
+    });
+  }
+
+  void warn(const std::string& w) {
+    counters_.last_warning = w;
+    std::fprintf(stderr, "[%s] %s\n", kNode, w.c_str());
+  }
+  int64_t published() const { return counters_.frames_out; }
+
+ private:
+  const NodeOptions& options_;
+  lcm::LCM& lcm_;
+  pplvo::PinholeCamera camera_;
+  std::string source_;
+  std::optional<pc::DeviceClockMapper> clock_;
+  pc::RateLimiter limiter_;
+  pm::NodeCounters counters_;
+  pplvo::StageTimings timings_;
+  int64_t seq_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  NodeOptions options;
+  std::string error;
+  if (!parseArgs(argc, argv, &options, &error)) {
+    std::fprintf(stderr, "%s: %s\n", kNode, error.c_str());
+    usage();
+    return kExitUsage;
+  }
+  pm::installShutdownHandlers();
+
+  std::optional<pplvo::PinholeCamera> calib_camera;
+  if (!options.calib.empty()) {
+    const auto loaded =
+        pc::loadCalibration(options.calib, options.device.width, options.device.height);
+    if (!loaded.camera) {
+      std::fprintf(stderr, "%s: %s\n", kNode, loaded.error.c_str());
+      return kExitUsage;
+    }
+    calib_camera = loaded.camera;
+  }
+
+  std::unique_ptr<pc::Backend> backend = options.backend == "freenect"
+                                             ? pc::makeFreenectBackend(options.device)
+                                             : pc::makeOpenni2Backend(options.device);
+  if (!backend->open(&error)) {
+    std::fprintf(stderr, "%s: no usable %s device: %s\n", kNode, options.backend.c_str(),
+                 error.c_str());
+    return kExitNoDevice;
+  }
+
+  std::unique_ptr<lcm::LCM> lcm;
+  try {
+    lcm = pm::openLcm(options.lcm_url);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", kNode, e.what());
+    return kExitRuntime;
+  }
+
+  pplvo::PinholeCamera camera;
+  if (calib_camera) {
+    camera = *calib_camera;
+  } else if (auto dev = backend->deviceIntrinsics()) {
+    camera = *dev;
+  } else {
+    camera = pc::kinectV1DefaultIntrinsics(options.device.width, options.device.height);
+  }
+  CameraPublisher publisher(options, *lcm, camera, backend->source());
+  publisher.resetClock(backend->clockOptions());
+  const auto reg = backend->registration();
+  if (!reg.warning.empty()) publisher.warn(reg.warning);
+  std::fprintf(stderr, "[%s] streaming from %s, %dx%d, fx %.2f fy %.2f cx %.2f cy %.2f (%s)\n",
+               kNode, backend->source().c_str(), camera.width, camera.height, camera.fx,
+               camera.fy, camera.cx, camera.cy,
+               calib_camera ? "calibration file" : "device/nominal intrinsics");
+  publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
+
+  int64_t last_status = pplvo::hostUtime();
+  int64_t last_frame = last_status;
+  bool end_of_stream = false;
+  while (!pm::shutdownRequested() && !end_of_stream &&
+         (options.max_frames == 0 || publisher.published() < options.max_frames)) {
+    pc::CapturedFrame frame;
+    const pc::GrabStatus st = backend->grab(100, &frame);
+    const int64_t now = pplvo::hostUtime();
+    bool lost = false;
+    switch (st) {
+      case pc::GrabStatus::Frame:
+        last_frame = now;
+        publisher.onFrame(frame);
+        break;
+      case pc::GrabStatus::Timeout:
+        lost = now - last_frame > static_cast<int64_t>(options.lost_after_s * 1e6);
+        break;
+      case pc::GrabStatus::Disconnected:
+        lost = true;
+        break;
+      case pc::GrabStatus::EndOfStream:
+        end_of_stream = true;
+        break;
+    }
+    if (lost) {
+      publisher.warn("device lost (unplugged or stalled): reconnecting every " +
+                     std::to_string(options.reconnect_period_s) + " s, ^C to stop");
+      publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_ERROR);
+      backend->close();
+      int attempts = 0;
+      while (!pm::shutdownRequested()) {
+        ++attempts;
+        if (backend->open(&error)) {
+          publisher.warn("device back after " + std::to_string(attempts) + " attempt(s)");
+          publisher.setSource(backend->source());
+          publisher.resetClock(backend->clockOptions());
+          publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
+          break;
+        }
+        if (attempts <= 3 || attempts % 30 == 0) {
+          std::fprintf(stderr, "[%s] reconnect attempt %d failed: %s\n", kNode, attempts,
+                       error.c_str());
+        }
+        const int64_t wait_until =
+            pplvo::hostUtime() + static_cast<int64_t>(options.reconnect_period_s * 1e6);
+        publisher.publishStatus(0);  // stay visible while waiting (once per attempt)
+        while (!pm::shutdownRequested() && pplvo::hostUtime() < wait_until) {
+          struct timespec ts {0, 50000000};
+          nanosleep(&ts, nullptr);
+        }
+      }
+      last_frame = pplvo::hostUtime();
+    }
+    if (now - last_status >= 1000000) {
+      publisher.publishStatus(backend->droppedFrames());
+      last_status = now;
+    }
+  }
+  publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_END);
+  publisher.publishStatus(backend->droppedFrames());
+  backend->close();
+  std::fprintf(stderr, "[%s] %s after %lld frames\n", kNode,
+               end_of_stream ? "end of stream" : "stopped",
+               static_cast<long long>(publisher.published()));
+  return 0;
+}
