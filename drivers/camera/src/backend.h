@@ -19,6 +19,9 @@ struct BackendOptions {
   int height = 480;
   int fps = 30;
   bool registration = true;  ///< hardware depth-to-colour registration when available
+  /// Under fakenect, treat the end of the dump as an unplugged device (exercises the
+  /// reconnect loop without hardware) instead of the end of the stream.
+  bool fakenect_end_is_unplug = false;
 };
 
 /// One synchronised pair as delivered by a device.

@@ -64,7 +64,10 @@ void usage() {
       "  --depth-encoding raw|zlib|png (default raw)\n"
       "  --max-fps F                  publish at most F frames per second (default: all)\n"
       "  --max-frames N               stop after N published frames (default: run until ^C)\n"
-      "  --lost-after S               seconds without frames before reconnecting (default 3)\n");
+      "  --lost-after S               seconds without frames before reconnecting (default 3)\n"
+      "  --reconnect-period S         seconds between reconnection attempts (default 1)\n"
+      "  --fakenect-end stop|unplug   under fakenect, the dump's end ends the stream (stop,\n"
+      "                               default) or acts as an unplugged device (tests)\n");
 }
 
 bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
@@ -114,6 +117,14 @@ bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
       else if (a == "--max-fps") o->max_fps = std::stod(v);
       else if (a == "--max-frames") o->max_frames = std::stoll(v);
       else if (a == "--lost-after") o->lost_after_s = std::stod(v);
+      else if (a == "--reconnect-period") o->reconnect_period_s = std::stod(v);
+      else if (a == "--fakenect-end") {
+        if (v != "stop" && v != "unplug") {
+          *error = "--fakenect-end takes stop or unplug";
+          return false;
+        }
+        o->device.fakenect_end_is_unplug = v == "unplug";
+      }
       else {
         *error = "unknown option " + a;
         return false;
@@ -131,8 +142,9 @@ bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
     *error = "--width, --height and --fps must be positive";
     return false;
   }
-  if (o->max_frames < 0 || o->max_fps < 0 || !(o->lost_after_s > 0)) {
-    *error = "--max-frames, --max-fps must be >= 0 and --lost-after > 0";
+  if (o->max_frames < 0 || o->max_fps < 0 || !(o->lost_after_s > 0) ||
+      !(o->reconnect_period_s > 0)) {
+    *error = "--max-frames, --max-fps must be >= 0; --lost-after, --reconnect-period > 0";
     return false;
   }
   if (o->jpeg_quality < 1 || o->jpeg_quality > 100) {
@@ -300,22 +312,60 @@ int main(int argc, char** argv) {
                calib_camera ? "calibration file" : "device/nominal intrinsics");
   publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
 
+  // Main loop. A lost device (error from the library, or no frame for --lost-after seconds)
+  // starts an outage: one message, then attempts every --reconnect-period seconds (waiting
+  // before each, so a device that opens but fails at once cannot spin), until a frame arrives.
   int64_t last_status = pplvo::hostUtime();
   int64_t last_frame = last_status;
   bool end_of_stream = false;
+  bool in_outage = false;
+  int attempts = 0;
+  bool device_open = true;
+  auto sleepUntil = [](int64_t until) {
+    while (!pm::shutdownRequested() && pplvo::hostUtime() < until) {
+      struct timespec ts {0, 20000000};
+      nanosleep(&ts, nullptr);
+    }
+  };
   while (!pm::shutdownRequested() && !end_of_stream &&
          (options.max_frames == 0 || publisher.published() < options.max_frames)) {
+    const int64_t now = pplvo::hostUtime();
+    if (now - last_status >= 1000000) {
+      publisher.publishStatus(backend->droppedFrames());
+      last_status = now;
+    }
+    if (!device_open) {
+      sleepUntil(pplvo::hostUtime() + static_cast<int64_t>(options.reconnect_period_s * 1e6));
+      if (pm::shutdownRequested()) break;
+      ++attempts;
+      if (backend->open(&error)) {
+        device_open = true;
+        publisher.setSource(backend->source());
+        publisher.resetClock(backend->clockOptions());
+        last_frame = pplvo::hostUtime();
+      } else if (attempts <= 3 || attempts % 30 == 0) {
+        std::fprintf(stderr, "[%s] reconnect attempt %d failed: %s\n", kNode, attempts,
+                     error.c_str());
+      }
+      continue;
+    }
     pc::CapturedFrame frame;
     const pc::GrabStatus st = backend->grab(100, &frame);
-    const int64_t now = pplvo::hostUtime();
     bool lost = false;
     switch (st) {
       case pc::GrabStatus::Frame:
-        last_frame = now;
+        if (in_outage) {
+          in_outage = false;
+          publisher.warn("device back after " + std::to_string(attempts) +
+                         " reconnect attempt(s)");
+          publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
+        }
+        last_frame = pplvo::hostUtime();
         publisher.onFrame(frame);
         break;
       case pc::GrabStatus::Timeout:
-        lost = now - last_frame > static_cast<int64_t>(options.lost_after_s * 1e6);
+        lost = pplvo::hostUtime() - last_frame >
+               static_cast<int64_t>(options.lost_after_s * 1e6);
         break;
       case pc::GrabStatus::Disconnected:
         lost = true;
@@ -325,37 +375,15 @@ int main(int argc, char** argv) {
         break;
     }
     if (lost) {
-      publisher.warn("device lost (unplugged or stalled): reconnecting every " +
-                     std::to_string(options.reconnect_period_s) + " s, ^C to stop");
-      publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_ERROR);
-      backend->close();
-      int attempts = 0;
-      while (!pm::shutdownRequested()) {
-        ++attempts;
-        if (backend->open(&error)) {
-          publisher.warn("device back after " + std::to_string(attempts) + " attempt(s)");
-          publisher.setSource(backend->source());
-          publisher.resetClock(backend->clockOptions());
-          publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
-          break;
-        }
-        if (attempts <= 3 || attempts % 30 == 0) {
-          std::fprintf(stderr, "[%s] reconnect attempt %d failed: %s\n", kNode, attempts,
-                       error.c_str());
-        }
-        const int64_t wait_until =
-            pplvo::hostUtime() + static_cast<int64_t>(options.reconnect_period_s * 1e6);
-        publisher.publishStatus(0);  // stay visible while waiting (once per attempt)
-        while (!pm::shutdownRequested() && pplvo::hostUtime() < wait_until) {
-          struct timespec ts {0, 50000000};
-          nanosleep(&ts, nullptr);
-        }
+      if (!in_outage) {
+        in_outage = true;
+        attempts = 0;
+        publisher.warn("device lost (unplugged or stalled): reconnecting every " +
+                       std::to_string(options.reconnect_period_s) + " s, ^C to stop");
+        publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_ERROR);
       }
-      last_frame = pplvo::hostUtime();
-    }
-    if (now - last_status >= 1000000) {
-      publisher.publishStatus(backend->droppedFrames());
-      last_status = now;
+      backend->close();
+      device_open = false;
     }
   }
   publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_END);

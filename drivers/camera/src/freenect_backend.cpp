@@ -157,7 +157,8 @@ class FreenectBackend final : public Backend {
       if (rc < 0) {
         // fakenect returns -1 at the end of its INDEX.txt; real hardware when the USB device
         // went away (LIBUSB_ERROR_NO_DEVICE, LIBUSB_ERROR_IO).
-        return under_fakenect_ ? GrabStatus::EndOfStream : GrabStatus::Disconnected;
+        if (under_fakenect_ && !options_.fakenect_end_is_unplug) return GrabStatus::EndOfStream;
+        return GrabStatus::Disconnected;
       }
     }
   }

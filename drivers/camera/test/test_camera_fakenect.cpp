@@ -93,11 +93,12 @@ class CameraFakenect : public ::testing::Test {
   }
 
   /// Runs pplvo-camera under fakenect with extra options and reads back its log.
-  static Published runCamera(const std::string& name, const std::string& extra) {
+  static Published runCamera(const std::string& name, const std::string& extra,
+                             const std::string& timeout = "timeout 60") {
     Published p;
     const std::string log = dir_ + "/" + name + ".lcmlog";
     const std::string err = dir_ + "/" + name + ".stderr";
-    const std::string cmd = std::string("timeout 60 ") + PPLVO_FAKENECT_WRAPPER + " " + dump_ +
+    const std::string cmd = timeout + " " + PPLVO_FAKENECT_WRAPPER + " " + dump_ +
                             " " + PPLVO_CAMERA_EXE + " --backend freenect --lcm-url 'file://" +
                             log + "?mode=w' " + extra + " > /dev/null 2> " + err;
     p.exit_code = run(cmd);
@@ -278,6 +279,34 @@ TEST_F(CameraFakenect, JpegAndRateLimit) {
     // Depth as PNG is lossless: the same bound as the raw run.
     compareFrame(m, sources_[best_k], 255);
   }
+}
+
+TEST_F(CameraFakenect, UnpluggedDeviceIsRetriedWithoutCrashing) {
+  // --fakenect-end unplug makes the end of the dump look like an unplugged Kinect. Debian's
+  // fakenect cannot rewind its index, so every reconnection fails again at once: the node
+  // must keep retrying quietly (one message per outage), stay alive, and stop cleanly on
+  // SIGINT with its END event.
+  const Published p =
+      runCamera("unplug", "--fakenect-end unplug --reconnect-period 0.2",
+                "timeout --preserve-status -s INT 4");
+  EXPECT_EQ(p.exit_code, 0) << p.log;
+  EXPECT_EQ(p.frames.size(), 20u);
+  EXPECT_NE(p.log.find("device lost (unplugged or stalled): reconnecting"), std::string::npos)
+      << p.log;
+  size_t lost_messages = 0;
+  for (size_t pos = p.log.find("device lost"); pos != std::string::npos;
+       pos = p.log.find("device lost", pos + 1)) {
+    ++lost_messages;
+  }
+  EXPECT_EQ(lost_messages, 1u) << p.log;
+  ASSERT_GE(p.events.size(), 3u);
+  EXPECT_EQ(p.events[0].event, pplvo_msgs::stream_event_t::EVENT_START);
+  EXPECT_EQ(p.events[1].event, pplvo_msgs::stream_event_t::EVENT_ERROR);
+  EXPECT_EQ(p.events.back().event, pplvo_msgs::stream_event_t::EVENT_END);
+  // Status keeps flowing about once a second during the outage (~3 s of it).
+  EXPECT_GE(p.status.size(), 3u);
+  EXPECT_LE(p.status.size(), 8u);
+  EXPECT_NE(p.status.back().last_warning.find("device lost"), std::string::npos);
 }
 
 }  // namespace
