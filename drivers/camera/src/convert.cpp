@@ -6,7 +6,9 @@
 #include <cstring>
 #include <stdexcept>
 
-#include <opencv2/core/persistence.hpp>
+#include <fstream>
+
+#include "pplvo/dataset/dataset.h"
 
 namespace pplvo::camera {
 
@@ -132,106 +134,61 @@ PinholeCamera kinectV1DefaultIntrinsics(int width, int height) {
   return s;
 }
 
-namespace {
-// Reads a 3x3 camera matrix and up to 5 distortion coefficients from FileStorage nodes.
-bool readIntrinsics(const cv::FileNode& k_node, const cv::FileNode& d_node, PinholeCamera* cam,
-                    std::string* error) {
-  cv::Mat k, d;
-  k_node >> k;
-  if (k.rows != 3 || k.cols != 3) {
-    *error = "camera matrix is not 3x3";
-    return false;
-  }
-  k.convertTo(k, CV_64F);
-  cam->fx = k.at<double>(0, 0);
-  cam->fy = k.at<double>(1, 1);
-  cam->cx = k.at<double>(0, 2);
-  cam->cy = k.at<double>(1, 2);
-  if (!d_node.empty()) {
-    d_node >> d;
-    if (!d.empty()) {
-      d.convertTo(d, CV_64F);
-      d = d.reshape(1, 1);
-      if (d.cols > 5) {
-        // Rational / thin-prism models are not representable: refuse instead of truncating.
-        for (int i = 5; i < d.cols; ++i) {
-          if (d.at<double>(0, i) != 0.0) {
-            *error = "distortion has more than 5 non-zero coefficients (k1 k2 p1 p2 k3 only)";
-            return false;
-          }
-        }
-      }
-      for (int i = 0; i < std::min(5, d.cols); ++i) cam->distortion[i] = d.at<double>(0, i);
-    }
-  }
-  const bool finite = std::isfinite(cam->fx) && std::isfinite(cam->fy) &&
-                      std::isfinite(cam->cx) && std::isfinite(cam->cy) && cam->fx != 0 &&
-                      cam->fy != 0;
-  if (!finite) {
-    *error = "camera matrix has zero or non-finite focal lengths";
-    return false;
-  }
-  return true;
-}
-}  // namespace
-
 CalibrationLoad loadCalibration(const std::string& path, int width, int height) {
+  // The player's loaders (pplvo_dataset) read the files; this only picks the loader and fits
+  // the intrinsics to the stream size.
   CalibrationLoad out;
   if (width <= 0 || height <= 0) {
     out.error = "image size must be positive";
     return out;
   }
-  cv::FileStorage fs;
+  dataset::DatasetCamera loaded;
   try {
-    if (!fs.open(path, cv::FileStorage::READ)) {
-      out.error = "cannot open calibration file '" + path + "'";
-      return out;
+    const auto dot = path.find_last_of('.');
+    const std::string ext = dot == std::string::npos ? "" : path.substr(dot);
+    bool pplvo_yaml = false;
+    if (ext == ".yaml" || ext == ".yml") {
+      // OpenCV FileStorage YAML starts with "%YAML"; the pplvo camera YAML does not.
+      std::ifstream f(path);
+      if (!f) {
+        out.error = "cannot open calibration file '" + path + "'";
+        return out;
+      }
+      std::string first;
+      std::getline(f, first);
+      pplvo_yaml = first.rfind("%YAML", 0) != 0;
     }
-    PinholeCamera cam;
-    std::string err;
-    int file_w = 0, file_h = 0;
-    if (!fs["RGB_intrinsic_params"].empty()) {
-      out.format = "calib_params (RGB_intrinsic_params)";
-      if (!readIntrinsics(fs["RGB_intrinsic_params"], fs["RGB_distortion_coefficients"], &cam,
-                          &err)) {
-        out.error = path + ": " + err;
-        return out;
-      }
-    } else if (!fs["camera_matrix"].empty()) {
-      out.format = "opencv calibration (camera_matrix)";
-      if (!readIntrinsics(fs["camera_matrix"], fs["distortion_coefficients"], &cam, &err)) {
-        out.error = path + ": " + err;
-        return out;
-      }
-      if (!fs["image_width"].empty()) fs["image_width"] >> file_w;
-      if (!fs["image_height"].empty()) fs["image_height"] >> file_h;
+    if (pplvo_yaml) {
+      loaded = dataset::loadCameraYaml(path);
+      out.format = "pplvo camera YAML";
     } else {
-      out.error = path +
-                  ": no RGB_intrinsic_params or camera_matrix entry (see docs/cameras.md)";
+      loaded = dataset::loadCalibParamsXml(path);
+      out.format = "calib_params (OpenCV FileStorage)";
+    }
+  } catch (const std::exception& e) {
+    out.error = e.what();
+    return out;
+  }
+  PinholeCamera cam = loaded.camera;
+  const int file_w = cam.width, file_h = cam.height;
+  if (file_w > 0 && file_h > 0 && (file_w != width || file_h != height)) {
+    const double sx = static_cast<double>(width) / file_w;
+    const double sy = static_cast<double>(height) / file_h;
+    if (std::abs(sx - sy) > 1e-3 * sx) {
+      out.error = path + ": calibrated at " + std::to_string(file_w) + "x" +
+                  std::to_string(file_h) + ", which does not scale to " + std::to_string(width) +
+                  "x" + std::to_string(height);
       return out;
     }
-    if (file_w > 0 && file_h > 0 && (file_w != width || file_h != height)) {
-      const double sx = static_cast<double>(width) / file_w;
-      const double sy = static_cast<double>(height) / file_h;
-      if (std::abs(sx - sy) > 1e-3 * sx) {
-        out.error = path + ": calibrated at " + std::to_string(file_w) + "x" +
-                    std::to_string(file_h) + ", which does not scale to " +
-                    std::to_string(width) + "x" + std::to_string(height);
-        return out;
-      }
-      // Pixel-centre convention: u' + 0.5 = s (u + 0.5).
-      cam.fx *= sx;
-      cam.fy *= sy;
-      cam.cx = (cam.cx + 0.5) * sx - 0.5;
-      cam.cy = (cam.cy + 0.5) * sy - 0.5;
-    }
-    cam.width = width;
-    cam.height = height;
-    out.camera = cam;
-  } catch (const cv::Exception& e) {
-    out.camera.reset();
-    out.error = path + ": cannot parse calibration: " + e.what();
+    // Pixel-centre convention: u' + 0.5 = s (u + 0.5).
+    cam.fx *= sx;
+    cam.fy *= sy;
+    cam.cx = (cam.cx + 0.5) * sx - 0.5;
+    cam.cy = (cam.cy + 0.5) * sy - 0.5;
   }
+  cam.width = width;
+  cam.height = height;
+  out.camera = cam;
   return out;
 }
 

@@ -165,13 +165,14 @@ TEST(Calibration, ReadsTheDatasetCalibParams) {
 }
 
 TEST(Calibration, ReadsOpenCvYamlAndScales) {
+  // calib_params layout written as OpenCV FileStorage YAML, calibrated at 1280x960.
   const std::string path = tempPath("calib.yaml");
   {
     std::ofstream f(path);
-    f << "%YAML:1.0\n---\nimage_width: 1280\nimage_height: 960\n"
-         "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+    f << "%YAML:1.0\n---\nwidth: 1280\nheight: 960\n"
+         "RGB_intrinsic_params: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
          "   data: [ 1050., 0., 639.5, 0., 1052., 479.5, 0., 0., 1. ]\n"
-         "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
+         "RGB_distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
          "   data: [ 0.1, -0.2, 0.001, 0.002, 0.05 ]\n";
   }
   const auto c = pc::loadCalibration(path, 640, 480);
@@ -184,7 +185,30 @@ TEST(Calibration, ReadsOpenCvYamlAndScales) {
   EXPECT_DOUBLE_EQ(c.camera->distortion[4], 0.05);
   EXPECT_EQ(c.camera->width, 640);
   // A size that does not scale uniformly is refused.
-  EXPECT_FALSE(pc::loadCalibration(path, 640, 360).camera);
+  const auto bad = pc::loadCalibration(path, 640, 360);
+  EXPECT_FALSE(bad.camera);
+  EXPECT_NE(bad.error.find("does not scale"), std::string::npos) << bad.error;
+  std::remove(path.c_str());
+}
+
+TEST(Calibration, ReadsThePlayersCameraYaml) {
+  const std::string path = tempPath("camera.yaml");
+  {
+    std::ofstream f(path);
+    f << "fx: 570.3\nfy: 570.3\ncx: 319.5\ncy: 239.5\ndistortion: [0.01, 0, 0, 0, 0]\n";
+  }
+  const auto c = pc::loadCalibration(path, 640, 480);
+  ASSERT_TRUE(c.camera) << c.error;
+  EXPECT_DOUBLE_EQ(c.camera->fx, 570.3);
+  EXPECT_DOUBLE_EQ(c.camera->distortion[0], 0.01);
+  EXPECT_EQ(c.camera->height, 480);
+  {
+    std::ofstream f(path);
+    f << "fx: 570.3\nfy: 570.3\ncx: 319.5\ncy: 239.5\nfocal: 3\n";
+  }
+  const auto u = pc::loadCalibration(path, 640, 480);
+  EXPECT_FALSE(u.camera);
+  EXPECT_NE(u.error.find("unknown key 'focal'"), std::string::npos) << u.error;
   std::remove(path.c_str());
 }
 
@@ -192,6 +216,7 @@ TEST(Calibration, ClearErrorsOnBadFiles) {
   const auto missing = pc::loadCalibration("/nonexistent/calib.xml", 640, 480);
   EXPECT_FALSE(missing.camera);
   EXPECT_NE(missing.error.find("cannot open"), std::string::npos) << missing.error;
+  EXPECT_NE(missing.error.find("/nonexistent/calib.xml"), std::string::npos) << missing.error;
 
   const std::string path = tempPath("garbage.xml");
   {
@@ -200,7 +225,7 @@ TEST(Calibration, ClearErrorsOnBadFiles) {
   }
   const auto nokey = pc::loadCalibration(path, 640, 480);
   EXPECT_FALSE(nokey.camera);
-  EXPECT_NE(nokey.error.find("RGB_intrinsic_params"), std::string::npos) << nokey.error;
+  EXPECT_NE(nokey.error.find("missing RGB_intrinsic_params"), std::string::npos) << nokey.error;
   {
     std::ofstream f(path);
     f << "this is not a calibration file {{{";

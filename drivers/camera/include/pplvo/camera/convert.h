@@ -94,12 +94,12 @@ struct CalibrationLoad {
   std::string error;                    ///< why loading failed (empty on success)
   std::string format;                   ///< which key layout was found
 };
-/// Reads colour intrinsics from an OpenCV FileStorage file (XML or YAML): either the dataset
-/// layout calib_params.xml (RGB_intrinsic_params 3x3, RGB_distortion_coefficients 1x5, as in
-/// /work/shared/data/*/calib_params.xml) or the output of OpenCV's calibration sample
-/// (camera_matrix, distortion_coefficients, optional image_width / image_height). When the
-/// file names its image size and it differs from (width, height), the intrinsics are scaled;
-/// with no size in the file they are used as they are for (width, height).
+/// Reads the colour intrinsics with the dataset player's loaders (pplvo_dataset, see
+/// docs/player.md): calib_params.xml / OpenCV FileStorage XML or YAML (RGB_intrinsic_params
+/// 3x3, RGB_distortion_coefficients, optional width/height), or the pplvo camera YAML (`fx fy
+/// cx cy [width height distortion depth_scale]`, a .yaml/.yml file not starting with %YAML).
+/// When the file names its image size and it differs from (width, height), the intrinsics are
+/// scaled (uniform scaling only); with no size in the file they are used as they are.
 CalibrationLoad loadCalibration(const std::string& path, int width, int height);
 
 // ---------------------------------------------------------------------------------------------
