@@ -123,9 +123,9 @@ class CameraFakenect : public ::testing::Test {
   /// Colour max abs difference and depth check of published frame `k` against source `k`.
   static void compareFrame(const pplvo_msgs::rgbd_frame_t& msg, const SourceFrame& src,
                            int max_colour_diff) {
-    const std::string base = sharedData() + "/" + kSequence + "/";
-    const cv::Mat bgr_src = cv::imread(base + src.rgb_path, cv::IMREAD_COLOR);
-    const cv::Mat depth_src = cv::imread(base + src.depth_path, cv::IMREAD_ANYDEPTH);
+    // pplvo_frames.txt holds the paths as the dataset library built them (folder included).
+    const cv::Mat bgr_src = cv::imread(src.rgb_path, cv::IMREAD_COLOR);
+    const cv::Mat depth_src = cv::imread(src.depth_path, cv::IMREAD_ANYDEPTH);
     ASSERT_FALSE(bgr_src.empty());
     ASSERT_EQ(depth_src.type(), CV_16UC1);
     const cv::Mat bgr = pplvo::msgs::decodeImage(msg.rgb);
@@ -259,7 +259,6 @@ TEST_F(CameraFakenect, JpegAndRateLimit) {
   }
   // Each published frame's source: the first one is source 0 (the limiter lets the first
   // through), the others are found by elapsed time. JPEG is lossy: compare the mean error.
-  const std::string base = sharedData() + "/" + kSequence + "/";
   ASSERT_FALSE(p.frames.empty());
   for (const auto& m : p.frames) {
     const double elapsed_s = (m.utime - p.frames.front().utime) * 1e-6;
@@ -270,7 +269,7 @@ TEST_F(CameraFakenect, JpegAndRateLimit) {
         best_k = k;
       }
     }
-    const cv::Mat src = cv::imread(base + sources_[best_k].rgb_path, cv::IMREAD_COLOR);
+    const cv::Mat src = cv::imread(sources_[best_k].rgb_path, cv::IMREAD_COLOR);
     const cv::Mat bgr = pplvo::msgs::decodeImage(m.rgb);
     cv::Mat diff;
     cv::absdiff(bgr, src, diff);

@@ -13,98 +13,18 @@
 // pplvo_frames.txt (ignored by fakenect) lists the source files of each pair, for tests.
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <filesystem>
 #include <fstream>
-#include <map>
-#include <sstream>
 #include <string>
-#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "pplvo/camera/convert.h"
 #include "pplvo/core/rgbd_frame.h"
+#include "pplvo/dataset/dataset.h"
 
 namespace {
-
-struct Entry {
-  std::string stamp;  // verbatim text
-  double t = 0;
-  std::string path;   // relative to the dataset folder
-};
-struct PairEntry {
-  Entry rgb, depth;
-};
-
-bool fileExists(const std::string& p) {
-  std::ifstream f(p);
-  return f.good();
-}
-
-std::vector<Entry> readList(const std::string& path) {
-  std::vector<Entry> out;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ss(line);
-    Entry e;
-    if (!(ss >> e.stamp >> e.path)) continue;
-    try {
-      e.t = std::stod(e.stamp);
-    } catch (...) {
-      continue;
-    }
-    out.push_back(e);
-  }
-  return out;
-}
-
-// associations.txt: "t1 path1 t2 path2" in either order (TUM: rgb first; ICL: depth first).
-std::vector<PairEntry> readAssociations(const std::string& path) {
-  std::vector<PairEntry> out;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ss(line);
-    Entry a, b;
-    if (!(ss >> a.stamp >> a.path >> b.stamp >> b.path)) continue;
-    try {
-      a.t = std::stod(a.stamp);
-      b.t = std::stod(b.stamp);
-    } catch (...) {
-      continue;
-    }
-    if (a.path.rfind("depth", 0) == 0) std::swap(a, b);
-    out.push_back({a, b});
-  }
-  return out;
-}
-
-// Nearest depth for each colour frame within max_dt seconds, each depth used once.
-std::vector<PairEntry> associate(const std::vector<Entry>& rgb, const std::vector<Entry>& depth,
-                                 double max_dt) {
-  std::vector<PairEntry> out;
-  std::vector<bool> used(depth.size(), false);
-  for (const Entry& r : rgb) {
-    int best = -1;
-    double best_dt = max_dt;
-    for (size_t j = 0; j < depth.size(); ++j) {
-      const double dt = std::abs(depth[j].t - r.t);
-      if (!used[j] && dt <= best_dt) {
-        best_dt = dt;
-        best = static_cast<int>(j);
-      }
-    }
-    if (best >= 0) {
-      used[best] = true;
-      out.push_back({r, depth[best]});
-    }
-  }
-  return out;
-}
 
 bool writeFile(const std::string& path, const std::string& header, const void* data,
                size_t bytes) {
@@ -160,48 +80,45 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  std::vector<PairEntry> pairs;
-  if (fileExists(dataset + "/associations.txt")) {
-    pairs = readAssociations(dataset + "/associations.txt");
-  } else if (fileExists(dataset + "/rgb.txt") && fileExists(dataset + "/depth.txt")) {
-    std::vector<Entry> depth;
-    for (const Entry& e : readList(dataset + "/depth.txt")) {
-      if (fileExists(dataset + "/" + e.path)) depth.push_back(e);  // depth.txt lists absent files
-    }
-    std::vector<Entry> rgb;
-    for (const Entry& e : readList(dataset + "/rgb.txt")) {
-      if (fileExists(dataset + "/" + e.path)) rgb.push_back(e);
-    }
-    pairs = associate(rgb, depth, max_dt);
-  } else {
-    std::fprintf(stderr, "pplvo-tum-to-fakenect: %s has neither associations.txt nor "
-                         "rgb.txt + depth.txt\n", dataset.c_str());
+  // The player's index rules (pplvo_dataset): associations.txt in either column order, else
+  // rgb.txt + depth.txt associated within max_dt; listed files that do not exist are dropped.
+  pplvo::dataset::DatasetIndex index;
+  try {
+    pplvo::dataset::DatasetOptions dopt;
+    dopt.max_association_dt_s = max_dt;
+    index = pplvo::dataset::buildIndex(dataset, dopt);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pplvo-tum-to-fakenect: %s\n", e.what());
     return 2;
   }
-  if (pairs.empty()) {
-    std::fprintf(stderr, "pplvo-tum-to-fakenect: no colour/depth pairs in %s\n",
-                 dataset.c_str());
+  if (index.entries.empty()) {
+    std::fprintf(stderr, "pplvo-tum-to-fakenect: no colour/depth pairs in %s (%s)\n",
+                 dataset.c_str(), index.summary.text().c_str());
     return 2;
   }
-  if (std::system(("mkdir -p '" + output + "'").c_str()) != 0) {
+  std::error_code ec;
+  std::filesystem::create_directories(output, ec);
+  if (ec) {
     std::fprintf(stderr, "pplvo-tum-to-fakenect: cannot create %s\n", output.c_str());
     return 2;
   }
 
   const pplvo::camera::KinectDisparityModel model;
-  std::ofstream index(output + "/INDEX.txt");
+  std::ofstream index_out(output + "/INDEX.txt");
   std::ofstream frames(output + "/pplvo_frames.txt");
   frames << "# n rgb_stamp rgb_path depth_stamp depth_path device_ticks (source: " << dataset
-         << ")\n";
-  const double t0 = pairs.front().rgb.t;
+         << "; " << index.summary.source << ")\n";
+  const int64_t t0_us = index.entries.front().utime;
   long written = 0, skipped = 0, unrepresentable = 0;
-  for (const PairEntry& p : pairs) {
+  for (const pplvo::dataset::DatasetEntry& e : index.entries) {
     if (max_frames > 0 && written >= max_frames) break;
-    cv::Mat bgr = cv::imread(dataset + "/" + p.rgb.path, cv::IMREAD_COLOR);
-    cv::Mat depth = cv::imread(dataset + "/" + p.depth.path, cv::IMREAD_ANYDEPTH);
-    if (bgr.empty() || depth.empty() || depth.type() != CV_16UC1) {
-      std::fprintf(stderr, "pplvo-tum-to-fakenect: skipping unreadable pair %s / %s\n",
-                   p.rgb.path.c_str(), p.depth.path.c_str());
+    cv::Mat bgr, depth;
+    try {
+      pplvo::dataset::RawFrame raw_frame = pplvo::dataset::loadRawFrame(e, depth_scale);
+      bgr = raw_frame.bgr;
+      depth = raw_frame.depth_units;
+    } catch (const std::exception& ex) {
+      std::fprintf(stderr, "pplvo-tum-to-fakenect: skipping frame: %s\n", ex.what());
       ++skipped;
       continue;
     }
@@ -218,9 +135,9 @@ int main(int argc, char** argv) {
 
     // 60 MHz counter from the colour stamp, starting away from 0, wrapping at 2^32.
     const auto ticks = static_cast<uint32_t>(
-        static_cast<uint64_t>(std::llround((p.rgb.t - t0) * 60e6) + 600000) & 0xffffffffu);
+        static_cast<uint64_t>((e.utime - t0_us) * 60 + 600000) & 0xffffffffu);
     char time_text[64];
-    std::snprintf(time_text, sizeof(time_text), "%f", p.rgb.t);
+    std::snprintf(time_text, sizeof(time_text), "%.6f", e.utime * 1e-6);
     const std::string dname = std::string("d-") + time_text + "-" + std::to_string(ticks) + ".pgm";
     const std::string rname = std::string("r-") + time_text + "-" + std::to_string(ticks) + ".ppm";
     if (!writeFile(output + "/" + dname, "P5 640 480 65535\n", raw.data, 640 * 480 * 2) ||
@@ -228,9 +145,10 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "pplvo-tum-to-fakenect: cannot write into %s\n", output.c_str());
       return 2;
     }
-    index << dname << "\n" << rname << "\n";
-    frames << written << " " << p.rgb.stamp << " " << p.rgb.path << " " << p.depth.stamp << " "
-           << p.depth.path << " " << ticks << "\n";
+    index_out << dname << "\n" << rname << "\n";
+    frames << written << " " << e.stamp_text << " " << std::filesystem::absolute(e.rgb_path).string()
+           << " " << e.depth_stamp_text << " "
+           << std::filesystem::absolute(e.depth_path).string() << " " << ticks << "\n";
     ++written;
   }
   std::fprintf(stderr,
