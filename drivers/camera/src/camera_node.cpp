@@ -72,16 +72,22 @@ void usage() {
 
 bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
   for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
+    std::string a = argv[i];
     if (a == "-h" || a == "--help") {
       usage();
       std::exit(0);
     }
-    if (i + 1 >= argc) {
+    std::string v;
+    const auto eq = a.find('=');
+    if (a.rfind("--", 0) == 0 && eq != std::string::npos) {  // --key=value
+      v = a.substr(eq + 1);
+      a = a.substr(0, eq);
+    } else if (i + 1 >= argc) {
       *error = "missing value after " + a;
       return false;
+    } else {
+      v = argv[++i];
     }
-    const std::string v = argv[++i];
     try {
       if (a == "--backend") o->backend = v;
       else if (a == "--device") o->device.device = v;
