@@ -3,6 +3,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <future>
 #include <map>
 #include <sstream>
 
@@ -331,31 +333,59 @@ void PlayerNode::runLoop(PlayerResult& result) {
   int64_t anchor_utime = 0;
   int64_t anchor_count = 0;
 
+  // The next frame is decoded on a worker thread while the current one waits for its slot and
+  // is published (PNG decoding is the slowest step). Only one task touches the reader at a
+  // time: seek() and the next fetch happen after get().
+  struct Fetched {
+    std::optional<dataset::DatasetReader::Item> item;
+    dataset::ReadStats stats;
+    std::exception_ptr error;
+    double load_ms = 0.0;
+  };
+  auto fetch = [&reader]() {
+    Fetched f;
+    Stopwatch watch;
+    try {
+      f.item = reader.next();  // throws FrameLoadError without --skip-bad
+    } catch (...) {
+      f.error = std::current_exception();
+    }
+    f.stats = reader.stats();
+    f.load_ms = watch.elapsedMs();
+    return f;
+  };
+  std::future<Fetched> pending = std::async(std::launch::async, fetch);
+
   while (!msgs::shutdownRequested()) {
     if (options_.max_frames > 0 && published_ >= options_.max_frames) break;
-    std::optional<dataset::DatasetReader::Item> item;
+    Fetched fetched;
     {
-      ScopedStageTimer t(timings_, "load");
-      item = reader.next();  // throws FrameLoadError without --skip-bad
+      ScopedStageTimer t(timings_, "load_wait");
+      fetched = pending.get();
     }
-    const int64_t newly_skipped = reader.stats().frames_skipped - skipped_before;
-    skipped_before = reader.stats().frames_skipped;
+    timings_.add("load", fetched.load_ms);
+    if (fetched.error) std::rethrow_exception(fetched.error);
+    const int64_t newly_skipped = fetched.stats.frames_skipped - skipped_before;
+    skipped_before = fetched.stats.frames_skipped;
     if (newly_skipped > 0) {
       counters_.frames_skipped += newly_skipped;
-      counters_.last_warning = "skipped bad frame: " + reader.stats().last_error;
+      counters_.last_warning = "skipped bad frame: " + fetched.stats.last_error;
       if (counters_.frames_skipped <= 5 || counters_.frames_skipped % 100 == 0) {
         std::fprintf(stderr, "[%s] %s\n", options_.node_name.c_str(),
                      counters_.last_warning.c_str());
       }
     }
-    if (!item) {
+    if (!fetched.item) {
       if (!options_.loop || published_this_pass == 0) break;
       reader.seek(start);
+      pending = std::async(std::launch::async, fetch);
       loop_offset_us += pass_us;
       published_this_pass = 0;
       ++result.loops;
       continue;
     }
+    pending = std::async(std::launch::async, fetch);
+    std::optional<dataset::DatasetReader::Item> item = std::move(fetched.item);
     ++counters_.frames_in;
     const dataset::DatasetEntry& entry = dataset_.entry(item->index);
     const int64_t utime = entry.utime + loop_offset_us;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <lcm/eventlog.h>
 #include <opencv2/imgcodecs.hpp>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <pplvo_msgs/node_status_t.hpp>
@@ -342,4 +343,24 @@ TEST(Player, WritesAFileLogThroughTheFileProvider) {
   EXPECT_EQ(per_channel["PPLVO_STREAM"], 2);
   EXPECT_GE(per_channel["PPLVO_STATUS"], 1);
   fs::remove(path);
+}
+
+TEST(PlayerProcess, ExitCodesAndCtrlC) {
+  const char* b = std::getenv("PPLVO_BINARY_DIR");
+  const std::string exe = std::string(b ? b : "build") + "/bin/pplvo-player";
+  ASSERT_TRUE(fs::exists(exe)) << exe;
+  auto run = [](const std::string& cmd) {
+    const int rc = std::system(cmd.c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  };
+  EXPECT_EQ(run(exe + " --rate x 2>/dev/null"), 2);
+  EXPECT_EQ(run(exe + " --lcm-url memq:// --dataset /nonexistent 2>/dev/null"), 1);
+  // Unreadable calibration: a camera file that does not parse.
+  EXPECT_EQ(run(exe + " --lcm-url memq:// --dataset " + iclDir() +
+                " --camera /nonexistent/cam.yaml 2>/dev/null"),
+            1);
+  // Real-time playback of 251 frames takes 8 s; SIGINT after 1.5 s stops it cleanly.
+  EXPECT_EQ(run("timeout --preserve-status -s INT 1.5 " + exe + " --lcm-url memq:// --dataset " +
+                iclDir() + " 2>/dev/null"),
+            0);
 }
