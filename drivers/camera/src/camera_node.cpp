@@ -384,9 +384,12 @@ int main(int argc, char** argv) {
       if (!in_outage) {
         in_outage = true;
         attempts = 0;
+        // No stream event here: consumers (pplvo-logger --until-end) take END and ERROR as
+        // the end of the stream, and the node has not given up. The outage shows in the
+        // status' last_warning; a new START marks the restart.
         publisher.warn("device lost (unplugged or stalled): reconnecting every " +
                        std::to_string(options.reconnect_period_s) + " s, ^C to stop");
-        publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_ERROR);
+        publisher.publishStatus(backend->droppedFrames());
       }
       backend->close();
       device_open = false;
