@@ -356,7 +356,13 @@ int main(int argc, char** argv) {
       continue;
     }
     pc::CapturedFrame frame;
-    const pc::GrabStatus st = backend->grab(100, &frame);
+    pc::GrabStatus st;
+    try {
+      st = backend->grab(100, &frame);
+    } catch (const std::exception& e) {  // e.g. a device buffer with impossible sizes
+      publisher.warn(std::string("device read failed: ") + e.what());
+      st = pc::GrabStatus::Disconnected;
+    }
     bool lost = false;
     switch (st) {
       case pc::GrabStatus::Frame:
