@@ -1,11 +1,10 @@
 // Per-frame costs of the camera conversions and encodings at 640x480 (not run by ctest).
+#include <benchmark/benchmark.h>
+
 #include <cstdlib>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <string>
-
-#include <opencv2/imgcodecs.hpp>
-
-#include <benchmark/benchmark.h>
 
 #include "pplvo/camera/convert.h"
 #include "pplvo/msgs/convert.h"

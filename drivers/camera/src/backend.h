@@ -3,10 +3,9 @@
 /// the pure conversions of pplvo_camera_convert. No LCM here.
 #include <cstdint>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/core.hpp>
 
 #include "pplvo/camera/convert.h"
 #include "pplvo/core/camera.h"
@@ -14,7 +13,7 @@
 namespace pplvo::camera {
 
 struct BackendOptions {
-  std::string device;        ///< OpenNI2 URI or index; libfreenect index; empty: first device
+  std::string device;  ///< OpenNI2 URI or index; libfreenect index; empty: first device
   int width = 640;
   int height = 480;
   int fps = 30;
@@ -26,8 +25,8 @@ struct BackendOptions {
 
 /// One synchronised pair as delivered by a device.
 struct CapturedFrame {
-  cv::Mat bgr;              ///< CV_8UC3
-  cv::Mat depth_u16;        ///< CV_16UC1, depth_scale units per metre, 0 = missing
+  cv::Mat bgr;        ///< CV_8UC3
+  cv::Mat depth_u16;  ///< CV_16UC1, depth_scale units per metre, 0 = missing
   double depth_scale = 1000;
   uint64_t device_ticks = 0;
   int64_t host_arrival_utime = 0;

@@ -7,12 +7,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
-#include <optional>
 #include <memory>
-#include <string>
-
+#include <optional>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
+#include <string>
 
 #include "backend.h"
 #include "pplvo/camera/convert.h"
@@ -41,14 +40,15 @@ struct NodeOptions {
   pc::RgbEncoding rgb_encoding = pc::RgbEncoding::Raw;
   pc::DepthEncoding depth_encoding = pc::DepthEncoding::Raw;
   int jpeg_quality = 90;
-  double max_fps = 0;        // 0: every frame
-  int64_t max_frames = 0;    // 0: until stopped
-  double lost_after_s = 3.0;       // no frame for this long: device lost
+  double max_fps = 0;         // 0: every frame
+  int64_t max_frames = 0;     // 0: until stopped
+  double lost_after_s = 3.0;  // no frame for this long: device lost
   double reconnect_period_s = 1.0;
 };
 
 void usage() {
-  std::fprintf(stderr,
+  std::fprintf(
+      stderr,
       "usage: pplvo-camera [options]\n"
       "  --backend openni2|freenect   device library (default openni2)\n"
       "  --device URI|INDEX           OpenNI2 URI (or .oni file) or index; freenect index\n"
@@ -89,22 +89,32 @@ bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
       v = argv[++i];
     }
     try {
-      if (a == "--backend") o->backend = v;
-      else if (a == "--device") o->device.device = v;
-      else if (a == "--lcm-url") o->lcm_url = v;
-      else if (a == "--channel") o->channel = v;
-      else if (a == "--stream-channel") o->stream_channel = v;
-      else if (a == "--status-channel") o->status_channel = v;
-      else if (a == "--width") o->device.width = std::stoi(v);
-      else if (a == "--height") o->device.height = std::stoi(v);
-      else if (a == "--fps") o->device.fps = std::stoi(v);
+      if (a == "--backend")
+        o->backend = v;
+      else if (a == "--device")
+        o->device.device = v;
+      else if (a == "--lcm-url")
+        o->lcm_url = v;
+      else if (a == "--channel")
+        o->channel = v;
+      else if (a == "--stream-channel")
+        o->stream_channel = v;
+      else if (a == "--status-channel")
+        o->status_channel = v;
+      else if (a == "--width")
+        o->device.width = std::stoi(v);
+      else if (a == "--height")
+        o->device.height = std::stoi(v);
+      else if (a == "--fps")
+        o->device.fps = std::stoi(v);
       else if (a == "--registration") {
         if (v != "on" && v != "off") {
           *error = "--registration takes on or off";
           return false;
         }
         o->device.registration = v == "on";
-      } else if (a == "--calib") o->calib = v;
+      } else if (a == "--calib")
+        o->calib = v;
       else if (a == "--rgb-encoding") {
         const auto e = pc::parseRgbEncoding(v);
         if (!e) {
@@ -119,19 +129,23 @@ bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
           return false;
         }
         o->depth_encoding = *e;
-      } else if (a == "--jpeg-quality") o->jpeg_quality = std::stoi(v);
-      else if (a == "--max-fps") o->max_fps = std::stod(v);
-      else if (a == "--max-frames") o->max_frames = std::stoll(v);
-      else if (a == "--lost-after") o->lost_after_s = std::stod(v);
-      else if (a == "--reconnect-period") o->reconnect_period_s = std::stod(v);
+      } else if (a == "--jpeg-quality")
+        o->jpeg_quality = std::stoi(v);
+      else if (a == "--max-fps")
+        o->max_fps = std::stod(v);
+      else if (a == "--max-frames")
+        o->max_frames = std::stoll(v);
+      else if (a == "--lost-after")
+        o->lost_after_s = std::stod(v);
+      else if (a == "--reconnect-period")
+        o->reconnect_period_s = std::stod(v);
       else if (a == "--fakenect-end") {
         if (v != "stop" && v != "unplug") {
           *error = "--fakenect-end takes stop or unplug";
           return false;
         }
         o->device.fakenect_end_is_unplug = v == "unplug";
-      }
-      else {
+      } else {
         *error = "unknown option " + a;
         return false;
       }
@@ -162,16 +176,22 @@ bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
 
 int8_t rgbCode(pc::RgbEncoding e) {
   switch (e) {
-    case pc::RgbEncoding::Jpeg: return pplvo_msgs::image_t::ENCODING_JPEG;
-    case pc::RgbEncoding::Png: return pplvo_msgs::image_t::ENCODING_PNG;
-    default: return pplvo_msgs::image_t::ENCODING_RAW_BGR8;
+    case pc::RgbEncoding::Jpeg:
+      return pplvo_msgs::image_t::ENCODING_JPEG;
+    case pc::RgbEncoding::Png:
+      return pplvo_msgs::image_t::ENCODING_PNG;
+    default:
+      return pplvo_msgs::image_t::ENCODING_RAW_BGR8;
   }
 }
 int8_t depthCode(pc::DepthEncoding e) {
   switch (e) {
-    case pc::DepthEncoding::Zlib: return pplvo_msgs::image_t::ENCODING_ZLIB_U16;
-    case pc::DepthEncoding::Png: return pplvo_msgs::image_t::ENCODING_PNG_U16;
-    default: return pplvo_msgs::image_t::ENCODING_RAW_U16;
+    case pc::DepthEncoding::Zlib:
+      return pplvo_msgs::image_t::ENCODING_ZLIB_U16;
+    case pc::DepthEncoding::Png:
+      return pplvo_msgs::image_t::ENCODING_PNG_U16;
+    default:
+      return pplvo_msgs::image_t::ENCODING_RAW_U16;
   }
 }
 
@@ -180,7 +200,10 @@ class CameraPublisher {
  public:
   CameraPublisher(const NodeOptions& options, lcm::LCM& lcm, pplvo::PinholeCamera camera,
                   std::string source)
-      : options_(options), lcm_(lcm), camera_(camera), source_(std::move(source)),
+      : options_(options),
+        lcm_(lcm),
+        camera_(camera),
+        source_(std::move(source)),
         limiter_(options.max_fps) {}
 
   void setSource(const std::string& s) { source_ = s; }
@@ -313,8 +336,8 @@ int main(int argc, char** argv) {
   const auto reg = backend->registration();
   if (!reg.warning.empty()) publisher.warn(reg.warning);
   std::fprintf(stderr, "[%s] streaming from %s, %dx%d, fx %.2f fy %.2f cx %.2f cy %.2f (%s)\n",
-               kNode, backend->source().c_str(), camera.width, camera.height, camera.fx,
-               camera.fy, camera.cx, camera.cy,
+               kNode, backend->source().c_str(), camera.width, camera.height, camera.fx, camera.fy,
+               camera.cx, camera.cy,
                calib_camera ? "calibration file" : "device/nominal intrinsics");
   publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
 
@@ -329,7 +352,9 @@ int main(int argc, char** argv) {
   bool device_open = true;
   auto sleepUntil = [](int64_t until) {
     while (!pm::shutdownRequested() && pplvo::hostUtime() < until) {
-      struct timespec ts {0, 20000000};
+      struct timespec ts {
+        0, 20000000
+      };
       nanosleep(&ts, nullptr);
     }
   };
@@ -368,16 +393,14 @@ int main(int argc, char** argv) {
       case pc::GrabStatus::Frame:
         if (in_outage) {
           in_outage = false;
-          publisher.warn("device back after " + std::to_string(attempts) +
-                         " reconnect attempt(s)");
+          publisher.warn("device back after " + std::to_string(attempts) + " reconnect attempt(s)");
           publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
         }
         last_frame = pplvo::hostUtime();
         publisher.onFrame(frame);
         break;
       case pc::GrabStatus::Timeout:
-        lost = pplvo::hostUtime() - last_frame >
-               static_cast<int64_t>(options.lost_after_s * 1e6);
+        lost = pplvo::hostUtime() - last_frame > static_cast<int64_t>(options.lost_after_s * 1e6);
         break;
       case pc::GrabStatus::Disconnected:
         lost = true;

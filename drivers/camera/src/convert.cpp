@@ -4,9 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <stdexcept>
-
 #include <fstream>
+#include <stdexcept>
 
 #include "pplvo/dataset/dataset.h"
 
@@ -101,9 +100,7 @@ cv::Mat depthU16FromBuffer(const uint16_t* data, int width, int height, int stri
   return out;
 }
 
-double depthScaleFor(DepthUnit unit) {
-  return unit == DepthUnit::Millimetre ? 1000.0 : 10000.0;
-}
+double depthScaleFor(DepthUnit unit) { return unit == DepthUnit::Millimetre ? 1000.0 : 10000.0; }
 
 std::optional<PinholeCamera> intrinsicsFromFov(int width, int height, double hfov_rad,
                                                double vfov_rad) {
@@ -243,7 +240,7 @@ int64_t DeviceClockMapper::map(uint64_t device_ticks, int64_t host_arrival_utime
       if (++consecutive_outliers_ >= options_.restart_after_outliers) {
         ++stats_.restarts;
         started_ = false;
-        --stats_.frames;  // counted again by the restarted call
+        --stats_.frames;                               // counted again by the restarted call
         return map(device_ticks, host_arrival_utime);  // restart from this frame
       }
       last_device_us_ = device_us;
@@ -364,8 +361,9 @@ std::optional<DepthEncoding> parseDepthEncoding(const std::string& s) {
 RegistrationDecision decideRegistration(bool requested, bool hardware_supported) {
   RegistrationDecision d;
   if (!requested) {
-    d.warning = "registration off: depth stays in the depth camera's frame although frames "
-                "carry the colour camera's intrinsics";
+    d.warning =
+        "registration off: depth stays in the depth camera's frame although frames "
+        "carry the colour camera's intrinsics";
     return d;
   }
   if (hardware_supported) {
@@ -373,8 +371,9 @@ RegistrationDecision decideRegistration(bool requested, bool hardware_supported)
     d.depth_in_colour_frame = true;
     return d;
   }
-  d.warning = "device has no hardware depth-to-colour registration: publishing depth as the "
-              "device delivers it (not registered)";
+  d.warning =
+      "device has no hardware depth-to-colour registration: publishing depth as the "
+      "device delivers it (not registered)";
   return d;
 }
 
@@ -395,8 +394,8 @@ std::string describeModes(const std::vector<ModeCandidate>& modes) {
   std::string out;
   for (const ModeCandidate& m : modes) {
     if (!out.empty()) out += ' ';
-    out += std::to_string(m.width) + "x" + std::to_string(m.height) + "@" +
-           std::to_string(m.fps) + "/fmt" + std::to_string(m.pixel_format);
+    out += std::to_string(m.width) + "x" + std::to_string(m.height) + "@" + std::to_string(m.fps) +
+           "/fmt" + std::to_string(m.pixel_format);
   }
   return out;
 }

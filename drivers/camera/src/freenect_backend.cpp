@@ -1,12 +1,11 @@
 // libfreenect (Kinect v1) backend: the asynchronous API driven from grab(), so that the node
 // owns the loop (no hidden thread), timeouts are bounded and an unplugged device surfaces as
 // an error code instead of a hang.
+#include <libfreenect.h>
 #include <sys/time.h>
 
 #include <cstdlib>
 #include <cstring>
-
-#include <libfreenect.h>
 
 #include "backend.h"
 #include "pplvo/core/stage_timer.h"
@@ -43,8 +42,8 @@ class FreenectBackend final : public Backend {
       char* end = nullptr;
       const long v = std::strtol(options_.device.c_str(), &end, 10);
       if (*end != '\0' || v < 0) {
-        *error = "libfreenect backend takes a device index (0, 1, ...), not '" +
-                 options_.device + "'";
+        *error =
+            "libfreenect backend takes a device index (0, 1, ...), not '" + options_.device + "'";
         return false;
       }
       index = static_cast<int>(v);
@@ -113,8 +112,8 @@ class FreenectBackend final : public Backend {
         registration_.depth_in_colour_frame = true;
       }
     }
-    const freenect_frame_mode video = freenect_find_video_mode(FREENECT_RESOLUTION_MEDIUM,
-                                                               FREENECT_VIDEO_RGB);
+    const freenect_frame_mode video =
+        freenect_find_video_mode(FREENECT_RESOLUTION_MEDIUM, FREENECT_VIDEO_RGB);
     if (!video.is_valid || freenect_set_video_mode(dev_, video) < 0) {
       *error = "cannot set 640x480 RGB video mode";
       close();
@@ -213,8 +212,8 @@ class FreenectBackend final : public Backend {
     if (!self || !data) return;
     self->arrival_utime_ = hostUtime();
     try {
-      self->pairer_.pushColour(
-          bgrFromRgb888(static_cast<const uint8_t*>(data), kWidth, kHeight), timestamp);
+      self->pairer_.pushColour(bgrFromRgb888(static_cast<const uint8_t*>(data), kWidth, kHeight),
+                               timestamp);
     } catch (...) {
       ++self->callback_errors_;
     }

@@ -3,9 +3,9 @@
 // for frames and hands the buffers to the pure conversions. Debian's Dummy driver crashes once
 // a stream starts, so this file is exercised only with real hardware (and with no device, by
 // test_camera_no_device).
-#include <cstdlib>
-
 #include <OpenNI.h>
+
+#include <cstdlib>
 
 #include "backend.h"
 #include "pplvo/core/stage_timer.h"
@@ -38,8 +38,8 @@ class Openni2Backend final : public Backend {
     close();
     if (!initialised_) {
       if (openni::OpenNI::initialize() != openni::STATUS_OK) {
-        *error = std::string("OpenNI2 initialisation failed: ") +
-                 openni::OpenNI::getExtendedError();
+        *error =
+            std::string("OpenNI2 initialisation failed: ") + openni::OpenNI::getExtendedError();
         return false;
       }
       initialised_ = true;
@@ -73,8 +73,8 @@ class Openni2Backend final : public Backend {
       close();
       return false;
     }
-    const bool hw = device_.isImageRegistrationModeSupported(
-        openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR);
+    const bool hw =
+        device_.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR);
     registration_ = decideRegistration(options_.registration, hw);
     device_.setImageRegistrationMode(registration_.use_hardware
                                          ? openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR
@@ -89,9 +89,9 @@ class Openni2Backend final : public Backend {
       close();
       return false;
     }
-    intrinsics_ = intrinsicsFromFov(options_.width, options_.height,
-                                    colour_.getHorizontalFieldOfView(),
-                                    colour_.getVerticalFieldOfView());
+    intrinsics_ =
+        intrinsicsFromFov(options_.width, options_.height, colour_.getHorizontalFieldOfView(),
+                          colour_.getVerticalFieldOfView());
     pairer_.clear();
     return true;
   }
@@ -125,15 +125,15 @@ class Openni2Backend final : public Backend {
         depth_scale_ = frame.getVideoMode().getPixelFormat() == openni::PIXEL_FORMAT_DEPTH_100_UM
                            ? depthScaleFor(DepthUnit::HundredMicrometre)
                            : depthScaleFor(DepthUnit::Millimetre);
-        pairer_.pushDepth(depthU16FromBuffer(static_cast<const uint16_t*>(frame.getData()),
-                                             frame.getWidth(), frame.getHeight(),
-                                             frame.getStrideInBytes()),
-                          frame.getTimestamp());
+        pairer_.pushDepth(
+            depthU16FromBuffer(static_cast<const uint16_t*>(frame.getData()), frame.getWidth(),
+                               frame.getHeight(), frame.getStrideInBytes()),
+            frame.getTimestamp());
       } else {
-        pairer_.pushColour(bgrFromRgb888(static_cast<const uint8_t*>(frame.getData()),
-                                         frame.getWidth(), frame.getHeight(),
-                                         frame.getStrideInBytes()),
-                           frame.getTimestamp());
+        pairer_.pushColour(
+            bgrFromRgb888(static_cast<const uint8_t*>(frame.getData()), frame.getWidth(),
+                          frame.getHeight(), frame.getStrideInBytes()),
+            frame.getTimestamp());
       }
     }
   }
@@ -180,8 +180,8 @@ class Openni2Backend final : public Backend {
       return false;
     }
     if (stream->create(device_, type) != openni::STATUS_OK) {
-      *error = std::string("cannot create ") + name + " stream: " +
-               openni::OpenNI::getExtendedError();
+      *error =
+          std::string("cannot create ") + name + " stream: " + openni::OpenNI::getExtendedError();
       return false;
     }
     const auto candidates = candidatesOf(device_.getSensorInfo(type));

@@ -1,12 +1,12 @@
 // Unit tests of the pure camera conversions (no device, no LCM).
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <random>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <random>
 
 #include "pplvo/camera/convert.h"
 #include "pplvo/core/rgbd_frame.h"
@@ -47,7 +47,8 @@ TEST(KinectDisparity, RoundTripWithinTheQuantisationBound) {
     const double back = m.metresFromRaw(raw);
     EXPECT_LE(std::abs(back - z), m.roundTripBoundM(z, back) * (1 + 1e-9)) << z;
     // And the bound is about half a step, (K2): 1.5e-3 z^2.
-    EXPECT_LE(m.roundTripBoundM(z, back), 0.5 * m.stepAtDepthM(z) * 1.02);  // z_back/z <= 1.014 at 9 m
+    EXPECT_LE(m.roundTripBoundM(z, back),
+              0.5 * m.stepAtDepthM(z) * 1.02);  // z_back/z <= 1.014 at 9 m
   }
   // Exact raw values survive the round trip.
   for (int raw = 0; raw <= m.max_valid_raw; raw += 7) {
@@ -98,7 +99,8 @@ TEST(Buffers, Rgb888ToBgrWithStride) {
   std::vector<uint8_t> buf(stride * h, 0xEE);
   for (int r = 0; r < h; ++r)
     for (int c = 0; c < w; ++c)
-      for (int k = 0; k < 3; ++k) buf[r * stride + 3 * c + k] = static_cast<uint8_t>(10 * r + 3 * c + k);
+      for (int k = 0; k < 3; ++k)
+        buf[r * stride + 3 * c + k] = static_cast<uint8_t>(10 * r + 3 * c + k);
   const cv::Mat bgr = pc::bgrFromRgb888(buf.data(), w, h, stride);
   ASSERT_EQ(bgr.type(), CV_8UC3);
   for (int r = 0; r < h; ++r)
@@ -151,15 +153,15 @@ TEST(Intrinsics, FromFieldOfView) {
 // ------------------------------------------------------------------ calibration
 
 TEST(Calibration, ReadsTheDatasetCalibParams) {
-  const auto tum = pc::loadCalibration(sharedData() + "/tum_fr3_sitting_static_short/calib_params.xml",
-                                       640, 480);
+  const auto tum = pc::loadCalibration(
+      sharedData() + "/tum_fr3_sitting_static_short/calib_params.xml", 640, 480);
   ASSERT_TRUE(tum.camera) << tum.error;
   EXPECT_DOUBLE_EQ(tum.camera->fx, 535.4);
   EXPECT_DOUBLE_EQ(tum.camera->fy, 539.2);
   EXPECT_DOUBLE_EQ(tum.camera->cx, 320.1);
   EXPECT_DOUBLE_EQ(tum.camera->cy, 247.6);
-  const auto icl = pc::loadCalibration(sharedData() + "/icl_living_room_kt0_short/calib_params.xml",
-                                       640, 480);
+  const auto icl =
+      pc::loadCalibration(sharedData() + "/icl_living_room_kt0_short/calib_params.xml", 640, 480);
   ASSERT_TRUE(icl.camera) << icl.error;
   EXPECT_DOUBLE_EQ(icl.camera->fy, -480.0);  // signed fy kept
 }
@@ -256,7 +258,8 @@ double maxErrorUs(const ClockSim& s, double seconds, double settle_s, uint64_t s
   int64_t last = INT64_MIN;
   for (int k = 0; k < static_cast<int>(seconds * 30); ++k) {
     const double t_true_us = k * 1e6 / 30.0;  // capture time on the host clock since start
-    const double dev_ticks = start_ticks + t_true_us * 1e-6 * s.ticks_per_s * (1 + s.drift_ppm * 1e-6);
+    const double dev_ticks =
+        start_ticks + t_true_us * 1e-6 * s.ticks_per_s * (1 + s.drift_ppm * 1e-6);
     uint64_t ticks = static_cast<uint64_t>(std::llround(dev_ticks));
     if (s.bits < 64) ticks &= (uint64_t{1} << s.bits) - 1;
     const double arrival = host0 + t_true_us + s.base_latency_us + jitter(*rng);
@@ -278,9 +281,9 @@ TEST(DeviceClock, FirstFrameOffsetThenLowerEnvelope) {
   pc::DeviceClockOptions o;
   o.max_drift_ppm = 0;  // exact arithmetic; the drift allowance is tested below
   pc::DeviceClockMapper m(o);
-  EXPECT_EQ(m.map(1000, 5000000), 5000000);        // first frame: arrival
-  EXPECT_EQ(m.map(34333, 5040000), 5033333);       // later: first offset + device time
-  EXPECT_EQ(m.map(67666, 5066000), 5066000 - 0);   // faster arrival lowers the offset
+  EXPECT_EQ(m.map(1000, 5000000), 5000000);       // first frame: arrival
+  EXPECT_EQ(m.map(34333, 5040000), 5033333);      // later: first offset + device time
+  EXPECT_EQ(m.map(67666, 5066000), 5066000 - 0);  // faster arrival lowers the offset
   EXPECT_EQ(m.stats().frames, 3);
 }
 

@@ -1,6 +1,7 @@
 // End to end without hardware: TUM sequence -> pplvo-tum-to-fakenect -> fakenect replaying the
 // dump as a Kinect v1 -> pplvo-camera --backend freenect -> file:// LCM log -> compared with
 // the source frames (colour equal, depth within the Kinect quantisation, count, stamps).
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -9,18 +10,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <map>
-#include <sstream>
-#include <string>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
-
 #include <pplvo_msgs/node_status_t.hpp>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "pplvo/camera/convert.h"
 #include "pplvo/core/rgbd_frame.h"
@@ -66,9 +64,9 @@ class CameraFakenect : public ::testing::Test {
     dir_ = "/tmp/pplvo_camera_fakenect_" + std::to_string(::getpid());
     dump_ = dir_ + "/dump";
     ASSERT_EQ(run("mkdir -p " + dir_), 0);
-    const std::string cmd = std::string(PPLVO_TUM_TO_FAKENECT_EXE) + " --dataset " +
-                            sharedData() + "/" + kSequence + " --output " + dump_ +
-                            " --max-frames 20 2> " + dir_ + "/tool.log";
+    const std::string cmd = std::string(PPLVO_TUM_TO_FAKENECT_EXE) + " --dataset " + sharedData() +
+                            "/" + kSequence + " --output " + dump_ + " --max-frames 20 2> " + dir_ +
+                            "/tool.log";
     ASSERT_EQ(run(cmd), 0) << slurp(dir_ + "/tool.log");
     std::ifstream in(dump_ + "/pplvo_frames.txt");
     std::string line;
@@ -98,9 +96,9 @@ class CameraFakenect : public ::testing::Test {
     Published p;
     const std::string log = dir_ + "/" + name + ".lcmlog";
     const std::string err = dir_ + "/" + name + ".stderr";
-    const std::string cmd = timeout + " " + PPLVO_FAKENECT_WRAPPER + " " + dump_ +
-                            " " + PPLVO_CAMERA_EXE + " --backend freenect --lcm-url 'file://" +
-                            log + "?mode=w' " + extra + " > /dev/null 2> " + err;
+    const std::string cmd = timeout + " " + PPLVO_FAKENECT_WRAPPER + " " + dump_ + " " +
+                            PPLVO_CAMERA_EXE + " --backend freenect --lcm-url 'file://" + log +
+                            "?mode=w' " + extra + " > /dev/null 2> " + err;
     p.exit_code = run(cmd);
     p.log = slurp(err);
     lcm::LogFile file(log, "r");
@@ -149,11 +147,12 @@ class CameraFakenect : public ::testing::Test {
       for (int c = 0; c < depth.cols; ++c) {
         const double z_src = depth_src.at<uint16_t>(r, c) / 5000.0;
         const double z_pub = depth.at<uint16_t>(r, c) / scale;
-        const bool representable =
-            z_src > 0 && model.rawFromMetres(z_src) != model.no_reading_raw;
+        const bool representable = z_src > 0 && model.rawFromMetres(z_src) != model.no_reading_raw;
         if (!representable) {
-          if (z_pub != 0) ++bad;
-          else ++missing_ok;
+          if (z_pub != 0)
+            ++bad;
+          else
+            ++missing_ok;
           continue;
         }
         const double half_unit = 0.5 / scale;
@@ -208,9 +207,10 @@ TEST_F(CameraFakenect, RawFramesMatchTheSource) {
   }
   std::sort(err_ms.begin(), err_ms.end());
   EXPECT_LT(err_ms[err_ms.size() / 2], 2.0) << "median interval error (ms)";
-  std::printf("raw run: 20 frames, worst depth error / bound %.3f, max colour diff %.0f, "
-              "interval error vs source median %.3f ms max %.3f ms\n",
-              worst_ratio_seen_, max_colour_seen_, err_ms[err_ms.size() / 2], err_ms.back());
+  std::printf(
+      "raw run: 20 frames, worst depth error / bound %.3f, max colour diff %.0f, "
+      "interval error vs source median %.3f ms max %.3f ms\n",
+      worst_ratio_seen_, max_colour_seen_, err_ms[err_ms.size() / 2], err_ms.back());
   // Stream events and status.
   ASSERT_GE(p.events.size(), 2u);
   EXPECT_EQ(p.events.front().event, pplvo_msgs::stream_event_t::EVENT_START);
@@ -240,9 +240,10 @@ TEST_F(CameraFakenect, CompressedFramesDecodeToTheSameImages) {
 }
 
 TEST_F(CameraFakenect, JpegAndRateLimit) {
-  const Published p = runCamera("jpeg_10hz", "--rgb-encoding jpeg --depth-encoding png "
-                                             "--max-fps 10 --calib " + sharedData() + "/" +
-                                             kSequence + "/calib_params.xml");
+  const Published p = runCamera("jpeg_10hz",
+                                "--rgb-encoding jpeg --depth-encoding png "
+                                "--max-fps 10 --calib " +
+                                    sharedData() + "/" + kSequence + "/calib_params.xml");
   ASSERT_EQ(p.exit_code, 0) << p.log;
   // 20 frames at ~30 Hz span 0.63 s: at most 10 Hz -> 7 frames (6..8 with stamp jitter).
   std::printf("--max-fps 10: %zu of 20 frames published\n", p.frames.size());
@@ -273,8 +274,8 @@ TEST_F(CameraFakenect, JpegAndRateLimit) {
     const cv::Mat bgr = pplvo::msgs::decodeImage(m.rgb);
     cv::Mat diff;
     cv::absdiff(bgr, src, diff);
-    EXPECT_LT(cv::mean(diff.reshape(1))[0], 3.0) << "mean JPEG error (grey levels), frame "
-                                                  << best_k;
+    EXPECT_LT(cv::mean(diff.reshape(1))[0], 3.0)
+        << "mean JPEG error (grey levels), frame " << best_k;
     // Depth as PNG is lossless: the same bound as the raw run.
     compareFrame(m, sources_[best_k], 255);
   }
@@ -285,9 +286,8 @@ TEST_F(CameraFakenect, UnpluggedDeviceIsRetriedWithoutCrashing) {
   // fakenect cannot rewind its index, so every reconnection fails again at once: the node
   // must keep retrying quietly (one message per outage), stay alive, and stop cleanly on
   // SIGINT with its END event.
-  const Published p =
-      runCamera("unplug", "--fakenect-end unplug --reconnect-period 0.2",
-                "timeout --preserve-status -s INT 4");
+  const Published p = runCamera("unplug", "--fakenect-end unplug --reconnect-period 0.2",
+                                "timeout --preserve-status -s INT 4");
   EXPECT_EQ(p.exit_code, 0) << p.log;
   EXPECT_EQ(p.frames.size(), 20u);
   EXPECT_NE(p.log.find("device lost (unplugged or stalled): reconnecting"), std::string::npos)

@@ -1,6 +1,7 @@
 // With no sensor attached, pplvo-camera must fail fast with a clear message and a non-zero
 // exit code, for both backends (this machine has no camera; set PPLVO_CAMERA_HARDWARE=1 on one
 // that does to skip).
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -9,8 +10,6 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 namespace {
 
@@ -24,8 +23,8 @@ RunResult runCamera(const std::string& args) {
   const std::string err = "/tmp/pplvo_camera_nodev_" + std::to_string(::getpid()) + ".txt";
   const std::string log = "/tmp/pplvo_camera_nodev_" + std::to_string(::getpid()) + ".lcmlog";
   // FAKENECT_PATH unset and the real libfreenect: no fake Kinect.
-  const std::string cmd = "env -u FAKENECT_PATH timeout 30 " + std::string(PPLVO_CAMERA_EXE) +
-                          " " + args + " --lcm-url 'file://" + log + "?mode=w' 2> " + err;
+  const std::string cmd = "env -u FAKENECT_PATH timeout 30 " + std::string(PPLVO_CAMERA_EXE) + " " +
+                          args + " --lcm-url 'file://" + log + "?mode=w' 2> " + err;
   const auto t0 = std::chrono::steady_clock::now();
   const int rc = std::system(cmd.c_str());
   RunResult r;
@@ -65,8 +64,7 @@ TEST(NoDeviceOptions, BadOptionsAreRejectedBeforeTouchingDevices) {
       << r.stderr_text;
   const RunResult c = runCamera("--backend freenect --calib /nonexistent/calib_params.xml");
   EXPECT_EQ(c.exit_code, 1);
-  EXPECT_NE(c.stderr_text.find("cannot open calibration file"), std::string::npos)
-      << c.stderr_text;
+  EXPECT_NE(c.stderr_text.find("cannot open calibration file"), std::string::npos) << c.stderr_text;
   const RunResult e = runCamera("--backend openni2 --depth-encoding jpeg");
   EXPECT_EQ(e.exit_code, 1);
 }

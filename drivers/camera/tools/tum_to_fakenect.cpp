@@ -15,10 +15,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <string>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "pplvo/camera/convert.h"
 #include "pplvo/core/rgbd_frame.h"
@@ -26,8 +25,7 @@
 
 namespace {
 
-bool writeFile(const std::string& path, const std::string& header, const void* data,
-               size_t bytes) {
+bool writeFile(const std::string& path, const std::string& header, const void* data, size_t bytes) {
   std::ofstream f(path, std::ios::binary);
   f << header;
   f.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
@@ -59,19 +57,23 @@ int main(int argc, char** argv) {
     }
     const std::string v = argv[++i];
     try {
-      if (a == "--dataset") dataset = v;
-      else if (a == "--output") output = v;
-      else if (a == "--max-frames") max_frames = std::stol(v);
-      else if (a == "--depth-scale") depth_scale = std::stod(v);
-      else if (a == "--max-dt") max_dt = std::stod(v);
+      if (a == "--dataset")
+        dataset = v;
+      else if (a == "--output")
+        output = v;
+      else if (a == "--max-frames")
+        max_frames = std::stol(v);
+      else if (a == "--depth-scale")
+        depth_scale = std::stod(v);
+      else if (a == "--max-dt")
+        max_dt = std::stod(v);
       else {
         std::fprintf(stderr, "pplvo-tum-to-fakenect: unknown option %s\n", a.c_str());
         usage();
         return 1;
       }
     } catch (...) {
-      std::fprintf(stderr, "pplvo-tum-to-fakenect: bad value '%s' for %s\n", v.c_str(),
-                   a.c_str());
+      std::fprintf(stderr, "pplvo-tum-to-fakenect: bad value '%s' for %s\n", v.c_str(), a.c_str());
       return 1;
     }
   }
@@ -134,8 +136,8 @@ int main(int argc, char** argv) {
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
 
     // 60 MHz counter from the colour stamp, starting away from 0, wrapping at 2^32.
-    const auto ticks = static_cast<uint32_t>(
-        static_cast<uint64_t>((e.utime - t0_us) * 60 + 600000) & 0xffffffffu);
+    const auto ticks =
+        static_cast<uint32_t>(static_cast<uint64_t>((e.utime - t0_us) * 60 + 600000) & 0xffffffffu);
     char time_text[64];
     std::snprintf(time_text, sizeof(time_text), "%.6f", e.utime * 1e-6);
     const std::string dname = std::string("d-") + time_text + "-" + std::to_string(ticks) + ".pgm";
@@ -146,15 +148,15 @@ int main(int argc, char** argv) {
       return 2;
     }
     index_out << dname << "\n" << rname << "\n";
-    frames << written << " " << e.stamp_text << " " << std::filesystem::absolute(e.rgb_path).string()
-           << " " << e.depth_stamp_text << " "
+    frames << written << " " << e.stamp_text << " "
+           << std::filesystem::absolute(e.rgb_path).string() << " " << e.depth_stamp_text << " "
            << std::filesystem::absolute(e.depth_path).string() << " " << ticks << "\n";
     ++written;
   }
   std::fprintf(stderr,
                "pplvo-tum-to-fakenect: wrote %ld frame pairs to %s (%ld skipped, %ld depth "
                "pixels outside the Kinect range [%.3f, %.2f] m set to no reading)\n",
-               written, output.c_str(), skipped, unrepresentable,
-               model.metresFromRaw(0), model.metresFromRaw(model.max_valid_raw));
+               written, output.c_str(), skipped, unrepresentable, model.metresFromRaw(0),
+               model.metresFromRaw(model.max_valid_raw));
   return written > 0 ? 0 : 2;
 }

@@ -3,11 +3,10 @@
 /// Everything here is testable on recorded or synthetic buffers; the OpenNI2 and libfreenect
 /// code paths only copy device buffers and call these functions. See docs/cameras.md.
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
 
@@ -134,10 +133,10 @@ class DeviceClockMapper {
 
   struct Stats {
     int64_t frames = 0;
-    int64_t wraps = 0;       ///< counter wrap-arounds unwrapped
-    int64_t outliers = 0;    ///< frames mapped to their arrival time
-    int64_t restarts = 0;    ///< mapping restarted after consecutive outliers
-    double offset_us = 0;    ///< current host - device offset (device time from first frame)
+    int64_t wraps = 0;     ///< counter wrap-arounds unwrapped
+    int64_t outliers = 0;  ///< frames mapped to their arrival time
+    int64_t restarts = 0;  ///< mapping restarted after consecutive outliers
+    double offset_us = 0;  ///< current host - device offset (device time from first frame)
   };
   const Stats& stats() const { return stats_; }
 
@@ -208,9 +207,9 @@ std::optional<DepthEncoding> parseDepthEncoding(const std::string& s);  ///< raw
 
 /// What to do about depth-to-colour registration, given the request and the device.
 struct RegistrationDecision {
-  bool use_hardware = false;        ///< switch the device's registration on
+  bool use_hardware = false;  ///< switch the device's registration on
   bool depth_in_colour_frame = false;
-  std::string warning;              ///< non-empty when the result differs from the request
+  std::string warning;  ///< non-empty when the result differs from the request
 };
 RegistrationDecision decideRegistration(bool requested, bool hardware_supported);
 
