@@ -1,54 +1,22 @@
-// pplvo-camera: publishes rgbd_frame_t from a live RGB-D sensor (OpenNI2 or libfreenect), the
-// same messages as the dataset player. Thin: the backend copies device buffers, the
-// conversions live in pplvo_camera_convert, and this file only maps to messages and publishes.
-// Channels: out PPLVO_RGBD (rgbd_frame_t), PPLVO_STREAM (stream_event_t START/END),
-// PPLVO_STATUS (node_status_t, about once a second). See docs/cameras.md.
+// The LCM side of pplvo-camera: messages, counters, outage handling. See camera_node.h.
+#include "camera_node.h"
+
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <ctime>
-#include <memory>
 #include <optional>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
 #include <string>
 
-#include "backend.h"
-#include "pplvo/camera/convert.h"
-#include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/msgs/node_runtime.h"
 
-namespace pc = pplvo::camera;
+namespace pplvo::camera {
+
 namespace pm = pplvo::msgs;
 
-namespace {
-
-constexpr const char* kNode = "pplvo-camera";
-constexpr int kExitUsage = 1;
-constexpr int kExitNoDevice = 2;
-constexpr int kExitRuntime = 3;
-
-struct NodeOptions {
-  std::string backend = "openni2";
-  pc::BackendOptions device;
-  std::string lcm_url;  // empty: $LCM_DEFAULT_URL
-  std::string channel = pplvo::channels::kRgbd;
-  std::string stream_channel = pplvo::channels::kStream;
-  std::string status_channel = pplvo::channels::kStatus;
-  std::string calib;
-  pc::RgbEncoding rgb_encoding = pc::RgbEncoding::Raw;
-  pc::DepthEncoding depth_encoding = pc::DepthEncoding::Raw;
-  int jpeg_quality = 90;
-  double max_fps = 0;         // 0: every frame
-  int64_t max_frames = 0;     // 0: until stopped
-  double lost_after_s = 3.0;  // no frame for this long: device lost
-  double reconnect_period_s = 1.0;
-};
-
-void usage() {
-  std::fprintf(
-      stderr,
+std::string nodeUsage() {
+  return std::string(
       "usage: pplvo-camera [options]\n"
       "  --backend openni2|freenect   device library (default openni2)\n"
       "  --device URI|INDEX           OpenNI2 URI (or .oni file) or index; freenect index\n"
@@ -70,12 +38,14 @@ void usage() {
       "                               default) or acts as an unplugged device (tests)\n");
 }
 
-bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
+bool parseNodeArgs(int argc, const char* const* argv, NodeOptions* o, std::string* error,
+                   bool* help) {
+  *help = false;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "-h" || a == "--help") {
-      usage();
-      std::exit(0);
+      *help = true;
+      return true;
     }
     std::string v;
     const auto eq = a.find('=');
@@ -116,14 +86,14 @@ bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
       } else if (a == "--calib")
         o->calib = v;
       else if (a == "--rgb-encoding") {
-        const auto e = pc::parseRgbEncoding(v);
+        const auto e = parseRgbEncoding(v);
         if (!e) {
           *error = "--rgb-encoding takes raw, jpeg or png";
           return false;
         }
         o->rgb_encoding = *e;
       } else if (a == "--depth-encoding") {
-        const auto e = pc::parseDepthEncoding(v);
+        const auto e = parseDepthEncoding(v);
         if (!e) {
           *error = "--depth-encoding takes raw, zlib or png";
           return false;
@@ -174,21 +144,23 @@ bool parseArgs(int argc, char** argv, NodeOptions* o, std::string* error) {
   return true;
 }
 
-int8_t rgbCode(pc::RgbEncoding e) {
+namespace {
+
+int8_t rgbCode(RgbEncoding e) {
   switch (e) {
-    case pc::RgbEncoding::Jpeg:
+    case RgbEncoding::Jpeg:
       return pplvo_msgs::image_t::ENCODING_JPEG;
-    case pc::RgbEncoding::Png:
+    case RgbEncoding::Png:
       return pplvo_msgs::image_t::ENCODING_PNG;
     default:
       return pplvo_msgs::image_t::ENCODING_RAW_BGR8;
   }
 }
-int8_t depthCode(pc::DepthEncoding e) {
+int8_t depthCode(DepthEncoding e) {
   switch (e) {
-    case pc::DepthEncoding::Zlib:
+    case DepthEncoding::Zlib:
       return pplvo_msgs::image_t::ENCODING_ZLIB_U16;
-    case pc::DepthEncoding::Png:
+    case DepthEncoding::Png:
       return pplvo_msgs::image_t::ENCODING_PNG_U16;
     default:
       return pplvo_msgs::image_t::ENCODING_RAW_U16;
@@ -207,11 +179,11 @@ class CameraPublisher {
         limiter_(options.max_fps) {}
 
   void setSource(const std::string& s) { source_ = s; }
-  void resetClock(const pc::DeviceClockOptions& clock) { clock_.emplace(clock); }
+  void resetClock(const DeviceClockOptions& clock) { clock_.emplace(clock); }
 
-  void onFrame(const pc::CapturedFrame& f) {
+  void onFrame(const CapturedFrame& f) {
     ++counters_.frames_in;
-    pm::guarded(counters_, kNode, [&] {
+    pm::guarded(counters_, kNodeName, [&] {
       pplvo::Stopwatch watch;
       const int64_t utime = clock_->map(f.device_ticks, f.host_arrival_utime);
       if (!limiter_.allow(utime)) {
@@ -230,7 +202,7 @@ class CameraPublisher {
       pplvo_msgs::rgbd_frame_t msg;
       msg.utime = utime;
       msg.seq = seq_;
-      msg.stamp = pc::stampText(utime);
+      msg.stamp = stampText(utime);
       msg.source = source_;
       msg.camera = pm::toMsg(camera_);
       msg.depth_scale = f.depth_scale;
@@ -245,7 +217,7 @@ class CameraPublisher {
   }
 
   void publishEvent(int8_t event) {
-    pm::guarded(counters_, kNode, [&] {
+    pm::guarded(counters_, kNodeName, [&] {
       pplvo_msgs::stream_event_t ev;
       ev.utime = pplvo::hostUtime();
       ev.source = source_;
@@ -257,17 +229,17 @@ class CameraPublisher {
   }
 
   void publishStatus(int64_t backend_dropped) {
-    pm::guarded(counters_, kNode, [&] {
+    pm::guarded(counters_, kNodeName, [&] {
       pm::NodeCounters c = counters_;
       c.frames_dropped += backend_dropped;
-      auto msg = pm::toStatusMsg(kNode, c, timings_, pplvo::hostUtime());
+      auto msg = pm::toStatusMsg(kNodeName, c, timings_, pplvo::hostUtime());
       lcm_.publish(options_.status_channel, &msg);
     });
   }
 
   void warn(const std::string& w) {
     counters_.last_warning = w;
-    std::fprintf(stderr, "[%s] %s\n", kNode, w.c_str());
+    std::fprintf(stderr, "[%s] %s\n", kNodeName, w.c_str());
   }
   int64_t published() const { return counters_.frames_out; }
 
@@ -276,8 +248,8 @@ class CameraPublisher {
   lcm::LCM& lcm_;
   pplvo::PinholeCamera camera_;
   std::string source_;
-  std::optional<pc::DeviceClockMapper> clock_;
-  pc::RateLimiter limiter_;
+  std::optional<DeviceClockMapper> clock_;
+  RateLimiter limiter_;
   pm::NodeCounters counters_;
   pplvo::StageTimings timings_;
   int64_t seq_ = 0;
@@ -285,60 +257,16 @@ class CameraPublisher {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  NodeOptions options;
+NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, lcm::LCM& lcm,
+                            const PinholeCamera& camera, const std::string& camera_origin) {
   std::string error;
-  if (!parseArgs(argc, argv, &options, &error)) {
-    std::fprintf(stderr, "%s: %s\n", kNode, error.c_str());
-    usage();
-    return kExitUsage;
-  }
-  pm::installShutdownHandlers();
-
-  std::optional<pplvo::PinholeCamera> calib_camera;
-  if (!options.calib.empty()) {
-    const auto loaded =
-        pc::loadCalibration(options.calib, options.device.width, options.device.height);
-    if (!loaded.camera) {
-      std::fprintf(stderr, "%s: %s\n", kNode, loaded.error.c_str());
-      return kExitUsage;
-    }
-    calib_camera = loaded.camera;
-  }
-
-  std::unique_ptr<pc::Backend> backend = options.backend == "freenect"
-                                             ? pc::makeFreenectBackend(options.device)
-                                             : pc::makeOpenni2Backend(options.device);
-  if (!backend->open(&error)) {
-    std::fprintf(stderr, "%s: no usable %s device: %s\n", kNode, options.backend.c_str(),
-                 error.c_str());
-    return kExitNoDevice;
-  }
-
-  std::unique_ptr<lcm::LCM> lcm;
-  try {
-    lcm = pm::openLcm(options.lcm_url);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: %s\n", kNode, e.what());
-    return kExitRuntime;
-  }
-
-  pplvo::PinholeCamera camera;
-  if (calib_camera) {
-    camera = *calib_camera;
-  } else if (auto dev = backend->deviceIntrinsics()) {
-    camera = *dev;
-  } else {
-    camera = pc::kinectV1DefaultIntrinsics(options.device.width, options.device.height);
-  }
-  CameraPublisher publisher(options, *lcm, camera, backend->source());
-  publisher.resetClock(backend->clockOptions());
-  const auto reg = backend->registration();
+  CameraPublisher publisher(options, lcm, camera, backend.source());
+  publisher.resetClock(backend.clockOptions());
+  const auto reg = backend.registration();
   if (!reg.warning.empty()) publisher.warn(reg.warning);
   std::fprintf(stderr, "[%s] streaming from %s, %dx%d, fx %.2f fy %.2f cx %.2f cy %.2f (%s)\n",
-               kNode, backend->source().c_str(), camera.width, camera.height, camera.fx, camera.fy,
-               camera.cx, camera.cy,
-               calib_camera ? "calibration file" : "device/nominal intrinsics");
+               kNodeName, backend.source().c_str(), camera.width, camera.height, camera.fx,
+               camera.fy, camera.cx, camera.cy, camera_origin.c_str());
   publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
 
   // Main loop. A lost device (error from the library, or no frame for --lost-after seconds)
@@ -349,6 +277,7 @@ int main(int argc, char** argv) {
   bool end_of_stream = false;
   bool in_outage = false;
   int attempts = 0;
+  NodeRunResult result;
   bool device_open = true;
   auto sleepUntil = [](int64_t until) {
     while (!pm::shutdownRequested() && pplvo::hostUtime() < until) {
@@ -362,35 +291,36 @@ int main(int argc, char** argv) {
          (options.max_frames == 0 || publisher.published() < options.max_frames)) {
     const int64_t now = pplvo::hostUtime();
     if (now - last_status >= 1000000) {
-      publisher.publishStatus(backend->droppedFrames());
+      publisher.publishStatus(backend.droppedFrames());
       last_status = now;
     }
     if (!device_open) {
       sleepUntil(pplvo::hostUtime() + static_cast<int64_t>(options.reconnect_period_s * 1e6));
       if (pm::shutdownRequested()) break;
       ++attempts;
-      if (backend->open(&error)) {
+      ++result.reconnect_attempts;
+      if (backend.open(&error)) {
         device_open = true;
-        publisher.setSource(backend->source());
-        publisher.resetClock(backend->clockOptions());
+        publisher.setSource(backend.source());
+        publisher.resetClock(backend.clockOptions());
         last_frame = pplvo::hostUtime();
       } else if (attempts <= 3 || attempts % 30 == 0) {
-        std::fprintf(stderr, "[%s] reconnect attempt %d failed: %s\n", kNode, attempts,
+        std::fprintf(stderr, "[%s] reconnect attempt %d failed: %s\n", kNodeName, attempts,
                      error.c_str());
       }
       continue;
     }
-    pc::CapturedFrame frame;
-    pc::GrabStatus st;
+    CapturedFrame frame;
+    GrabStatus st;
     try {
-      st = backend->grab(100, &frame);
+      st = backend.grab(options.grab_timeout_ms, &frame);
     } catch (const std::exception& e) {  // e.g. a device buffer with impossible sizes
       publisher.warn(std::string("device read failed: ") + e.what());
-      st = pc::GrabStatus::Disconnected;
+      st = GrabStatus::Disconnected;
     }
     bool lost = false;
     switch (st) {
-      case pc::GrabStatus::Frame:
+      case GrabStatus::Frame:
         if (in_outage) {
           in_outage = false;
           publisher.warn("device back after " + std::to_string(attempts) + " reconnect attempt(s)");
@@ -399,36 +329,41 @@ int main(int argc, char** argv) {
         last_frame = pplvo::hostUtime();
         publisher.onFrame(frame);
         break;
-      case pc::GrabStatus::Timeout:
+      case GrabStatus::Timeout:
         lost = pplvo::hostUtime() - last_frame > static_cast<int64_t>(options.lost_after_s * 1e6);
         break;
-      case pc::GrabStatus::Disconnected:
+      case GrabStatus::Disconnected:
         lost = true;
         break;
-      case pc::GrabStatus::EndOfStream:
+      case GrabStatus::EndOfStream:
         end_of_stream = true;
         break;
     }
     if (lost) {
       if (!in_outage) {
         in_outage = true;
+        ++result.outages;
         attempts = 0;
         // No stream event here: consumers (pplvo-logger --until-end) take END and ERROR as
         // the end of the stream, and the node has not given up. The outage shows in the
         // status' last_warning; a new START marks the restart.
         publisher.warn("device lost (unplugged or stalled): reconnecting every " +
                        std::to_string(options.reconnect_period_s) + " s, ^C to stop");
-        publisher.publishStatus(backend->droppedFrames());
+        publisher.publishStatus(backend.droppedFrames());
       }
-      backend->close();
+      backend.close();
       device_open = false;
     }
   }
   publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_END);
-  publisher.publishStatus(backend->droppedFrames());
-  backend->close();
-  std::fprintf(stderr, "[%s] %s after %lld frames\n", kNode,
+  publisher.publishStatus(backend.droppedFrames());
+  backend.close();
+  std::fprintf(stderr, "[%s] %s after %lld frames\n", kNodeName,
                end_of_stream ? "end of stream" : "stopped",
                static_cast<long long>(publisher.published()));
-  return 0;
+  result.published = publisher.published();
+  result.end_of_stream = end_of_stream;
+  return result;
 }
+
+}  // namespace pplvo::camera
