@@ -296,8 +296,11 @@ void FramePairer::match() {
   if (!depth_ || !colour_) return;
   const int64_t d = signedDiff(colour_->second, depth_->second);
   if (static_cast<uint64_t>(d < 0 ? -d : d) <= tolerance_) {
-    if (ready_) ++dropped_;  // the consumer did not collect the previous pair
-    ready_ = Pair{colour_->first, depth_->first, colour_->second};
+    if (ready_.size() >= max_ready_) {  // the consumer fell behind: drop the oldest pair
+      ready_.pop_front();
+      ++dropped_;
+    }
+    ready_.push_back(Pair{colour_->first, depth_->first, colour_->second});
     depth_.reset();
     colour_.reset();
     return;
@@ -312,15 +315,16 @@ void FramePairer::match() {
 }
 
 std::optional<FramePairer::Pair> FramePairer::pop() {
-  std::optional<Pair> out;
-  out.swap(ready_);
+  if (ready_.empty()) return std::nullopt;
+  Pair out = std::move(ready_.front());
+  ready_.pop_front();
   return out;
 }
 
 void FramePairer::clear() {
   depth_.reset();
   colour_.reset();
-  ready_.reset();
+  ready_.clear();
 }
 
 bool RateLimiter::allow(int64_t utime) {

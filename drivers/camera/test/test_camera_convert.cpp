@@ -370,6 +370,19 @@ TEST(FramePairer, PairsWithinToleranceAndDropsStaleHalves) {
   p.pushDepth(d, 0xffffff00u);
   p.pushColour(c, 0x00000100u);
   EXPECT_TRUE(p.pop());
+  // Several pairs completed before the consumer pops: kept in order, up to max_ready (4).
+  const int64_t before = p.dropped();
+  for (uint64_t k = 0; k < 6; ++k) {
+    p.pushDepth(d, 100000 + k * 2000);
+    p.pushColour(c, 100000 + k * 2000 + 10);
+  }
+  EXPECT_EQ(p.dropped() - before, 2);
+  for (uint64_t k = 2; k < 6; ++k) {
+    auto q = p.pop();
+    ASSERT_TRUE(q);
+    EXPECT_EQ(q->device_ticks, 100000 + k * 2000 + 10);
+  }
+  EXPECT_FALSE(p.pop());
 }
 
 TEST(RateLimiter, ThirtyHertzLimitedToTen) {

@@ -3,6 +3,7 @@
 /// Everything here is testable on recorded or synthetic buffers; the OpenNI2 and libfreenect
 /// code paths only copy device buffers and call these functions. See docs/cameras.md.
 #include <cstdint>
+#include <deque>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -153,12 +154,14 @@ class DeviceClockMapper {
 };
 
 /// Pairs separately delivered depth and colour frames by device time (libfreenect calls its
-/// depth and video callbacks independently). A pair is released when both halves are present
-/// within `tolerance_ticks`; otherwise the older half is dropped (counted).
+/// depth and video callbacks independently, possibly several in one event-loop call). A pair
+/// is released when both halves are present within `tolerance_ticks`; otherwise the older
+/// half is dropped (counted). Up to `max_ready` complete pairs wait for pop(); older ones are
+/// dropped (counted) beyond that.
 class FramePairer {
  public:
-  explicit FramePairer(uint64_t tolerance_ticks, int counter_bits = 64)
-      : tolerance_(tolerance_ticks), bits_(counter_bits) {}
+  explicit FramePairer(uint64_t tolerance_ticks, int counter_bits = 64, size_t max_ready = 4)
+      : tolerance_(tolerance_ticks), bits_(counter_bits), max_ready_(max_ready) {}
   struct Pair {
     cv::Mat bgr;
     cv::Mat depth;
@@ -166,7 +169,7 @@ class FramePairer {
   };
   void pushDepth(const cv::Mat& depth, uint64_t ticks);
   void pushColour(const cv::Mat& bgr, uint64_t ticks);
-  /// The next complete pair, if any.
+  /// The oldest complete pair, if any.
   std::optional<Pair> pop();
   void clear();
   int64_t dropped() const { return dropped_; }
@@ -176,8 +179,9 @@ class FramePairer {
   int64_t signedDiff(uint64_t a, uint64_t b) const;  // a - b modulo the counter width
   uint64_t tolerance_;
   int bits_;
+  size_t max_ready_;
   std::optional<std::pair<cv::Mat, uint64_t>> depth_, colour_;
-  std::optional<Pair> ready_;
+  std::deque<Pair> ready_;
   int64_t dropped_ = 0;
 };
 
