@@ -310,4 +310,53 @@ TEST_F(CameraFakenect, UnpluggedDeviceIsRetriedWithoutCrashing) {
   EXPECT_NE(p.status.back().last_warning.find("device lost"), std::string::npos);
 }
 
+TEST_F(CameraFakenect, ToolHandlesIclAndBadInput) {
+  // ICL-NUIM: depth-first associations.txt, integer frame stamps (30 Hz).
+  const std::string icl = dir_ + "/icl_dump";
+  ASSERT_EQ(
+      run(std::string(PPLVO_TUM_TO_FAKENECT_EXE) + " --dataset " + sharedData() +
+          "/icl_living_room_kt0_short --output " + icl + " --max-frames 3 2> " + dir_ + "/icl.log"),
+      0)
+      << slurp(dir_ + "/icl.log");
+  std::ifstream index(icl + "/INDEX.txt");
+  std::vector<std::string> names;
+  for (std::string line; std::getline(index, line);) names.push_back(line);
+  ASSERT_EQ(names.size(), 6u);
+  for (size_t i = 0; i < names.size(); ++i) {
+    char type = 0;
+    double t = 0;
+    unsigned ticks = 0;
+    ASSERT_EQ(std::sscanf(names[i].c_str(), "%c-%lf-%u", &type, &t, &ticks), 3) << names[i];
+    EXPECT_EQ(type, i % 2 == 0 ? 'd' : 'r');
+    EXPECT_NEAR(t, (i / 2) / 30.0, 1e-6);                     // frame index at 30 Hz
+    EXPECT_NEAR(ticks, 600000 + (i / 2) * 2000000.0, 100.0);  // 60 MHz counter
+    std::ifstream f(icl + "/" + names[i], std::ios::binary | std::ios::ate);
+    const std::string header = type == 'd' ? "P5 640 480 65535\n" : "P6 640 480 255\n";
+    EXPECT_EQ(static_cast<size_t>(f.tellg()),
+              header.size() + (type == 'd' ? 640 * 480 * 2 : 640 * 480 * 3));
+  }
+  // A corrupt depth PNG is skipped with a message naming it; the other frames are written.
+  const std::string bad = dir_ + "/bad_dataset";
+  ASSERT_EQ(run("mkdir -p " + bad + "/rgb " + bad + "/depth && cp " + sources_[0].rgb_path + " " +
+                bad + "/rgb/1.png && cp " + sources_[1].rgb_path + " " + bad + "/rgb/2.png && cp " +
+                sources_[1].depth_path + " " + bad + "/depth/2.png && echo garbage > " + bad +
+                "/depth/1.png"),
+            0);
+  {
+    std::ofstream a(bad + "/associations.txt");
+    a << "1.0 rgb/1.png 1.0 depth/1.png\n2.0 rgb/2.png 2.0 depth/2.png\n";
+  }
+  ASSERT_EQ(run(std::string(PPLVO_TUM_TO_FAKENECT_EXE) + " --dataset " + bad + " --output " + dir_ +
+                "/bad_dump 2> " + dir_ + "/bad.log"),
+            0);
+  const std::string log = slurp(dir_ + "/bad.log");
+  EXPECT_NE(log.find("depth/1.png"), std::string::npos) << log;
+  EXPECT_NE(log.find("wrote 1 frame pairs"), std::string::npos) << log;
+  // No dataset: exit 2 with a message.
+  EXPECT_EQ(run(std::string(PPLVO_TUM_TO_FAKENECT_EXE) + " --dataset " + dir_ +
+                "/nothing --output " + dir_ + "/none 2> " + dir_ + "/none.log"),
+            2);
+  EXPECT_NE(slurp(dir_ + "/none.log").find("nothing"), std::string::npos);
+}
+
 }  // namespace
