@@ -5,8 +5,16 @@
 # PPLVO_(RGBD|STREAM|STATUS) with --until-end; the log must hold all frames, START and END.
 # Usage: camera_logger_session.sh CAMERA_EXE TOOL_EXE LOGGER_EXE SHARED_DATA
 set -euo pipefail
+if [ -z "${PPLVO_IN_NETNS:-}" ]; then
+  # Re-run inside the private namespace; skip (ctest code 77) where namespaces are unavailable.
+  isolated="$(cd "$(dirname "$0")/../../.." && pwd)/scripts/isolated.sh"
+  if ! "$isolated" true > /dev/null 2>&1; then
+    echo "cannot create a private network namespace (unshare): skipping"
+    exit 77
+  fi
+  exec "$isolated" "$0" "$@"
+fi
 camera=$1 tool=$2 logger=$3 data=$4
-[ -n "${PPLVO_IN_NETNS:-}" ] || { echo "must run inside scripts/isolated.sh" >&2; exit 1; }
 case "${LCM_DEFAULT_URL:-}" in udpm://*ttl=0*) ;; *) echo "refusing: LCM_DEFAULT_URL=${LCM_DEFAULT_URL:-} is not udpm ttl=0" >&2; exit 1;; esac
 command -v fakenect > /dev/null || { echo "fakenect not installed: skipping"; exit 77; }
 
