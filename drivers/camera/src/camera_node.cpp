@@ -1,0 +1,369 @@
+// The LCM side of pplvo-camera: messages, counters, outage handling. See camera_node.h.
+#include "camera_node.h"
+
+#include <cstdio>
+#include <ctime>
+#include <optional>
+#include <pplvo_msgs/rgbd_frame_t.hpp>
+#include <pplvo_msgs/stream_event_t.hpp>
+#include <string>
+
+#include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/node_runtime.h"
+
+namespace pplvo::camera {
+
+namespace pm = pplvo::msgs;
+
+std::string nodeUsage() {
+  return std::string(
+      "usage: pplvo-camera [options]\n"
+      "  --backend openni2|freenect   device library (default openni2)\n"
+      "  --device URI|INDEX           OpenNI2 URI (or .oni file) or index; freenect index\n"
+      "  --lcm-url URL                LCM provider (default $LCM_DEFAULT_URL); e.g.\n"
+      "                               'file:///tmp/cam.lcmlog?mode=w' to record to a log\n"
+      "  --channel NAME               frame channel (default PPLVO_RGBD)\n"
+      "  --stream-channel NAME        stream events (default PPLVO_STREAM)\n"
+      "  --status-channel NAME        node status (default PPLVO_STATUS)\n"
+      "  --width W --height H --fps F colour and depth mode (default 640 480 30)\n"
+      "  --registration on|off        hardware depth-to-colour registration (default on)\n"
+      "  --calib FILE                 calib_params.xml / OpenCV YAML with colour intrinsics\n"
+      "  --rgb-encoding raw|jpeg|png  (default raw)   --jpeg-quality Q (default 90)\n"
+      "  --depth-encoding raw|zlib|png (default raw)\n"
+      "  --max-fps F                  publish at most F frames per second (default: all)\n"
+      "  --max-frames N               stop after N published frames (default: run until ^C)\n"
+      "  --lost-after S               seconds without frames before reconnecting (default 3)\n"
+      "  --reconnect-period S         seconds between reconnection attempts (default 1)\n"
+      "  --fakenect-end stop|unplug   under fakenect, the dump's end ends the stream (stop,\n"
+      "                               default) or acts as an unplugged device (tests)\n");
+}
+
+bool parseNodeArgs(int argc, const char* const* argv, NodeOptions* o, std::string* error,
+                   bool* help) {
+  *help = false;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      *help = true;
+      return true;
+    }
+    std::string v;
+    const auto eq = a.find('=');
+    if (a.rfind("--", 0) == 0 && eq != std::string::npos) {  // --key=value
+      v = a.substr(eq + 1);
+      a = a.substr(0, eq);
+    } else if (i + 1 >= argc) {
+      *error = "missing value after " + a;
+      return false;
+    } else {
+      v = argv[++i];
+    }
+    try {
+      if (a == "--backend")
+        o->backend = v;
+      else if (a == "--device")
+        o->device.device = v;
+      else if (a == "--lcm-url")
+        o->lcm_url = v;
+      else if (a == "--channel")
+        o->channel = v;
+      else if (a == "--stream-channel")
+        o->stream_channel = v;
+      else if (a == "--status-channel")
+        o->status_channel = v;
+      else if (a == "--width")
+        o->device.width = std::stoi(v);
+      else if (a == "--height")
+        o->device.height = std::stoi(v);
+      else if (a == "--fps")
+        o->device.fps = std::stoi(v);
+      else if (a == "--registration") {
+        if (v != "on" && v != "off") {
+          *error = "--registration takes on or off";
+          return false;
+        }
+        o->device.registration = v == "on";
+      } else if (a == "--calib")
+        o->calib = v;
+      else if (a == "--rgb-encoding") {
+        const auto e = parseRgbEncoding(v);
+        if (!e) {
+          *error = "--rgb-encoding takes raw, jpeg or png";
+          return false;
+        }
+        o->rgb_encoding = *e;
+      } else if (a == "--depth-encoding") {
+        const auto e = parseDepthEncoding(v);
+        if (!e) {
+          *error = "--depth-encoding takes raw, zlib or png";
+          return false;
+        }
+        o->depth_encoding = *e;
+      } else if (a == "--jpeg-quality")
+        o->jpeg_quality = std::stoi(v);
+      else if (a == "--max-fps")
+        o->max_fps = std::stod(v);
+      else if (a == "--max-frames")
+        o->max_frames = std::stoll(v);
+      else if (a == "--lost-after")
+        o->lost_after_s = std::stod(v);
+      else if (a == "--reconnect-period")
+        o->reconnect_period_s = std::stod(v);
+      else if (a == "--fakenect-end") {
+        if (v != "stop" && v != "unplug") {
+          *error = "--fakenect-end takes stop or unplug";
+          return false;
+        }
+        o->device.fakenect_end_is_unplug = v == "unplug";
+      } else {
+        *error = "unknown option " + a;
+        return false;
+      }
+    } catch (const std::exception&) {
+      *error = "bad value '" + v + "' for " + a;
+      return false;
+    }
+  }
+  if (o->backend != "openni2" && o->backend != "freenect") {
+    *error = "--backend takes openni2 or freenect";
+    return false;
+  }
+  if (o->device.width <= 0 || o->device.height <= 0 || o->device.fps <= 0) {
+    *error = "--width, --height and --fps must be positive";
+    return false;
+  }
+  if (o->max_frames < 0 || o->max_fps < 0 || !(o->lost_after_s > 0) ||
+      !(o->reconnect_period_s > 0)) {
+    *error = "--max-frames, --max-fps must be >= 0; --lost-after, --reconnect-period > 0";
+    return false;
+  }
+  if (o->jpeg_quality < 1 || o->jpeg_quality > 100) {
+    *error = "--jpeg-quality must be in 1..100";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+int8_t rgbCode(RgbEncoding e) {
+  switch (e) {
+    case RgbEncoding::Jpeg:
+      return pplvo_msgs::image_t::ENCODING_JPEG;
+    case RgbEncoding::Png:
+      return pplvo_msgs::image_t::ENCODING_PNG;
+    default:
+      return pplvo_msgs::image_t::ENCODING_RAW_BGR8;
+  }
+}
+int8_t depthCode(DepthEncoding e) {
+  switch (e) {
+    case DepthEncoding::Zlib:
+      return pplvo_msgs::image_t::ENCODING_ZLIB_U16;
+    case DepthEncoding::Png:
+      return pplvo_msgs::image_t::ENCODING_PNG_U16;
+    default:
+      return pplvo_msgs::image_t::ENCODING_RAW_U16;
+  }
+}
+
+/// The publishing side: converts captured frames to messages and keeps the counters.
+class CameraPublisher {
+ public:
+  CameraPublisher(const NodeOptions& options, lcm::LCM& lcm, pplvo::PinholeCamera camera,
+                  std::string source)
+      : options_(options),
+        lcm_(lcm),
+        camera_(camera),
+        source_(std::move(source)),
+        limiter_(options.max_fps) {}
+
+  void setSource(const std::string& s) { source_ = s; }
+  void resetClock(const DeviceClockOptions& clock) { clock_.emplace(clock); }
+
+  void onFrame(const CapturedFrame& f) {
+    ++counters_.frames_in;
+    pm::guarded(counters_, kNodeName, [&] {
+      pplvo::Stopwatch watch;
+      const int64_t utime = clock_->map(f.device_ticks, f.host_arrival_utime);
+      if (!limiter_.allow(utime)) {
+        ++counters_.frames_dropped;
+        return;
+      }
+      if (f.bgr.size() != f.depth_u16.size()) {
+        throw pm::MessageError("colour " + std::to_string(f.bgr.cols) + "x" +
+                               std::to_string(f.bgr.rows) + " and depth " +
+                               std::to_string(f.depth_u16.cols) + "x" +
+                               std::to_string(f.depth_u16.rows) + " sizes differ");
+      }
+      if (f.bgr.cols != camera_.width || f.bgr.rows != camera_.height) {
+        throw pm::MessageError("frame size differs from the camera model");
+      }
+      pplvo_msgs::rgbd_frame_t msg;
+      msg.utime = utime;
+      msg.seq = seq_;
+      msg.stamp = stampText(utime);
+      msg.source = source_;
+      msg.camera = pm::toMsg(camera_);
+      msg.depth_scale = f.depth_scale;
+      msg.rgb = pm::encodeImage(f.bgr, rgbCode(options_.rgb_encoding), options_.jpeg_quality);
+      msg.depth = pm::encodeImage(f.depth_u16, depthCode(options_.depth_encoding));
+      lcm_.publish(options_.channel, &msg);
+      ++seq_;
+      ++counters_.frames_out;
+      counters_.last_seq = msg.seq;
+      timings_.add("publish", watch.elapsedMs());
+    });
+  }
+
+  void publishEvent(int8_t event) {
+    pm::guarded(counters_, kNodeName, [&] {
+      pplvo_msgs::stream_event_t ev;
+      ev.utime = pplvo::hostUtime();
+      ev.source = source_;
+      ev.event = event;
+      ev.frames_published = counters_.frames_out;
+      ev.frames_skipped = counters_.frames_skipped;
+      lcm_.publish(options_.stream_channel, &ev);
+    });
+  }
+
+  void publishStatus(int64_t backend_dropped) {
+    pm::guarded(counters_, kNodeName, [&] {
+      pm::NodeCounters c = counters_;
+      c.frames_dropped += backend_dropped;
+      auto msg = pm::toStatusMsg(kNodeName, c, timings_, pplvo::hostUtime());
+      lcm_.publish(options_.status_channel, &msg);
+    });
+  }
+
+  void warn(const std::string& w) {
+    counters_.last_warning = w;
+    std::fprintf(stderr, "[%s] %s\n", kNodeName, w.c_str());
+  }
+  int64_t published() const { return counters_.frames_out; }
+
+ private:
+  const NodeOptions& options_;
+  lcm::LCM& lcm_;
+  pplvo::PinholeCamera camera_;
+  std::string source_;
+  std::optional<DeviceClockMapper> clock_;
+  RateLimiter limiter_;
+  pm::NodeCounters counters_;
+  pplvo::StageTimings timings_;
+  int64_t seq_ = 0;
+};
+
+}  // namespace
+
+NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, lcm::LCM& lcm,
+                            const PinholeCamera& camera, const std::string& camera_origin) {
+  std::string error;
+  CameraPublisher publisher(options, lcm, camera, backend.source());
+  publisher.resetClock(backend.clockOptions());
+  const auto reg = backend.registration();
+  if (!reg.warning.empty()) publisher.warn(reg.warning);
+  std::fprintf(stderr, "[%s] streaming from %s, %dx%d, fx %.2f fy %.2f cx %.2f cy %.2f (%s)\n",
+               kNodeName, backend.source().c_str(), camera.width, camera.height, camera.fx,
+               camera.fy, camera.cx, camera.cy, camera_origin.c_str());
+  publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
+
+  // Main loop. A lost device (error from the library, or no frame for --lost-after seconds)
+  // starts an outage: one message, then attempts every --reconnect-period seconds (waiting
+  // before each, so a device that opens but fails at once cannot spin), until a frame arrives.
+  int64_t last_status = pplvo::hostUtime();
+  int64_t last_frame = last_status;
+  bool end_of_stream = false;
+  bool in_outage = false;
+  int attempts = 0;
+  NodeRunResult result;
+  bool device_open = true;
+  auto sleepUntil = [](int64_t until) {
+    while (!pm::shutdownRequested() && pplvo::hostUtime() < until) {
+      struct timespec ts {
+        0, 20000000
+      };
+      nanosleep(&ts, nullptr);
+    }
+  };
+  while (!pm::shutdownRequested() && !end_of_stream &&
+         (options.max_frames == 0 || publisher.published() < options.max_frames)) {
+    const int64_t now = pplvo::hostUtime();
+    if (now - last_status >= 1000000) {
+      publisher.publishStatus(backend.droppedFrames());
+      last_status = now;
+    }
+    if (!device_open) {
+      sleepUntil(pplvo::hostUtime() + static_cast<int64_t>(options.reconnect_period_s * 1e6));
+      if (pm::shutdownRequested()) break;
+      ++attempts;
+      ++result.reconnect_attempts;
+      if (backend.open(&error)) {
+        device_open = true;
+        publisher.setSource(backend.source());
+        publisher.resetClock(backend.clockOptions());
+        last_frame = pplvo::hostUtime();
+      } else if (attempts <= 3 || attempts % 30 == 0) {
+        std::fprintf(stderr, "[%s] reconnect attempt %d failed: %s\n", kNodeName, attempts,
+                     error.c_str());
+      }
+      continue;
+    }
+    CapturedFrame frame;
+    GrabStatus st;
+    try {
+      st = backend.grab(options.grab_timeout_ms, &frame);
+    } catch (const std::exception& e) {  // e.g. a device buffer with impossible sizes
+      publisher.warn(std::string("device read failed: ") + e.what());
+      st = GrabStatus::Disconnected;
+    }
+    bool lost = false;
+    switch (st) {
+      case GrabStatus::Frame:
+        if (in_outage) {
+          in_outage = false;
+          publisher.warn("device back after " + std::to_string(attempts) + " reconnect attempt(s)");
+          publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
+        }
+        last_frame = pplvo::hostUtime();
+        publisher.onFrame(frame);
+        break;
+      case GrabStatus::Timeout:
+        lost = pplvo::hostUtime() - last_frame > static_cast<int64_t>(options.lost_after_s * 1e6);
+        break;
+      case GrabStatus::Disconnected:
+        lost = true;
+        break;
+      case GrabStatus::EndOfStream:
+        end_of_stream = true;
+        break;
+    }
+    if (lost) {
+      if (!in_outage) {
+        in_outage = true;
+        ++result.outages;
+        attempts = 0;
+        // No stream event here: consumers (pplvo-logger --until-end) take END and ERROR as
+        // the end of the stream, and the node has not given up. The outage shows in the
+        // status' last_warning; a new START marks the restart.
+        publisher.warn("device lost (unplugged or stalled): reconnecting every " +
+                       std::to_string(options.reconnect_period_s) + " s, ^C to stop");
+        publisher.publishStatus(backend.droppedFrames());
+      }
+      backend.close();
+      device_open = false;
+    }
+  }
+  publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_END);
+  publisher.publishStatus(backend.droppedFrames());
+  backend.close();
+  std::fprintf(stderr, "[%s] %s after %lld frames\n", kNodeName,
+               end_of_stream ? "end of stream" : "stopped",
+               static_cast<long long>(publisher.published()));
+  result.published = publisher.published();
+  result.end_of_stream = end_of_stream;
+  return result;
+}
+
+}  // namespace pplvo::camera
