@@ -138,10 +138,10 @@ struct SyntheticSequence::Impl {
     camera.cx = o.cx;
     camera.cy = o.cy;
     const HandHeldTrajectory traj(o.seed, o.trajectory_scale);
-    // The moving box starts a little to the right of the initial viewing direction and moves
+    // The moving box starts to the right of the initial viewing direction and moves
     // counter-clockwise (to the left), so it crosses the view early in the sequence.
     const double heading0 = traj.yaw0 + traj.yaw(0.0);
-    scene = detail::buildScene(o.scene, o.seed, o.moving_object, heading0 - 0.5);
+    scene = detail::buildScene(o.scene, o.seed, o.moving_object, heading0 - 0.9);
     poses.reserve(o.frames);
     for (int i = 0; i < o.frames; ++i) poses.push_back(traj.pose(i / o.fps));
     dynamic_surface.resize(scene.surfaces.size());
