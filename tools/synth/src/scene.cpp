@@ -270,7 +270,13 @@ class Builder {
     const int h = std::max(2, static_cast<int>(std::ceil((o.hi[s.ax_v] - o.lo[s.ax_v]) * tpm)) + 2);
     cv::RNG rng(splitmix64(seed_ ^ splitmix64(0x5EED0000ull + scene_->surfaces.size())));
     s.texture = static_cast<int>(scene_->textures.size());
-    scene_->textures.push_back(makeTexture(style, w, h, tpm, rng, base));
+    std::vector<cv::Mat> mips{makeTexture(style, w, h, tpm, rng, base)};
+    while (mips.size() < 6 && std::min(mips.back().cols, mips.back().rows) >= 8) {
+      cv::Mat down;
+      cv::pyrDown(mips.back(), down);
+      mips.push_back(down);
+    }
+    scene_->textures.push_back(std::move(mips));
     return s;
   }
 

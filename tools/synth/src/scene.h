@@ -49,7 +49,9 @@ struct Object {
 struct Scene {
   std::vector<Object> objects;
   std::vector<Surface> surfaces;
-  std::vector<cv::Mat> textures;   ///< CV_8UC1 albedo, rows along v, cols along u
+  /// Per texture a mip pyramid of CV_8UC1 albedo maps (rows along v, cols along u); level L
+  /// has 2^L times coarser texels. Sampling picks the level matching the pixel footprint.
+  std::vector<std::vector<cv::Mat>> textures;
   double texels_per_m = 200.0;
   Eigen::Vector3d point_light_w{3.0, 2.5, 2.85};
   Eigen::Vector3d dir_light_w{0.6, -0.4, 0.7};  ///< towards the light (normalised on build)

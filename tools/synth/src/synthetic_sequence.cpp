@@ -285,6 +285,8 @@ SynthFrame SyntheticSequence::Impl::render(int i) const {
   const Eigen::Vector3d Ldir = scene.dir_light_w;
   const Eigen::Vector3d Lp = scene.point_light_w;
   const double s_tex = scene.texels_per_m;
+  // Texels per pixel per metre of depth on a fronto-parallel surface.
+  const double footprint_per_m = s_tex / std::min(std::abs(camera.fx), std::abs(camera.fy));
   const bool noisy = options.noise.enabled;
   const float rgb_sigma = static_cast<float>(noisy ? options.noise.rgb_noise_sigma : 0.0);
 
@@ -380,9 +382,28 @@ SynthFrame SyntheticSequence::Impl::render(int i) const {
       const double cos_d = std::max(0.0, surf.sign * Ldir[surf.axis]);
       const double shade = 0.28 + 0.32 * cos_d + 0.55 * cos_p * (4.0 / (4.0 + l2));
       const Eigen::Vector3d& slo = surf_lo[best_surface];
-      const float albedo = sampleBilinear(scene.textures[surf.texture],
-                                          (p[surf.ax_u] - slo[surf.ax_u]) * s_tex,
-                                          (p[surf.ax_v] - slo[surf.ax_v]) * s_tex);
+      const double tu = (p[surf.ax_u] - slo[surf.ax_u]) * s_tex;
+      const double tv = (p[surf.ax_v] - slo[surf.ax_v]) * s_tex;
+      // Mip level from the pixel footprint on the surface (texels per pixel), blended
+      // linearly between the two nearest levels: no texture aliasing at distance.
+      const std::vector<cv::Mat>& mips = scene.textures[surf.texture];
+      double footprint = best * footprint_per_m / std::max(0.25, static_cast<double>(cosrow[u]));
+      float albedo;
+      if (footprint <= 1.0 || mips.size() == 1) {
+        albedo = sampleBilinear(mips[0], tu, tv);
+      } else {
+        int level = 0;
+        double scale = 1.0;
+        while (footprint >= 2.0 && level + 2 < static_cast<int>(mips.size())) {
+          footprint *= 0.5;
+          scale *= 0.5;
+          ++level;
+        }
+        const float w = static_cast<float>(std::min(1.0, footprint - 1.0));
+        const float a0 = sampleBilinear(mips[level], tu * scale, tv * scale);
+        const float a1 = sampleBilinear(mips[level + 1], tu * scale * 0.5, tv * scale * 0.5);
+        albedo = a0 + w * (a1 - a0);
+      }
       const float g = static_cast<float>(255.0 * shade) * albedo;
       cv::Vec3b& c = colrow[u];
       for (int ch = 0; ch < 3; ++ch) {
