@@ -519,6 +519,93 @@ std::string SyntheticSequence::surfaceName(int surface_id) const {
   return impl_->scene.surfaces[surface_id].name;
 }
 
+std::vector<VisibleSurface> SyntheticSequence::visibleSurfaces(const SynthFrame& frame,
+                                                               int min_pixels) const {
+  const int i = static_cast<int>(frame.frame.seq);
+  impl_->checkIndex(i);
+  if (frame.surface_id.type() != CV_32SC1 || frame.surface_id.size() != frame.frame.depth_m.size()) {
+    throw std::invalid_argument("visibleSurfaces: frame without matching surface_id/depth maps");
+  }
+  std::vector<int> pixels(surfaceCount(), 0), with_depth(surfaceCount(), 0);
+  for (int v = 0; v < frame.surface_id.rows; ++v) {
+    const int32_t* id = frame.surface_id.ptr<int32_t>(v);
+    const float* z = frame.frame.depth_m.ptr<float>(v);
+    for (int u = 0; u < frame.surface_id.cols; ++u) {
+      if (id[u] < 0 || id[u] >= surfaceCount()) continue;
+      ++pixels[id[u]];
+      if (z[u] > 0) ++with_depth[id[u]];
+    }
+  }
+  std::vector<VisibleSurface> out;
+  const Pose3& T_w_c = impl_->poses[i];
+  for (int id = 0; id < surfaceCount(); ++id) {
+    if (pixels[id] < std::max(1, min_pixels)) continue;
+    VisibleSurface vs;
+    vs.surface_id = id;
+    vs.pixels = pixels[id];
+    vs.pixels_with_depth = with_depth[id];
+    vs.dynamic = isDynamicSurface(id);
+    impl_->planeAt(id, impl_->time(i), &vs.plane_w);
+    const Eigen::Vector3d n_w = vs.plane_w.head<3>();
+    vs.plane_c.head<3>() = T_w_c.linear().transpose() * n_w;
+    vs.plane_c[3] = vs.plane_w[3] + n_w.dot(T_w_c.translation());
+    vs.name = surfaceName(id);
+    out.push_back(std::move(vs));
+  }
+  std::stable_sort(out.begin(), out.end(), [](const VisibleSurface& a, const VisibleSurface& b) {
+    return a.pixels > b.pixels;
+  });
+  return out;
+}
+
+std::vector<SceneEdge> SyntheticSequence::sceneEdges(int i) const {
+  impl_->checkIndex(i);
+  const double t = impl_->time(i);
+  std::vector<SceneEdge> edges;
+  for (const Object& obj : impl_->scene.objects) {
+    Eigen::Vector3d lo, hi;
+    impl_->bounds(obj, t, &lo, &hi);
+    if (obj.kind == Object::Kind::kRect) {
+      const int k = obj.rect_axis, a = (k + 1) % 3, b = (k + 2) % 3;
+      for (int e = 0; e < 4; ++e) {
+        // Edges along a (at b = lo or hi) and along b (at a = lo or hi).
+        SceneEdge edge;
+        edge.a_w = lo;
+        edge.b_w = lo;
+        if (e < 2) {
+          edge.a_w[b] = edge.b_w[b] = e ? hi[b] : lo[b];
+          edge.b_w[a] = hi[a];
+        } else {
+          edge.a_w[a] = edge.b_w[a] = (e == 3) ? hi[a] : lo[a];
+          edge.b_w[b] = hi[b];
+        }
+        edge.surface_a = obj.first_surface;
+        edges.push_back(edge);
+      }
+      continue;
+    }
+    // Box or room: 12 edges, 4 along each axis k, at the corners of the other two axes.
+    for (int k = 0; k < 3; ++k) {
+      const int a = (k + 1) % 3, b = (k + 2) % 3;
+      for (int c = 0; c < 4; ++c) {
+        const bool a_hi = c & 1, b_hi = c & 2;
+        SceneEdge edge;
+        edge.a_w[k] = lo[k];
+        edge.b_w[k] = hi[k];
+        edge.a_w[a] = edge.b_w[a] = a_hi ? hi[a] : lo[a];
+        edge.a_w[b] = edge.b_w[b] = b_hi ? hi[b] : lo[b];
+        // Faces meeting there: box face at hi has a +axis normal (index 2 axis + 1); the room's
+        // wall at hi faces inwards (-axis, index 2 axis + 0).
+        const bool room = obj.kind == Object::Kind::kRoomInside;
+        edge.surface_a = obj.first_surface + 2 * a + ((a_hi != room) ? 1 : 0);
+        edge.surface_b = obj.first_surface + 2 * b + ((b_hi != room) ? 1 : 0);
+        edges.push_back(edge);
+      }
+    }
+  }
+  return edges;
+}
+
 Trajectory SyntheticSequence::groundTruth() const {
   Trajectory traj;
   traj.reserve(impl_->poses.size());

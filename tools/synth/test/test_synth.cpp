@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -135,6 +136,69 @@ TEST(SynthGeometry, SurfaceIdsAreBoundedAndPlanesAreUnit) {
   }
   EXPECT_FALSE(seq.surfacePlane(-1, &plane));
   EXPECT_FALSE(seq.surfacePlane(seq.surfaceCount(), &plane));
+}
+
+TEST(SynthGeometry, VisibleSurfacesGivePlanesInCameraFrame) {
+  SynthOptions o = smallOptions("room", 8);
+  o.moving_object = true;
+  const SyntheticSequence seq(o);
+  for (int i : {0, 30, 200}) {
+    const SynthFrame f = seq.render(i);
+    const std::vector<VisibleSurface> vis = seq.visibleSurfaces(f);
+    ASSERT_FALSE(vis.empty());
+    int total = 0;
+    for (size_t k = 0; k < vis.size(); ++k) {
+      const VisibleSurface& s = vis[k];
+      total += s.pixels;
+      if (k > 0) {
+        EXPECT_LE(s.pixels, vis[k - 1].pixels);
+      }
+      EXPECT_LE(s.pixels_with_depth, s.pixels);
+      EXPECT_EQ(s.dynamic, seq.isDynamicSurface(s.surface_id));
+      EXPECT_GT(s.plane_c[3], 0.0) << s.name;
+      EXPECT_NEAR(s.plane_c.head<3>().norm(), 1.0, 1e-12);
+      Eigen::Vector4d plane_w;
+      ASSERT_TRUE(seq.surfacePlaneAt(s.surface_id, i, &plane_w));
+      EXPECT_TRUE(plane_w.isApprox(s.plane_w, 1e-12));
+    }
+    EXPECT_EQ(total, f.surface_id.rows * f.surface_id.cols);
+    // The camera-frame plane holds the backprojected noiseless depth of its pixels.
+    std::map<int, Eigen::Vector4d> plane_c;
+    for (const VisibleSurface& s : vis) plane_c[s.surface_id] = s.plane_c;
+    for (int v = 0; v < f.surface_id.rows; v += 7) {
+      for (int u = 0; u < f.surface_id.cols; u += 7) {
+        const Eigen::Vector4d& pc = plane_c.at(f.surface_id.at<int32_t>(v, u));
+        const Eigen::Vector3d p_c = seq.camera().backproject(u, v, f.depth_true_m.at<float>(v, u));
+        ASSERT_LT(std::abs(pc.head<3>().dot(p_c) + pc[3]), 1e-6);
+      }
+    }
+    // min_pixels filters.
+    for (const VisibleSurface& s : seq.visibleSurfaces(f, 5000)) EXPECT_GE(s.pixels, 5000);
+  }
+}
+
+TEST(SynthGeometry, SceneEdgesLieOnTheirSurfaces) {
+  SynthOptions o = smallOptions("room", 8);
+  o.moving_object = true;
+  const SyntheticSequence seq(o);
+  for (int i : {0, 100}) {
+    const std::vector<SceneEdge> edges = seq.sceneEdges(i);
+    ASSERT_GT(edges.size(), 100u);
+    for (const SceneEdge& e : edges) {
+      EXPECT_GT((e.b_w - e.a_w).norm(), 0.0);
+      // Axis-aligned.
+      int moving_axes = 0;
+      for (int k = 0; k < 3; ++k) moving_axes += std::abs(e.b_w[k] - e.a_w[k]) > 0 ? 1 : 0;
+      EXPECT_EQ(moving_axes, 1);
+      for (int id : {e.surface_a, e.surface_b}) {
+        if (id < 0) continue;
+        Eigen::Vector4d plane;
+        ASSERT_TRUE(seq.surfacePlaneAt(id, i, &plane));
+        EXPECT_LT(std::abs(plane.head<3>().dot(e.a_w) + plane[3]), 1e-9) << seq.surfaceName(id);
+        EXPECT_LT(std::abs(plane.head<3>().dot(e.b_w) + plane[3]), 1e-9) << seq.surfaceName(id);
+      }
+    }
+  }
 }
 
 // (b) Determinism.
