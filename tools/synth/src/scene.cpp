@@ -38,11 +38,11 @@ int px(double metres, double texels_per_m) {
   return static_cast<int>(std::lround(metres * texels_per_m));
 }
 
-void drawText(cv::Mat& img, cv::Rect area, double s, cv::RNG& rng, double ink_lo,
-              double ink_hi) {
+void drawText(cv::Mat& img, cv::Rect area, double s, cv::RNG& rng, double ink_lo, double ink_hi) {
   const double line_h = rng.uniform(0.018, 0.03);
   const double gap = 0.35 * line_h;
-  for (double y = area.y + gap * s; y + line_h * s < area.y + area.height; y += (line_h + gap) * s) {
+  for (double y = area.y + gap * s; y + line_h * s < area.y + area.height;
+       y += (line_h + gap) * s) {
     double x = area.x + rng.uniform(0.0, 0.03) * s;
     const double line_end = area.x + area.width * rng.uniform(0.6, 1.0);
     while (true) {
@@ -69,8 +69,8 @@ void drawBlobs(cv::Mat& img, double s, cv::RNG& rng, double per_m2) {
       cv::ellipse(img, c, axes, rng.uniform(0.0, 180.0), 0, 360, cv::Scalar(grey), cv::FILLED,
                   cv::LINE_AA);
     } else {
-      cv::circle(img, c, std::max(2, px(rng.uniform(0.01, 0.07), s)), cv::Scalar(grey),
-                 cv::FILLED, cv::LINE_AA);
+      cv::circle(img, c, std::max(2, px(rng.uniform(0.01, 0.07), s)), cv::Scalar(grey), cv::FILLED,
+                 cv::LINE_AA);
     }
   }
 }
@@ -81,7 +81,8 @@ void drawStripes(cv::Mat& img, bool along_u, double s, cv::RNG& rng) {
   while (pos < len) {
     const int width = std::max(2, px(rng.uniform(0.03, 0.18), s));
     const double grey = rng.uniform(0.25, 0.9);
-    const cv::Rect r = along_u ? cv::Rect(pos, 0, width, img.rows) : cv::Rect(0, pos, img.cols, width);
+    const cv::Rect r =
+        along_u ? cv::Rect(pos, 0, width, img.rows) : cv::Rect(0, pos, img.cols, width);
     img(r & cv::Rect(0, 0, img.cols, img.rows)).setTo(grey);
     pos += width;
     if (rng.uniform(0, 2) == 0) {  // a thin dark separating line
@@ -110,8 +111,10 @@ void drawTiles(cv::Mat& img, double tile_m, double grout_m, double s, cv::RNG& r
 void drawGrid(cv::Mat& img, double cell_m, double s) {
   const int cell = std::max(4, px(cell_m, s));
   const int lw = std::max(1, px(0.006, s));
-  for (int x = cell / 2; x < img.cols; x += cell) img(cv::Rect(x, 0, std::min(lw, img.cols - x), img.rows)).setTo(0.12);
-  for (int y = cell / 2; y < img.rows; y += cell) img(cv::Rect(0, y, img.cols, std::min(lw, img.rows - y))).setTo(0.12);
+  for (int x = cell / 2; x < img.cols; x += cell)
+    img(cv::Rect(x, 0, std::min(lw, img.cols - x), img.rows)).setTo(0.12);
+  for (int y = cell / 2; y < img.rows; y += cell)
+    img(cv::Rect(0, y, img.cols, std::min(lw, img.rows - y))).setTo(0.12);
 }
 
 void drawFrame(cv::Mat& img, int border, double grey) {
@@ -285,7 +288,7 @@ class Builder {
 };
 
 const cv::Vec3f kWhite{1.0f, 1.0f, 1.0f};
-const cv::Vec3f kWarm{0.82f, 0.93f, 1.0f};     // BGR
+const cv::Vec3f kWarm{0.82f, 0.93f, 1.0f};  // BGR
 const cv::Vec3f kCool{1.0f, 0.95f, 0.85f};
 const cv::Vec3f kWood{0.45f, 0.68f, 0.92f};
 const cv::Vec3f kGreen{0.55f, 0.9f, 0.6f};
@@ -332,7 +335,8 @@ Scene buildScene(const std::string& name, uint64_t seed, bool moving_object,
     const double bases[6] = {0.8, 0.82, 0.78, 0.8, 0.9, 0.6};
     b.room(lo, hi, "room", styles, tints, bases);
   } else {  // lines
-    const TS styles[6] = {TS::kGrid, TS::kStripesU, TS::kStripesV, TS::kPlain, TS::kPlain, TS::kTiles};
+    const TS styles[6] = {TS::kGrid,  TS::kStripesU, TS::kStripesV,
+                          TS::kPlain, TS::kPlain,    TS::kTiles};
     const cv::Vec3f tints[6] = {kWarm, kWhite, kCool, kWarm, kWhite, kGrey};
     const double bases[6] = {0.85, 0.8, 0.8, 0.8, 0.9, 0.7};
     b.room(lo, hi, "room", styles, tints, bases);
@@ -371,10 +375,10 @@ Scene buildScene(const std::string& name, uint64_t seed, bool moving_object,
     }
     b.box(V(2.5, 3.8, 0.76), V(2.9, 4.15, 1.06), "box_on_table", lines ? TS::kGrid : TS::kText,
           kWarm, 0.85);
-    b.box(V(0.3, 4.2, 0), V(0.9, 4.8, 0.6), "box_corner", lines ? TS::kStripesU : TS::kBlobs,
-          kBlue, 0.7);
-    b.box(V(0.4, 4.3, 0.6), V(0.8, 4.7, 0.9), "box_stacked", lines ? TS::kGrid : TS::kNoise,
-          kRed, 0.7);
+    b.box(V(0.3, 4.2, 0), V(0.9, 4.8, 0.6), "box_corner", lines ? TS::kStripesU : TS::kBlobs, kBlue,
+          0.7);
+    b.box(V(0.4, 4.3, 0.6), V(0.8, 4.7, 0.9), "box_stacked", lines ? TS::kGrid : TS::kNoise, kRed,
+          0.7);
     b.box(V(0.2, 0.5, 0), V(0.7, 1.1, 0.8), "box_x0", TS::kGrid, kGreen, 0.8);
     b.box(V(2.3, 0.2, 0), V(3.1, 0.8, 0.5), "box_front", lines ? TS::kTiles : TS::kNoise, kRed,
           0.7);

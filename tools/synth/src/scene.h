@@ -12,26 +12,26 @@ namespace pplvo::synth::detail {
 
 /// Procedural texture styles (grey albedo patterns, tinted per surface).
 enum class TextureStyle {
-  kPlain,         ///< constant albedo: texture-less, smooth shading only
-  kNoise,         ///< multi-octave value noise (corner-rich)
-  kBlobs,         ///< noise background with random discs and ellipses (corner-rich)
-  kText,          ///< light page with rows of dark "words" (corner- and line-rich)
-  kStripesU,      ///< bands along the surface u axis (parallel lines)
-  kStripesV,      ///< bands along the surface v axis (parallel lines)
-  kTiles,         ///< tiles with dark grout lines (line grid)
-  kGrid,          ///< thin dark grid lines on a light background
-  kPoster,        ///< framed poster: border, blocks, text, discs
-  kDoor,          ///< door panel with frame, inner panels and a handle
+  kPlain,     ///< constant albedo: texture-less, smooth shading only
+  kNoise,     ///< multi-octave value noise (corner-rich)
+  kBlobs,     ///< noise background with random discs and ellipses (corner-rich)
+  kText,      ///< light page with rows of dark "words" (corner- and line-rich)
+  kStripesU,  ///< bands along the surface u axis (parallel lines)
+  kStripesV,  ///< bands along the surface v axis (parallel lines)
+  kTiles,     ///< tiles with dark grout lines (line grid)
+  kGrid,      ///< thin dark grid lines on a light background
+  kPoster,    ///< framed poster: border, blocks, text, discs
+  kDoor,      ///< door panel with frame, inner panels and a handle
 };
 
 /// One planar, axis-aligned face. Its outward normal (into free space) is sign * e_axis.
 struct Surface {
   std::string name;
-  int object = -1;      ///< owning object index
-  int axis = 0;         ///< normal axis 0 (x), 1 (y), 2 (z)
-  double sign = 1.0;    ///< +1 or -1: direction of the outward normal along axis
-  int ax_u = 0, ax_v = 1;  ///< in-plane axes for texture coordinates
-  int texture = -1;     ///< index into Scene::textures
+  int object = -1;          ///< owning object index
+  int axis = 0;             ///< normal axis 0 (x), 1 (y), 2 (z)
+  double sign = 1.0;        ///< +1 or -1: direction of the outward normal along axis
+  int ax_u = 0, ax_v = 1;   ///< in-plane axes for texture coordinates
+  int texture = -1;         ///< index into Scene::textures
   cv::Vec3f tint{1, 1, 1};  ///< BGR albedo multiplier
 };
 
@@ -40,10 +40,10 @@ struct Object {
   enum class Kind { kRoomInside, kBox, kRect } kind = Kind::kBox;
   Eigen::Vector3d lo = Eigen::Vector3d::Zero();  ///< min corner (world, at time 0 if dynamic)
   Eigen::Vector3d hi = Eigen::Vector3d::Zero();  ///< max corner; a rect has lo == hi on rect_axis
-  int rect_axis = 0;        ///< rect only: normal axis
-  double rect_sign = 1.0;   ///< rect only: outward normal sign
-  int first_surface = 0;    ///< box/room: face (axis, positive normal) = first + 2 axis + pos
-  bool dynamic = false;     ///< moves with Scene::dynamicOffset(t)
+  int rect_axis = 0;                             ///< rect only: normal axis
+  double rect_sign = 1.0;                        ///< rect only: outward normal sign
+  int first_surface = 0;  ///< box/room: face (axis, positive normal) = first + 2 axis + pos
+  bool dynamic = false;   ///< moves with Scene::dynamicOffset(t)
 };
 
 struct Scene {

@@ -32,8 +32,8 @@ struct Wave {
   }
 };
 
-Wave makeWave(SplitMix& rng, double a0_lo, double a0_hi, double w0_lo, double w0_hi,
-              double a1_lo, double a1_hi, double w1_lo, double w1_hi) {
+Wave makeWave(SplitMix& rng, double a0_lo, double a0_hi, double w0_lo, double w0_hi, double a1_lo,
+              double a1_hi, double w1_lo, double w1_hi) {
   Wave wv;
   wv.a[0] = rng.uniform(a0_lo, a0_hi);
   wv.w[0] = rng.uniform(w0_lo, w0_hi);
@@ -73,11 +73,10 @@ struct HandHeldTrajectory {
   Pose3 pose(double t) const {
     const Eigen::Vector3d p = centre_w + Eigen::Vector3d(x(t), y(t), z(t));
     // Body frame: x forward, y left, z up; positive pitch tilts the nose down.
-    const Eigen::Matrix3d R_w_b =
-        (Eigen::AngleAxisd(yaw0 + yaw(t), Eigen::Vector3d::UnitZ()) *
-         Eigen::AngleAxisd(pitch0 + pitch(t), Eigen::Vector3d::UnitY()) *
-         Eigen::AngleAxisd(roll(t), Eigen::Vector3d::UnitX()))
-            .toRotationMatrix();
+    const Eigen::Matrix3d R_w_b = (Eigen::AngleAxisd(yaw0 + yaw(t), Eigen::Vector3d::UnitZ()) *
+                                   Eigen::AngleAxisd(pitch0 + pitch(t), Eigen::Vector3d::UnitY()) *
+                                   Eigen::AngleAxisd(roll(t), Eigen::Vector3d::UnitX()))
+                                      .toRotationMatrix();
     Eigen::Matrix3d R_b_c;  // camera x right, y down, z forward
     R_b_c << 0, 0, 1, -1, 0, 0, 0, -1, 0;
     Pose3 T = Pose3::Identity();
@@ -114,7 +113,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Per-frame geometry of one object: bounds at this time and its image bounding box.
 struct FrameObject {
   const Object* obj = nullptr;
-  Eigen::Vector3d lo, hi;  // world bounds at this frame
+  Eigen::Vector3d lo, hi;                // world bounds at this frame
   int u0 = 0, u1 = -1, v0 = 0, v1 = -1;  // pixel bounding box (inclusive)
 };
 
@@ -125,8 +124,8 @@ struct SyntheticSequence::Impl {
   PinholeCamera camera;
   Scene scene;
   std::vector<Pose3> poses;
-  std::vector<float> ray_u;  // (u - cx) / fx per column
-  std::vector<float> ray_v;  // (v - cy) / fy per row
+  std::vector<float> ray_u;          // (u - cx) / fx per column
+  std::vector<float> ray_v;          // (v - cy) / fy per row
   std::vector<int> dynamic_surface;  // 1 where the surface belongs to a moving object
 
   explicit Impl(const SynthOptions& o) : options(o) {
@@ -178,9 +177,15 @@ struct SyntheticSequence::Impl {
     bounds(obj, t, &lo, &hi);
     double at;
     switch (obj.kind) {
-      case Object::Kind::kRoomInside: at = s.sign > 0 ? lo[s.axis] : hi[s.axis]; break;
-      case Object::Kind::kBox: at = s.sign > 0 ? hi[s.axis] : lo[s.axis]; break;
-      default: at = lo[s.axis]; break;
+      case Object::Kind::kRoomInside:
+        at = s.sign > 0 ? lo[s.axis] : hi[s.axis];
+        break;
+      case Object::Kind::kBox:
+        at = s.sign > 0 ? hi[s.axis] : lo[s.axis];
+        break;
+      default:
+        at = lo[s.axis];
+        break;
     }
     if (plane_w) {
       plane_w->setZero();
@@ -523,7 +528,8 @@ std::vector<VisibleSurface> SyntheticSequence::visibleSurfaces(const SynthFrame&
                                                                int min_pixels) const {
   const int i = static_cast<int>(frame.frame.seq);
   impl_->checkIndex(i);
-  if (frame.surface_id.type() != CV_32SC1 || frame.surface_id.size() != frame.frame.depth_m.size()) {
+  if (frame.surface_id.type() != CV_32SC1 ||
+      frame.surface_id.size() != frame.frame.depth_m.size()) {
     throw std::invalid_argument("visibleSurfaces: frame without matching surface_id/depth maps");
   }
   std::vector<int> pixels(surfaceCount(), 0), with_depth(surfaceCount(), 0);

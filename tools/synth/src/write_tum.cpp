@@ -74,8 +74,9 @@ void writeTumFolder(const SyntheticSequence& seq, const std::string& dir, bool w
   if (write_true_depth) depth_true_txt = openText(p_depth_true);
   const auto& o = seq.options();
   char header[256];
-  std::snprintf(header, sizeof(header), "# pplvo synthetic sequence: scene %s, seed %llu, %d frames\n",
-                o.scene.c_str(), static_cast<unsigned long long>(o.seed), o.frames);
+  std::snprintf(header, sizeof(header),
+                "# pplvo synthetic sequence: scene %s, seed %llu, %d frames\n", o.scene.c_str(),
+                static_cast<unsigned long long>(o.seed), o.frames);
   rgb_txt << "# color images\n" << header << "# timestamp filename\n";
   depth_txt << "# depth maps (16-bit PNG, 5000 units per metre, 0 = missing)\n"
             << header << "# timestamp filename\n";

@@ -3,13 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
-#include <sstream>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -270,12 +270,13 @@ double incidenceCos(const SyntheticSequence& seq, const SynthFrame& f, int u, in
 
 /// Collects (noisy - true) depth on near fronto-parallel static walls away from edges.
 struct Residuals {
-  std::vector<double> normalised;  // (noisy - true) / model sigma
+  std::vector<double> normalised;      // (noisy - true) / model sigma
   std::vector<double> disparity_frac;  // fractional part of disparity / step
   int dropped = 0, total = 0;
 };
 
-Residuals collect(const SyntheticSequence& seq, const std::vector<int>& frames, double model_extra) {
+Residuals collect(const SyntheticSequence& seq, const std::vector<int>& frames,
+                  double model_extra) {
   Residuals r;
   const auto& n = seq.options().noise;
   const double fb = seq.camera().fx * n.baseline_m;
@@ -386,8 +387,9 @@ TEST(SynthNoise, MissingDepthAtRangeGrazingAndEdges) {
           ++grazing;
           ASSERT_EQ(zn, 0.0f) << u << "," << v;
         } else {
-          const float jumps[4] = {f.depth_true_m.at<float>(v, u - 1), f.depth_true_m.at<float>(v, u + 1),
-                                  f.depth_true_m.at<float>(v - 1, u), f.depth_true_m.at<float>(v + 1, u)};
+          const float jumps[4] = {
+              f.depth_true_m.at<float>(v, u - 1), f.depth_true_m.at<float>(v, u + 1),
+              f.depth_true_m.at<float>(v - 1, u), f.depth_true_m.at<float>(v + 1, u)};
           bool edge = false;
           for (float zz : jumps) edge = edge || std::abs(zz - z) > 0.1f;
           if (edge) {
@@ -454,8 +456,8 @@ TEST(SynthTexture, LinesSceneIsLineRich) {
     lines_min = std::min(lines_min, longSegments(lines.render(i)));
     plain_sum += longSegments(plain.render(i));
   }
-  std::printf("LSD segments > 30 px: lines min %d, textureless sum over 5 frames %d\n",
-              lines_min, plain_sum);
+  std::printf("LSD segments > 30 px: lines min %d, textureless sum over 5 frames %d\n", lines_min,
+              plain_sum);
   EXPECT_GT(lines_min, 50);
   EXPECT_GT(plain_sum, 0) << "box edges should still give a few lines";
   EXPECT_LT(plain_sum, 5 * lines_min / 3);
@@ -557,8 +559,8 @@ TEST(SynthProgram, WritesFolderAndRejectsBadArguments) {
   if (bin_dir == nullptr) GTEST_SKIP() << "PPLVO_BINARY_DIR not set (run through ctest)";
   const std::string exe = std::string(bin_dir) + "/bin/pplvo-synth";
   ASSERT_TRUE(std::filesystem::exists(exe)) << exe;
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("pplvo_test_synth_cli_" + std::to_string(::getpid()));
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("pplvo_test_synth_cli_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const std::string ok_cmd = exe + " --output " + dir.string() +
                              " --frames 3 --width 160 --height 120 --scene textureless --seed 4"
