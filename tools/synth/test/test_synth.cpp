@@ -628,3 +628,62 @@ TEST(SynthTrajectory, SmoothBoundedHandHeldMotion) {
 
 }  // namespace
 }  // namespace pplvo::synth
+
+namespace pplvo::synth {
+namespace {
+
+TEST(SynthTrajectory, ScaleZeroIsStaticAndLargeScalesStayInside) {
+  SynthOptions o = smallOptions("room", 21);
+  o.trajectory_scale = 0.0;
+  const SyntheticSequence still(o);
+  for (int i = 1; i < still.size(); i += 37) {
+    EXPECT_TRUE(still.pose(i).isApprox(still.pose(0), 1e-12)) << i;
+  }
+  o.trajectory_scale = 5.0;
+  const SyntheticSequence wild(o);
+  double max_step = 0;
+  for (int i = 0; i < wild.size(); ++i) {
+    const Eigen::Vector3d p = wild.pose(i).translation();
+    EXPECT_GT(p.x(), 2.0);
+    EXPECT_LT(p.x(), 4.0);
+    EXPECT_GT(p.y(), 1.5);
+    EXPECT_LT(p.y(), 3.1);
+    if (i > 0) {
+      max_step = std::max(max_step, (p - wild.pose(i - 1).translation()).norm());
+    }
+  }
+  EXPECT_LT(max_step, 0.05) << "capped amplitudes keep the motion smooth";
+}
+
+TEST(SynthFrameFields, StampsSequenceNumbersAndCamera) {
+  SynthOptions o = smallOptions("textureless", 2);
+  o.fps = 25.0;
+  o.width = 200;
+  o.height = 150;
+  o.fx = o.fy = 180.0;
+  o.cx = 99.5;
+  o.cy = 74.5;
+  const SyntheticSequence seq(o);
+  const SynthFrame f = seq.render(10);
+  EXPECT_EQ(f.frame.seq, 10);
+  EXPECT_EQ(f.frame.stamp, "1.400000");
+  EXPECT_EQ(seq.stamp(10), "1.400000");
+  EXPECT_EQ(f.frame.utime, 1400000);
+  EXPECT_TRUE(f.frame.camera == seq.camera());
+  EXPECT_EQ(f.frame.bgr.type(), CV_8UC3);
+  EXPECT_EQ(f.frame.depth_m.type(), CV_32FC1);
+  EXPECT_EQ(f.frame.bgr.cols, 200);
+  EXPECT_EQ(f.frame.bgr.rows, 150);
+  EXPECT_EQ(f.depth_true_m.size(), f.frame.bgr.size());
+  EXPECT_EQ(f.surface_id.size(), f.frame.bgr.size());
+  EXPECT_EQ(f.dynamic_mask.size(), f.frame.bgr.size());
+  EXPECT_EQ(cv::countNonZero(f.dynamic_mask), 0);
+  const Trajectory gt = seq.groundTruth();
+  ASSERT_EQ(static_cast<int>(gt.size()), seq.size());
+  EXPECT_EQ(gt[10].stamp_text, "1.400000");
+  EXPECT_DOUBLE_EQ(gt[10].stamp, 1.4);
+  EXPECT_TRUE(gt[10].T_w_c.isApprox(seq.pose(10), 0.0));
+}
+
+}  // namespace
+}  // namespace pplvo::synth
