@@ -1,7 +1,11 @@
+#include <algorithm>
+#include <atomic>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include <opencv2/core/persistence.hpp>
@@ -84,17 +88,40 @@ void writeTumFolder(const SyntheticSequence& seq, const std::string& dir, bool w
     depth_true_txt << "# noiseless depth maps (16-bit PNG, 5000 units per metre)\n"
                    << header << "# timestamp filename\n";
   }
-  for (int i = 0; i < seq.size(); ++i) {
+  // Frames are rendered and encoded by two workers (render() is const and thread-safe); the
+  // text files are written afterwards in frame order, so the output does not depend on timing.
+  const auto writeFrame = [&](int i) {
     const SynthFrame f = seq.render(i);
     const std::string s = seq.stamp(i);
-    const std::string rgb_name = "rgb/" + s + ".png", depth_name = "depth/" + s + ".png";
-    writePng(dir + "/" + rgb_name, f.frame.bgr);
-    writePng(dir + "/" + depth_name, depthMetresToUnits(f.frame.depth_m, kDepthScale));
+    writePng(dir + "/rgb/" + s + ".png", f.frame.bgr);
+    writePng(dir + "/depth/" + s + ".png", depthMetresToUnits(f.frame.depth_m, kDepthScale));
     if (write_true_depth) {
-      const std::string name = "depth_true/" + s + ".png";
-      writePng(dir + "/" + name, depthMetresToUnits(f.depth_true_m, kDepthScale));
-      depth_true_txt << s << ' ' << name << '\n';
+      writePng(dir + "/depth_true/" + s + ".png", depthMetresToUnits(f.depth_true_m, kDepthScale));
     }
+  };
+  const int workers =
+      std::max(1, std::min(2, static_cast<int>(std::thread::hardware_concurrency())));
+  std::vector<std::exception_ptr> errors(workers);
+  std::atomic<bool> failed{false};
+  const auto work = [&](int w) {
+    try {
+      for (int i = w; i < seq.size() && !failed.load(); i += workers) writeFrame(i);
+    } catch (...) {
+      errors[w] = std::current_exception();
+      failed.store(true);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int w = 1; w < workers; ++w) threads.emplace_back(work, w);
+  work(0);
+  for (std::thread& t : threads) t.join();
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+  for (int i = 0; i < seq.size(); ++i) {
+    const std::string s = seq.stamp(i);
+    const std::string rgb_name = "rgb/" + s + ".png", depth_name = "depth/" + s + ".png";
+    if (write_true_depth) depth_true_txt << s << " depth_true/" << s << ".png\n";
     rgb_txt << s << ' ' << rgb_name << '\n';
     depth_txt << s << ' ' << depth_name << '\n';
     assoc_txt << s << ' ' << depth_name << ' ' << s << ' ' << rgb_name << '\n';
