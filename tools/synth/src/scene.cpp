@@ -320,7 +320,8 @@ Scene buildScene(const std::string& name, uint64_t seed, bool moving_object,
   const Eigen::Vector3d lo(0, 0, 0), hi(6, 5, 3);
   using V = Eigen::Vector3d;
   using TS = TextureStyle;
-  const double kOff = 0.01;  // posters and doors stand 1 cm off the wall
+  // Posters, whiteboard and door lie in their wall's plane (own surface id, same plane).
+  const double kOff = 0.0;
 
   // Room faces in order -x face (wall x = 6, normal -x), +x (wall x = 0), -y (wall y = 5),
   // +y (wall y = 0), -z (ceiling), +z (floor).

@@ -127,6 +127,7 @@ struct SyntheticSequence::Impl {
   std::vector<float> ray_u;          // (u - cx) / fx per column
   std::vector<float> ray_v;          // (v - cy) / fy per row
   std::vector<int> dynamic_surface;  // 1 where the surface belongs to a moving object
+  std::vector<int> plane_group;      // smallest id with the same plane (static surfaces)
 
   explicit Impl(const SynthOptions& o) : options(o) {
     validate(o);
@@ -146,6 +147,22 @@ struct SyntheticSequence::Impl {
     dynamic_surface.resize(scene.surfaces.size());
     for (size_t s = 0; s < scene.surfaces.size(); ++s) {
       dynamic_surface[s] = scene.objects[scene.surfaces[s].object].dynamic ? 1 : 0;
+    }
+    const int n = static_cast<int>(scene.surfaces.size());
+    plane_group.resize(n);
+    for (int a = 0; a < n; ++a) {
+      plane_group[a] = a;
+      if (dynamic_surface[a]) continue;
+      Eigen::Vector4d pa, pb;
+      planeAt(a, 0.0, &pa);
+      for (int b = 0; b < a; ++b) {
+        if (dynamic_surface[b]) continue;
+        planeAt(b, 0.0, &pb);
+        if (pa == pb) {
+          plane_group[a] = plane_group[b];
+          break;
+        }
+      }
     }
   }
 
@@ -362,7 +379,9 @@ SynthFrame SyntheticSequence::Impl::render(int i) const {
         } else {  // rectangle
           const int k = obj.rect_axis;
           const double tk = (fo->lo[k] - o[k]) * inv[k];
-          if (tk > 0 && tk < best) {
+          // `<=`: a rectangle lying in a wall's plane wins over the wall (the same arithmetic
+          // gives bit-identical distances).
+          if (tk > 0 && tk <= best) {
             const int a = (k + 1) % 3, b = (k + 2) % 3;
             const double pa = o[a] + tk * d[a], pb = o[b] + tk * d[b];
             if (pa >= fo->lo[a] && pa <= fo->hi[a] && pb >= fo->lo[b] && pb <= fo->hi[b]) {
@@ -509,6 +528,11 @@ bool SyntheticSequence::surfacePlane(int surface_id, Eigen::Vector4d* plane_w) c
 bool SyntheticSequence::surfacePlaneAt(int surface_id, int i, Eigen::Vector4d* plane_w) const {
   impl_->checkIndex(i);
   return impl_->planeAt(surface_id, impl_->time(i), plane_w);
+}
+
+int SyntheticSequence::planeGroup(int surface_id) const {
+  if (surface_id < 0 || surface_id >= surfaceCount()) return -1;
+  return impl_->plane_group[surface_id];
 }
 
 int SyntheticSequence::surfaceCount() const {

@@ -134,6 +134,23 @@ TEST(SynthGeometry, SurfaceIdsAreBoundedAndPlanesAreUnit) {
     EXPECT_NEAR(plane.head<3>().norm(), 1.0, 1e-12);
     EXPECT_FALSE(seq.surfaceName(id).empty());
   }
+  // Posters lie in their wall's plane.
+  int posters = 0;
+  for (int id = 0; id < seq.surfaceCount(); ++id) {
+    const int g = seq.planeGroup(id);
+    ASSERT_GE(g, 0);
+    ASSERT_LE(g, id);
+    Eigen::Vector4d pg;
+    ASSERT_TRUE(seq.surfacePlane(g, &pg));
+    ASSERT_TRUE(seq.surfacePlane(id, &plane));
+    EXPECT_TRUE(pg == plane);
+    if (seq.surfaceName(id).rfind("poster", 0) == 0) {
+      ++posters;
+      EXPECT_EQ(seq.surfaceName(g).rfind("room", 0), 0u) << seq.surfaceName(id);
+    }
+  }
+  EXPECT_GE(posters, 4);
+  EXPECT_EQ(seq.planeGroup(-1), -1);
   EXPECT_FALSE(seq.surfacePlane(-1, &plane));
   EXPECT_FALSE(seq.surfacePlane(seq.surfaceCount(), &plane));
 }

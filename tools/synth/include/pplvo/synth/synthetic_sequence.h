@@ -110,6 +110,10 @@ class SyntheticSequence {
   std::vector<VisibleSurface> visibleSurfaces(const SynthFrame& frame, int min_pixels = 1) const;
   /// Every straight edge of the scene at frame i (static ones do not move).
   std::vector<SceneEdge> sceneEdges(int i) const;
+  /// The smallest surface id lying on exactly the same plane as `surface_id` (e.g. a poster
+  /// and its wall, or coplanar faces of different boxes); the id itself for the moving object;
+  /// -1 for an unknown id.
+  int planeGroup(int surface_id) const;
   /// Human-readable name of a surface, e.g. "room+z" (floor) or "cabinet-x"; "" if unknown.
   std::string surfaceName(int surface_id) const;
 
