@@ -84,6 +84,17 @@ void drawStripes(cv::Mat& img, bool along_u, double s, cv::RNG& rng) {
     const cv::Rect r =
         along_u ? cv::Rect(pos, 0, width, img.rows) : cv::Rect(0, pos, img.cols, width);
     img(r & cv::Rect(0, 0, img.cols, img.rows)).setTo(grey);
+    // A few contrasting labels / knobs per band: corners among the lines.
+    const int labels = rng.uniform(0, 4);
+    for (int k = 0; k < labels; ++k) {
+      const int lw = std::max(2, std::min(width - 2, px(rng.uniform(0.02, 0.06), s)));
+      const int ll = std::max(2, px(rng.uniform(0.02, 0.08), s));
+      const int along = rng.uniform(0, std::max(1, (along_u ? img.rows : img.cols) - ll));
+      const int across = pos + rng.uniform(0, std::max(1, width - lw));
+      const cv::Rect lab =
+          along_u ? cv::Rect(across, along, lw, ll) : cv::Rect(along, across, ll, lw);
+      img(lab & cv::Rect(0, 0, img.cols, img.rows)).setTo(grey > 0.5 ? 0.1 : 0.95);
+    }
     pos += width;
     if (rng.uniform(0, 2) == 0) {  // a thin dark separating line
       const int lw = std::max(1, px(0.008, s));
@@ -130,9 +141,20 @@ cv::Mat makeTexture(TextureStyle style, int w, int h, double s, cv::RNG& rng, do
   switch (style) {
     case TextureStyle::kPlain:
       break;
-    case TextureStyle::kNoise:
-      img = fractalNoise(w, h, s, rng, 0.08, 0.95);
+    case TextureStyle::kNoise: {
+      // Posterised fractal noise ("camouflage"): sharp patch borders with many corners, plus a
+      // little of the continuous noise for shading inside the patches.
+      const cv::Mat smooth = fractalNoise(w, h, s, rng, 0.0, 1.0);
+      for (int r = 0; r < h; ++r) {
+        const float* in = smooth.ptr<float>(r);
+        float* out = img.ptr<float>(r);
+        for (int c = 0; c < w; ++c) {
+          const float level = std::min(4.0f, std::floor(in[c] * 5.0f)) / 4.0f;
+          out[c] = 0.05f + 0.8f * level + 0.12f * in[c];
+        }
+      }
       break;
+    }
     case TextureStyle::kBlobs:
       img = fractalNoise(w, h, s, rng, 0.35, 0.75, 0.03);
       drawBlobs(img, s, rng, 260.0);
@@ -365,6 +387,16 @@ Scene buildScene(const std::string& name, uint64_t seed, bool moving_object,
     b.rect(1, 5.0 - kOff, -1.0, V(1.5, 0, 1.2), V(2.5, 0, 2.2), "poster_y5a", TS::kPoster, kGreen);
     b.rect(1, 5.0 - kOff, -1.0, V(3.5, 0, 1.4), V(4.3, 0, 2.0), "poster_y5b", TS::kPoster, kWhite);
     b.rect(0, 6.0 - kOff, -1.0, V(0, 3.2, 1.3), V(0, 4.2, 2.0), "poster_x6", TS::kPoster, kCool);
+    // More on the otherwise plain walls (x = 0 and y = 0), so every view direction has some
+    // texture; plain wall areas remain between the items.
+    b.rect(1, kOff, 1.0, V(2.6, 0, 1.15), V(3.5, 0, 1.85), "painting_y0",
+           lines ? TS::kStripesV : TS::kBlobs, kWarm, 0.7);
+    b.rect(1, kOff, 1.0, V(2.4, 0, 0.15), V(3.7, 0, 0.65), "radiator_y0", TS::kStripesU, kWhite,
+           0.85);
+    b.rect(0, kOff, 1.0, V(0, 0.3, 1.3), V(0, 0.8, 1.8), "picture_x0",
+           lines ? TS::kGrid : TS::kNoise, kGreen, 0.7);
+    b.box(V(0.3, 0.02, 0), V(1.1, 0.38, 1.6), "bookshelf", lines ? TS::kStripesU : TS::kText, kWood,
+          0.8);
     // Furniture.
     b.box(V(5.5, 0.6, 0), V(5.95, 1.8, 1.9), "cabinet", TS::kStripesV, kWood, 0.7);
     b.box(V(2.3, 3.6, 0.72), V(3.5, 4.4, 0.76), "table_top", lines ? TS::kStripesU : TS::kNoise,

@@ -404,7 +404,7 @@ SynthFrame SyntheticSequence::Impl::render(int i) const {
       const double l2 = l.squaredNorm();
       const double cos_p = std::max(0.0, surf.sign * l[surf.axis]) / std::sqrt(l2);
       const double cos_d = std::max(0.0, surf.sign * Ldir[surf.axis]);
-      const double shade = 0.28 + 0.32 * cos_d + 0.55 * cos_p * (4.0 / (4.0 + l2));
+      const double shade = 0.42 + 0.28 * cos_d + 0.5 * cos_p * (4.0 / (4.0 + l2));
       const Eigen::Vector3d& slo = surf_lo[best_surface];
       const double tu = (p[surf.ax_u] - slo[surf.ax_u]) * s_tex;
       const double tv = (p[surf.ax_v] - slo[surf.ax_v]) * s_tex;

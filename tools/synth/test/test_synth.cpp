@@ -480,6 +480,43 @@ TEST(SynthTexture, LinesSceneIsLineRich) {
   EXPECT_LT(plain_sum, 5 * lines_min / 3);
 }
 
+TEST(SynthTexture, OrbMatchesAgreeWithGroundTruthMotion) {
+  // Colour must be consistent with geometry and poses: ORB matches between frames i and i + 5
+  // reproject (true depth + true poses) onto each other within a pixel or so.
+  SynthOptions o = smallOptions("room", 13);
+  const SyntheticSequence seq(o);
+  auto orb = cv::ORB::create(1000);
+  cv::BFMatcher matcher(cv::NORM_HAMMING, true);
+  for (int i : {0, 100, 200}) {
+    const SynthFrame a = seq.render(i), b = seq.render(i + 5);
+    cv::Mat ga, gb;
+    cv::cvtColor(a.frame.bgr, ga, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(b.frame.bgr, gb, cv::COLOR_BGR2GRAY);
+    std::vector<cv::KeyPoint> ka, kb;
+    cv::Mat da, db;
+    orb->detectAndCompute(ga, cv::noArray(), ka, da);
+    orb->detectAndCompute(gb, cv::noArray(), kb, db);
+    std::vector<cv::DMatch> matches;
+    matcher.match(da, db, matches);
+    const Pose3 T_b_a = b.T_w_c.inverse() * a.T_w_c;
+    std::vector<double> err;
+    for (const cv::DMatch& m : matches) {
+      const cv::Point2f pa = ka[m.queryIdx].pt, pb = kb[m.trainIdx].pt;
+      const float z = a.depth_true_m.at<float>(cvRound(pa.y), cvRound(pa.x));
+      const Eigen::Vector3d p_b = T_b_a * seq.camera().backproject(pa.x, pa.y, z);
+      err.push_back((seq.camera().project(p_b) - Eigen::Vector2d(pb.x, pb.y)).norm());
+    }
+    ASSERT_GT(err.size(), 200u) << "frame " << i;
+    std::sort(err.begin(), err.end());
+    const double median = err[err.size() / 2];
+    const double inliers = std::count_if(err.begin(), err.end(), [](double e) { return e < 3; });
+    std::printf("frame %d: %zu ORB matches, median reprojection error %.2f px, %.0f%% < 3 px\n", i,
+                err.size(), median, 100.0 * inliers / err.size());
+    EXPECT_LT(median, 1.5);
+    EXPECT_GT(inliers, 0.6 * err.size());
+  }
+}
+
 // (e) TUM folder output.
 TEST(SynthWriter, TumFolderRoundTrip) {
   SynthOptions o = smallOptions("lines", 9);
