@@ -74,7 +74,8 @@ struct SceneEdge {
   int surface_b = -1;
 };
 
-/// A procedural indoor scene and a smooth hand-held trajectory through it.
+/// A procedural indoor scene and a smooth hand-held trajectory through it. World frame: room
+/// corner at the origin, x in [0, 6], y in [0, 5], z in [0, 3] m, z up (docs/synthetic.md).
 class SyntheticSequence {
  public:
   explicit SyntheticSequence(const SynthOptions& options);
@@ -89,7 +90,8 @@ class SyntheticSequence {
   Pose3 pose(int i) const;
   /// Stamp text of frame i as written to rgb.txt / groundtruth.txt ("%.6f", starting at 1.0 s).
   std::string stamp(int i) const;
-  /// Renders frame i (independent of the order frames are rendered in).
+  /// Renders frame i (independent of the order frames are rendered in). Thread-safe: frames
+  /// may be rendered concurrently. Throws std::out_of_range for i outside [0, size()).
   SynthFrame render(int i) const;
   /// Plane [n; d] (n.p + d = 0, world frame) of a surface id, if that surface is planar and
   /// static. n (unit) is the outward normal, pointing into the free space the surface is seen
@@ -124,7 +126,8 @@ class SyntheticSequence {
 
 /// Writes a TUM-layout folder: rgb/, depth/ (16-bit PNG, scale 5000), rgb.txt, depth.txt,
 /// associations.txt (depth first, like the shared ICL folder), groundtruth.txt and
-/// calib_params.xml. Optionally depth_true/ with the noiseless depth.
+/// calib_params.xml. Optionally depth_true/ (+ depth_true.txt) with the noiseless depth.
+/// Uses two threads. Throws std::runtime_error naming the path that could not be written.
 void writeTumFolder(const SyntheticSequence& sequence, const std::string& dir,
                     bool write_true_depth = false);
 
