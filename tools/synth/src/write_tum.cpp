@@ -56,8 +56,8 @@ void writeCalib(const SyntheticSequence& seq, const std::string& path) {
   fs << "Rotation" << cv::Mat::eye(3, 3, CV_64F);
   fs << "Translation" << cv::Mat::zeros(3, 1, CV_64F);
   fs << "depth_scale" << kDepthScale;
-  fs << "image_width" << c.width;
-  fs << "image_height" << c.height;
+  fs << "width" << c.width;  // the names pplvo_dataset (drivers/dataset) reads
+  fs << "height" << c.height;
   fs.release();
 }
 

@@ -598,6 +598,8 @@ TEST(SynthWriter, TumFolderRoundTrip) {
   EXPECT_EQ(R.total(), 9u);
   EXPECT_EQ(t.total(), 3u);
   EXPECT_DOUBLE_EQ(static_cast<double>(fs["depth_scale"]), 5000.0);
+  EXPECT_EQ(static_cast<int>(fs["width"]), 320);
+  EXPECT_EQ(static_cast<int>(fs["height"]), 240);
   std::filesystem::remove_all(dir);
 }
 
