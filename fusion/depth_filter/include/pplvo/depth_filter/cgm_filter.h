@@ -47,6 +47,9 @@ class CgmFilter {
   /// missing). Returns depth and variance (CV_32FC1, 0 where missing), window_length = 1.
   /// Throws std::invalid_argument if depth_m is not a non-empty CV_32FC1 matrix.
   DepthWithVariance apply(const cv::Mat& depth_m);
+  /// Same, writing into `out`, whose matrices are reused when they already have the size and
+  /// type (no allocation in steady state). They must not share data with anything still in use.
+  void apply(const cv::Mat& depth_m, DepthWithVariance* out);
 
   const CgmStats& stats() const { return stats_; }
   const Options& options() const { return options_; }
@@ -54,14 +57,16 @@ class CgmFilter {
 
  private:
   void resize(int rows, int cols);
+  void horizontalRow(const cv::Mat& depth_m, int r, int64_t* invalid, int64_t* valid);
 
   Options options_;
   std::shared_ptr<const SensorModel> model_;
   CgmStats stats_;
   int rows_ = 0, cols_ = 0;
-  // Per pixel: clean depth, sensor variance; horizontal [1 2 1] sums of y, y z, y (z^2+s^2).
-  std::vector<float> z_, var_;
-  std::vector<double> h_s_, h_z_, h_q_;
+  // One row of clean depth and sensor variance; padded rows of y, z, z^2 + sigma^2; a ring of
+  // three rows of horizontal [1 2 1] sums and of the centre depth. Sized once per image size.
+  std::vector<float> z_, var_, centre_;
+  std::vector<double> pad_y_, pad_z_, pad_q_, h_s_, h_z_, h_q_, zero_;
 };
 
 }  // namespace pplvo::depth_filter

@@ -69,6 +69,7 @@ struct OgmOptions {
 /// z = r_bar cos(alpha), var_z = var_r cos^2(alpha). Pixels without a current measurement but
 /// with projected points are filled. Memory: max_window frames of two float images plus one
 /// accumulator image, all allocated once per camera.
+/// Fused variances come from float sums centred per pixel; relative precision ~1e-6.
 class OgmFusion {
  public:
   using Options = OgmOptions;
@@ -90,6 +91,9 @@ class OgmFusion {
   /// Sets the pose of frame `seq` (which must have been added) and fuses the window into it.
   /// Frames without a pose and frames newer than `seq` are not used.
   OgmResult fuse(int64_t seq, const Pose3& T_w_c);
+  /// Same, writing into `result`, whose depth matrices are reused when they already have the
+  /// camera's size (no allocation in steady state; they must not share data still in use).
+  void fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result);
 
   /// Empties the window (e.g. after tracking loss).
   void reset();
@@ -107,12 +111,12 @@ class OgmFusion {
     int64_t seq = 0;
     Pose3 T_w_c = Pose3::Identity();
     cv::Mat depth_m;  ///< CV_32FC1, 0 = missing
-    cv::Mat var_r;    ///< CV_32FC1 range variance, m^2
+    cv::Mat weight;   ///< CV_32FC1 1 / sigma_r^2 (eq. 6), 1/m^2; 0 where missing
   };
+  /// Running sums of one pixel, centred on its first accepted range r0 (float precision
+  /// suffices for d = r - r0): S_w, S_w d, S_w (d^2 + sigma^2). The count lives in count_.
   struct Acc {
-    double s_w, s_wr, s_wq;
-    int32_t count;
-    int32_t pad;
+    float r0, s_w, s_wd, s_wq;
   };
 
   void configure(const PinholeCamera& camera);
@@ -126,8 +130,13 @@ class OgmFusion {
   std::vector<Slot> slots_;
   std::vector<float> ray_x_, ray_y_;  ///< (u - cx)/fx per column, (v - cy)/fy per row
   std::vector<float> cos_;            ///< cos(alpha) per pixel = 1 / |ray|
+  std::vector<float> inv_cos_;        ///< |ray| per pixel
   std::vector<Acc> acc_;
-  std::vector<float> col_terms_;     ///< R * (x_u, 0, 0) per column of one past frame
+  std::vector<Slot*> past_;          ///< window frames used by one fusion, newest first
+  std::vector<uint8_t> count_;       ///< points per pixel (saturates at 255)
+  std::vector<float> ax_, ay_, az_;  ///< R * (x_u, 0, 0) per column of one past frame
+  std::vector<int32_t> idx_;         ///< target pixel per column of one row (-1: none)
+  std::vector<float> range_;         ///< range in the current camera per column of one row
 };
 
 }  // namespace pplvo::depth_filter
