@@ -101,7 +101,7 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     ++counters_.frames_out;
     return;
   }
-  depth_filter::OgmResult result;
+  depth_filter::OgmResult& result = fused_;  // buffers reused frame to frame
   {
     ScopedStageTimer t(timings_, "ogm");
     if (pose.status == pplvo_msgs::pose_t::STATUS_LOST ||
@@ -110,7 +110,7 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     }
     for (const auto& w : pose.window_uncertainty) ogm_.setWindowUncertainty(w.first, w.second);
     ogm_.addFrame(p.seq, p.camera, p.depth);
-    result = ogm_.fuse(p.seq, pose.T_w_c);
+    ogm_.fuse(p.seq, pose.T_w_c, &result);
   }
   if (!result.ok) {
     // Downstream still gets a depth map: the frame's own stage-2 output.

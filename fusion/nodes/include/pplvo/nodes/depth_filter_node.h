@@ -91,6 +91,7 @@ class DepthFilterNode {
   depth_filter::QuadraticSensorModel sensor_;
   depth_filter::CgmFilter cgm_;
   depth_filter::OgmFusion ogm_;
+  depth_filter::OgmResult fused_;  ///< reused output buffers of the fusion
   std::deque<Pending> pending_;
   msgs::NodeCounters counters_;
   StageTimings timings_;
