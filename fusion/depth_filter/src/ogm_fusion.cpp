@@ -160,8 +160,11 @@ struct RowProjection {
 };
 
 /// Transforms and projects one row, branch-free so that it vectorises: p_c = z R ray + t,
-/// idx = nearest pixel (-1: none), range = |p_c|. (GCC 12's target_clones("avx2") version of
-/// this loop did not vectorise and ran 1.7x slower: baseline SSE2 only.)
+/// idx = nearest pixel (-1: none), range = |p_c|. Compiled for AVX2 and for baseline x86-64,
+/// chosen at load time (GCC function multi-versioning).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target_clones("avx2", "default")))
+#endif
 void projectRow(const RowProjection& p, int32_t* __restrict idx, float* __restrict range) {
   const float* __restrict z = p.z;
   const float* __restrict ax = p.ax;
@@ -169,7 +172,7 @@ void projectRow(const RowProjection& p, int32_t* __restrict idx, float* __restri
   const float* __restrict az = p.az;
   const float bx = p.bx, by = p.by, bz = p.bz, tx = p.tx, ty = p.ty, tz = p.tz;
   const float fx = p.fx, fy = p.fy, cx = p.cx, cy = p.cy, min_z = p.min_z;
-  const float umax = p.umax, vmax = p.vmax, wf = p.wf;
+  const float umax = p.umax, vmax = p.vmax;
   const int w = p.w;
   for (int u = 0; u < w; ++u) {
     const float zk = z[u];
@@ -179,13 +182,19 @@ void projectRow(const RowProjection& p, int32_t* __restrict idx, float* __restri
     const float pzc = pz > min_z ? pz : 1.f;
     const float inv = 1.f / pzc;
     const float uf = fx * px * inv + cx, vf = fy * py * inv + cy;
-    const bool ok = (zk > 0.f) & (pz > min_z) & (uf >= -0.5f) & (uf < umax) & (vf >= -0.5f) &
-                    (vf < vmax);
-    const float ufc = ok ? uf + 0.5f : 0.f, vfc = ok ? vf + 0.5f : 0.f;
-    const float iu = static_cast<float>(static_cast<int32_t>(ufc));
-    const float iv = static_cast<float>(static_cast<int32_t>(vfc));
-    const int32_t cand = static_cast<int32_t>(iv * wf + iu);
-    idx[u] = ok ? cand : -1;
+    // Selects rather than && / int-float round trips: GCC 12 vectorises this form for both
+    // SSE2 and AVX2. Clamping before the conversion keeps it defined for any input (NaN too).
+    float okf = zk > 0.f ? 1.f : 0.f;
+    okf = pz > min_z ? okf : 0.f;
+    okf = uf >= -0.5f ? okf : 0.f;
+    okf = uf < umax ? okf : 0.f;
+    okf = vf >= -0.5f ? okf : 0.f;
+    okf = vf < vmax ? okf : 0.f;
+    const float ur = uf + 0.5f, vr = vf + 0.5f;
+    const float ufc = ur > 0.f ? (ur < umax + 0.5f ? ur : 0.f) : 0.f;
+    const float vfc = vr > 0.f ? (vr < vmax + 0.5f ? vr : 0.f) : 0.f;
+    const int32_t cand = static_cast<int32_t>(vfc) * w + static_cast<int32_t>(ufc);
+    idx[u] = okf > 0.5f ? cand : -1;
     range[u] = std::sqrt(px * px + py * py + pz * pz);
   }
 }
@@ -333,21 +342,20 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
     const uint8_t* n = &count_[static_cast<size_t>(v) * w];
     float* oz = out.depth_m.ptr<float>(v);
     float* ov = out.var_m2.ptr<float>(v);
-    for (int u = 0; u < w; ++u) {
-      if (n[u] == 0) {
-        oz[u] = 0.f;
-        ov[u] = 0.f;
-        continue;
-      }
-      const float inv = 1.f / a[u].s_w;
+    int32_t filled_row = 0;
+    for (int u = 0; u < w; ++u) {  // branch-free (vectorised); unused pixels select 0
+      const bool has = n[u] != 0;
+      const float sw = has ? a[u].s_w : 1.f;
+      const float inv = 1.f / sw;
       const float mean_d = a[u].s_wd * inv;
       // The GM variance is at least 1/S_w for one point; the floor only guards rounding.
       const float var_r = std::max(a[u].s_wq * inv - mean_d * mean_d, 1e-3f * inv);
       const float c = cs[u];
-      oz[u] = (a[u].r0 + mean_d) * c;
-      ov[u] = var_r * c * c;
-      filled += zc[u] > 0.f ? 0 : 1;
+      oz[u] = has ? (a[u].r0 + mean_d) * c : 0.f;
+      ov[u] = has ? var_r * c * c : 0.f;
+      filled_row += static_cast<int32_t>(has & !(zc[u] > 0.f));
     }
+    filled += filled_row;
   }
   stats_.pixels_filled += filled;
   out.window_length = 1 + static_cast<int>(past.size());
