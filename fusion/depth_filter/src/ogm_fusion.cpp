@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 namespace pplvo::depth_filter {
 
@@ -155,7 +154,7 @@ struct RowProjection {
   const float *ax, *ay, *az;      ///< R * (x_u, 0, 0) per column
   float bx, by, bz;               ///< R * (0, y_v, 1) for the row
   float tx, ty, tz;               ///< translation of T_c_k
-  float fx, fy, cx, cy, min_z, umax, vmax, wf;
+  float fx, fy, cx, cy, min_z, umax, vmax;
   int w;
 };
 
@@ -272,7 +271,6 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
   const int k = std::min(options_.k_consistency, 255);
   const float g2 = static_cast<float>(options_.gate_sigma * options_.gate_sigma);
   const float umax = static_cast<float>(w) - 0.5f, vmax = static_cast<float>(h) - 0.5f;
-  const float wf = static_cast<float>(w);
   float* ax = ax_.data();
   float* ay = ay_.data();
   float* az = az_.data();
@@ -297,7 +295,7 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
       const float bx = R(0, 1) * ry + R(0, 2), by = R(1, 1) * ry + R(1, 2),
                   bz = R(2, 1) * ry + R(2, 2);
       projectRow(RowProjection{z, ax, ay, az, bx, by, bz, tx, ty, tz, fx, fy, cx, cy, min_z, umax,
-                               vmax, wf, w},
+                               vmax, w},
                  idx, range);
       // Accumulate (scattered).
       for (int u = 0; u < w; ++u) {
