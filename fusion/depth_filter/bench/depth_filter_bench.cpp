@@ -8,12 +8,11 @@
 #include <cstdlib>
 #include <ctime>
 #include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/core/stage_timer.h"
@@ -146,11 +145,12 @@ void timeSequence(const Sequence& s) {
       filled += static_cast<double>(cv::countNonZero(r.depth.depth_m)) -
                 cv::countNonZero(cgm_out[i].depth_m);
     }
-    std::printf("  O-GM_%-5d mean %6.2f ms  median %6.2f ms  (CPU mean %.2f median %.2f ms; mean "
-                "window %.1f, filled %.0f px/frame, gated %.1f%% of projected)\n",
-                window, mean(t), median(t), mean(c), median(c), window_sum / n, filled / n,
-                100.0 * static_cast<double>(ogm.stats().points_gated) /
-                    std::max<double>(1.0, static_cast<double>(ogm.stats().points_projected)));
+    std::printf(
+        "  O-GM_%-5d mean %6.2f ms  median %6.2f ms  (CPU mean %.2f median %.2f ms; mean "
+        "window %.1f, filled %.0f px/frame, gated %.1f%% of projected)\n",
+        window, mean(t), median(t), mean(c), median(c), window_sum / n, filled / n,
+        100.0 * static_cast<double>(ogm.stats().points_gated) /
+            std::max<double>(1.0, static_cast<double>(ogm.stats().points_projected)));
   }
 }
 
@@ -196,10 +196,11 @@ void synthRmse(int frames, bool moving) {
         e10k1.add(r10k1.depth.depth_m.at<float>(v, u) - t);
       }
   }
-  std::printf("synthetic room%s, frames 10..%d, static pixels with raw depth (%lld px):\n"
-              "  depth RMSE mm: raw %.2f  C-GM %.2f  O-GM_5 %.2f  O-GM_10 %.2f  O-GM_10(k=1) %.2f\n",
-              moving ? " + moving box" : "", frames - 1, static_cast<long long>(raw.n), raw.mm(),
-              c.mm(), e5.mm(), e10.mm(), e10k1.mm());
+  std::printf(
+      "synthetic room%s, frames 10..%d, static pixels with raw depth (%lld px):\n"
+      "  depth RMSE mm: raw %.2f  C-GM %.2f  O-GM_5 %.2f  O-GM_10 %.2f  O-GM_10(k=1) %.2f\n",
+      moving ? " + moving box" : "", frames - 1, static_cast<long long>(raw.n), raw.mm(), c.mm(),
+      e5.mm(), e10.mm(), e10k1.mm());
 }
 
 }  // namespace
@@ -212,9 +213,12 @@ int main(int argc, char** argv) {
   bool timing_only = false;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--data") data = argv[i + 1];
-    else if (a == "--synth-frames") synth_frames = std::max(11, std::atoi(argv[i + 1]));
-    else if (a == "--timing-only") timing_only = std::atoi(argv[i + 1]) != 0;
+    if (a == "--data")
+      data = argv[i + 1];
+    else if (a == "--synth-frames")
+      synth_frames = std::max(11, std::atoi(argv[i + 1]));
+    else if (a == "--timing-only")
+      timing_only = std::atoi(argv[i + 1]) != 0;
   }
   for (const char* name : {"icl_living_room_kt0_short", "tum_fr3_sitting_static_short"}) {
     Sequence s;

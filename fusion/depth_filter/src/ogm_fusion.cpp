@@ -80,8 +80,8 @@ bool OgmFusion::addFrame(int64_t seq, const PinholeCamera& camera, const DepthWi
       cgm.depth_m.rows != camera.height || cgm.depth_m.cols != camera.width ||
       cgm.var_m2.size() != cgm.depth_m.size()) {
     ++stats_.invalid_inputs;
-    warn("addFrame: depth/variance not CV_32FC1 of the camera size (frame " +
-         std::to_string(seq) + " ignored)");
+    warn("addFrame: depth/variance not CV_32FC1 of the camera size (frame " + std::to_string(seq) +
+         " ignored)");
     return false;
   }
   if (!configured_ || camera != camera_) {
@@ -150,10 +150,10 @@ namespace {
 
 /// Inputs of projectRow: one row of a past frame and its transform into the current camera.
 struct RowProjection {
-  const float* z;                 ///< depth of the row (0 = missing)
-  const float *ax, *ay, *az;      ///< R * (x_u, 0, 0) per column
-  float bx, by, bz;               ///< R * (0, y_v, 1) for the row
-  float tx, ty, tz;               ///< translation of T_c_k
+  const float* z;             ///< depth of the row (0 = missing)
+  const float *ax, *ay, *az;  ///< R * (x_u, 0, 0) per column
+  float bx, by, bz;           ///< R * (0, y_v, 1) for the row
+  float tx, ty, tz;           ///< translation of T_c_k
   float fx, fy, cx, cy, min_z, umax, vmax;
   int w;
 };

@@ -2,9 +2,9 @@
 /// Small analytic test scene (used until the shared synthetic generator is available): a wall
 /// (plane z_w = 3 m), a static box in front of it, optionally a box moving towards the camera,
 /// seen by a camera moving a few cm and degrees. Noise: Kinect model of paper eq. (1) plus
-/// disparity quantisation (1/8 px, f*b = fx * 0.075 m), and edge dropout. Deterministic for a given seed.
+/// disparity quantisation (1/8 px, f*b = fx * 0.075 m), and edge dropout. Deterministic for a given
+/// seed.
 #include <cstdint>
-
 #include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"

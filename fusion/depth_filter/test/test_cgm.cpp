@@ -1,9 +1,9 @@
 // C-GM (paper eqs. 2-5) on hand-computed 3x3 cases, and the stage-1 sensor model.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
 #include <memory>
-
-#include <gtest/gtest.h>
 
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/sensor_model.h"

@@ -1,13 +1,13 @@
 // O-GM temporal fusion (paper eqs. 6-7, section 3.4) on exact small cases and on an analytic
 // noisy scene with known true depth.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "analytic_scene.h"
 #include "pplvo/depth_filter/cgm_filter.h"
@@ -236,7 +236,8 @@ class SceneTest : public ::testing::Test {
             lo = std::min(lo, z);
             hi = std::max(hi, z);
           }
-        m.at<uint8_t>(v, u) = (hi - lo > 0.1f && f.label.at<uint8_t>(v, u) != test::kMoving) ? 255 : 0;
+        m.at<uint8_t>(v, u) =
+            (hi - lo > 0.1f && f.label.at<uint8_t>(v, u) != test::kMoving) ? 255 : 0;
       }
     return m;
   }
@@ -297,8 +298,7 @@ TEST_F(SceneTest, PlanarResidualDecreasesRawOgm5Ogm10) {
       }
   }
   std::printf("wall planar residual RMSE mm: raw %.2f  O-GM5 %.2f  O-GM10 %.2f (%lld px)\n",
-              1e3 * raw.rmse(), 1e3 * o5.rmse(), 1e3 * o10.rmse(),
-              static_cast<long long>(raw.n));
+              1e3 * raw.rmse(), 1e3 * o5.rmse(), 1e3 * o10.rmse(), static_cast<long long>(raw.n));
   ASSERT_GT(raw.n, 10000);
   EXPECT_LT(o5.rmse(), 0.9 * raw.rmse());
   EXPECT_LT(o10.rmse(), 0.95 * o5.rmse());
@@ -351,10 +351,11 @@ TEST_F(SceneTest, UncertaintyCalibratedAndHigherAtEdgesAndMovingObject) {
               1e3 * std::sqrt(mean(edge_var_cgm)));
   std::printf("fraction |err| < 2 sigma: raw+sensor model %.3f  C-GM %.3f  O-GM10 %.3f\n", f_raw,
               f_cgm, f_o10);
-  std::printf("median sigma mm: wall O-GM10 %.2f (C-GM %.2f), discontinuities O-GM10 %.2f "
-              "(C-GM %.2f), moving object O-GM10 %.2f\n",
-              1e3 * std::sqrt(mw), 1e3 * std::sqrt(median(wall_var_cgm)), 1e3 * std::sqrt(me),
-              1e3 * std::sqrt(median(edge_var_cgm)), 1e3 * std::sqrt(mm));
+  std::printf(
+      "median sigma mm: wall O-GM10 %.2f (C-GM %.2f), discontinuities O-GM10 %.2f "
+      "(C-GM %.2f), moving object O-GM10 %.2f\n",
+      1e3 * std::sqrt(mw), 1e3 * std::sqrt(median(wall_var_cgm)), 1e3 * std::sqrt(me),
+      1e3 * std::sqrt(median(edge_var_cgm)), 1e3 * std::sqrt(mm));
   // Stage 1 alone is a per-pixel sensor sigma: close to Gaussian 95 % (quantisation widens
   // the tails). C-GM and O-GM variances are the spread of the mixture (eq. 5), not the error of
   // its mean, hence conservative: measured 0.99-1.00 (docs/depth_filter.md).

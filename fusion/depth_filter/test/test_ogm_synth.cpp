@@ -1,14 +1,14 @@
 // Acceptance of the full depth filter on the shared synthetic sequence (pplvo_synth): noisy
 // Kinect-like depth (paper eq. 1 + 1/8 px disparity quantisation + edge dropout), true poses,
 // noiseless truth, and a moving object.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
@@ -158,10 +158,11 @@ Data* SynthTest::moving_ = nullptr;
 
 TEST_F(SynthTest, DepthRmseOgm10BelowCgmAndRaw) {
   const Rmse e = depthRmse(*static_);
-  std::printf("synth (static room) depth RMSE mm (%lld px): raw %.2f  C-GM %.2f  O-GM5 %.2f  "
-              "O-GM10 %.2f\n",
-              static_cast<long long>(e.raw.n), 1e3 * e.raw.rmse(), 1e3 * e.cgm.rmse(),
-              1e3 * e.o5.rmse(), 1e3 * e.o10.rmse());
+  std::printf(
+      "synth (static room) depth RMSE mm (%lld px): raw %.2f  C-GM %.2f  O-GM5 %.2f  "
+      "O-GM10 %.2f\n",
+      static_cast<long long>(e.raw.n), 1e3 * e.raw.rmse(), 1e3 * e.cgm.rmse(), 1e3 * e.o5.rmse(),
+      1e3 * e.o10.rmse());
   ASSERT_GT(e.raw.n, 100000);
   EXPECT_LT(e.o10.rmse(), 0.9 * e.cgm.rmse());
   EXPECT_LT(e.o10.rmse(), 0.9 * e.raw.rmse());
@@ -175,10 +176,11 @@ TEST_F(SynthTest, MovingObjectTrailAndGateFromFirstPoint) {
   const Rmse e = depthRmse(*moving_);
   const auto o10_k1 = fuseAll(*moving_, 10, 1);
   const Rmse e1 = depthRmse(*moving_, &o10_k1);
-  std::printf("synth (moving box) static-pixel depth RMSE mm: raw %.2f  C-GM %.2f  O-GM5 %.2f  "
-              "O-GM10 %.2f  O-GM10 k=1 %.2f\n",
-              1e3 * e.raw.rmse(), 1e3 * e.cgm.rmse(), 1e3 * e.o5.rmse(), 1e3 * e.o10.rmse(),
-              1e3 * e1.o10.rmse());
+  std::printf(
+      "synth (moving box) static-pixel depth RMSE mm: raw %.2f  C-GM %.2f  O-GM5 %.2f  "
+      "O-GM10 %.2f  O-GM10 k=1 %.2f\n",
+      1e3 * e.raw.rmse(), 1e3 * e.cgm.rmse(), 1e3 * e.o5.rmse(), 1e3 * e.o10.rmse(),
+      1e3 * e1.o10.rmse());
   EXPECT_LT(e1.o10.rmse(), 0.9 * e.cgm.rmse());
   EXPECT_LT(e1.o10.rmse(), 0.5 * e.o10.rmse());
 }
@@ -215,49 +217,50 @@ TEST_F(SynthTest, UncertaintyCalibratedAndHigherAtEdgesAndMovingObject) {
   int64_t in2_cgm = 0, in2_o10 = 0, n = 0;
   std::vector<float> wall_var, edge_var, moving_var;
   for (const Data* d : {static_, moving_}) {
-  for (int i = kFirstEval; i < kFrames; ++i) {
-    const synth::SynthFrame& f = d->frames[i];
-    Eigen::Vector4d pw;
-    const cv::Mat wall = interior(f, largestPlane(*d, i, &pw));
-    const DepthWithVariance& o10 = d->o10[i];
-    const cv::Mat& t = f.depth_true_m;
-    for (int v = 2; v < t.rows - 2; ++v)
-      for (int u = 2; u < t.cols - 2; ++u) {
-        const float zt = t.at<float>(v, u);
-        const float vo = o10.var_m2.at<float>(v, u);
-        if (d == static_) {
-          if (evaluable(f, v, u)) {
-            ++n;
-            in2_cgm += std::abs(d->cgm[i].depth_m.at<float>(v, u) - zt) <
-                       2 * std::sqrt(d->cgm[i].var_m2.at<float>(v, u));
-            in2_o10 += std::abs(o10.depth_m.at<float>(v, u) - zt) < 2 * std::sqrt(vo);
+    for (int i = kFirstEval; i < kFrames; ++i) {
+      const synth::SynthFrame& f = d->frames[i];
+      Eigen::Vector4d pw;
+      const cv::Mat wall = interior(f, largestPlane(*d, i, &pw));
+      const DepthWithVariance& o10 = d->o10[i];
+      const cv::Mat& t = f.depth_true_m;
+      for (int v = 2; v < t.rows - 2; ++v)
+        for (int u = 2; u < t.cols - 2; ++u) {
+          const float zt = t.at<float>(v, u);
+          const float vo = o10.var_m2.at<float>(v, u);
+          if (d == static_) {
+            if (evaluable(f, v, u)) {
+              ++n;
+              in2_cgm += std::abs(d->cgm[i].depth_m.at<float>(v, u) - zt) <
+                         2 * std::sqrt(d->cgm[i].var_m2.at<float>(v, u));
+              in2_o10 += std::abs(o10.depth_m.at<float>(v, u) - zt) < 2 * std::sqrt(vo);
+            }
+            continue;
           }
-          continue;
-        }
-        if (zt <= 0 || !(o10.depth_m.at<float>(v, u) > 0)) continue;
-        if (f.dynamic_mask.at<uint8_t>(v, u)) {
-          moving_var.push_back(vo);
-          continue;
-        }
-        if (wall.at<uint8_t>(v, u)) wall_var.push_back(vo);
-        float lo = 1e9f, hi = 0.f;  // true depth jump > 0.1 m within 5x5: a discontinuity
-        for (int dv = -2; dv <= 2; ++dv)
-          for (int du = -2; du <= 2; ++du) {
-            const float z = t.at<float>(v + dv, u + du);
-            lo = std::min(lo, z);
-            hi = std::max(hi, z);
+          if (zt <= 0 || !(o10.depth_m.at<float>(v, u) > 0)) continue;
+          if (f.dynamic_mask.at<uint8_t>(v, u)) {
+            moving_var.push_back(vo);
+            continue;
           }
-        if (hi - lo > 0.1f) edge_var.push_back(vo);
-      }
-  }
+          if (wall.at<uint8_t>(v, u)) wall_var.push_back(vo);
+          float lo = 1e9f, hi = 0.f;  // true depth jump > 0.1 m within 5x5: a discontinuity
+          for (int dv = -2; dv <= 2; ++dv)
+            for (int du = -2; du <= 2; ++du) {
+              const float z = t.at<float>(v + dv, u + du);
+              lo = std::min(lo, z);
+              hi = std::max(hi, z);
+            }
+          if (hi - lo > 0.1f) edge_var.push_back(vo);
+        }
+    }
   }
   const double f_cgm = static_cast<double>(in2_cgm) / n, f_o10 = static_cast<double>(in2_o10) / n;
   std::printf("synth fraction |err| < 2 sigma: C-GM %.3f  O-GM10 %.3f\n", f_cgm, f_o10);
-  std::printf("synth O-GM10 sigma mm: wall median %.2f rms %.2f; discontinuities median %.2f rms "
-              "%.2f; moving object median %.2f rms %.2f\n",
-              1e3 * std::sqrt(median(wall_var)), 1e3 * std::sqrt(mean(wall_var)),
-              1e3 * std::sqrt(median(edge_var)), 1e3 * std::sqrt(mean(edge_var)),
-              1e3 * std::sqrt(median(moving_var)), 1e3 * std::sqrt(mean(moving_var)));
+  std::printf(
+      "synth O-GM10 sigma mm: wall median %.2f rms %.2f; discontinuities median %.2f rms "
+      "%.2f; moving object median %.2f rms %.2f\n",
+      1e3 * std::sqrt(median(wall_var)), 1e3 * std::sqrt(mean(wall_var)),
+      1e3 * std::sqrt(median(edge_var)), 1e3 * std::sqrt(mean(edge_var)),
+      1e3 * std::sqrt(median(moving_var)), 1e3 * std::sqrt(mean(moving_var)));
   EXPECT_GT(f_cgm, 0.97);
   EXPECT_GT(f_o10, 0.97);
   ASSERT_GT(edge_var.size(), 1000u);

@@ -71,7 +71,8 @@ int main(int argc, char** argv) {
     } else if (a == "--max-translation-variance") {
       if (value(&v)) {
         o.ogm.max_translation_variance_m2 = std::atof(v.c_str());
-        if (!(o.ogm.max_translation_variance_m2 > 0)) errors.push_back("--max-translation-variance: > 0");
+        if (!(o.ogm.max_translation_variance_m2 > 0))
+          errors.push_back("--max-translation-variance: > 0");
       }
     } else if (a == "--depth-model") {
       if (value(&v) && !nodes::parseDepthModel(v, &o.model)) {
@@ -94,14 +95,15 @@ int main(int argc, char** argv) {
     nodes::DepthFilterNode node(o, *lcm);
     std::fprintf(stderr, "[pplvo-depth-filter] %s -> %s, %s; window %d\n", o.rgbd_channel.c_str(),
                  o.cgm_channel.c_str(), o.fused_channel.c_str(), o.ogm.max_window);
-    msgs::spin(*lcm, [] { return false; }, [&] { node.publishStatus(hostUtime()); }, 1.0);
+    msgs::spin(
+        *lcm, [] { return false; }, [&] { node.publishStatus(hostUtime()); }, 1.0);
     node.publishStatus(hostUtime());
-    std::fprintf(stderr, "[pplvo-depth-filter] done: in %lld out %lld dropped %lld skipped %lld\n%s",
-                 static_cast<long long>(node.counters().frames_in),
-                 static_cast<long long>(node.counters().frames_out),
-                 static_cast<long long>(node.counters().frames_dropped),
-                 static_cast<long long>(node.counters().frames_skipped),
-                 node.timings().table().c_str());
+    std::fprintf(
+        stderr, "[pplvo-depth-filter] done: in %lld out %lld dropped %lld skipped %lld\n%s",
+        static_cast<long long>(node.counters().frames_in),
+        static_cast<long long>(node.counters().frames_out),
+        static_cast<long long>(node.counters().frames_dropped),
+        static_cast<long long>(node.counters().frames_skipped), node.timings().table().c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pplvo-depth-filter: %s\n", e.what());
     return 1;

@@ -1,8 +1,7 @@
 #include "pplvo/nodes/depth_filter_node.h"
 
-#include <utility>
-
 #include <pplvo_msgs/depth_map_t.hpp>
+#include <utility>
 
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/depth_filter_convert.h"
@@ -10,10 +9,14 @@
 namespace pplvo::nodes {
 
 bool parseDepthModel(const std::string& text, DepthModel* model) {
-  if (text == "sensor") *model = DepthModel::kSensor;
-  else if (text == "cgm") *model = DepthModel::kCgm;
-  else if (text == "ogm") *model = DepthModel::kOgm;
-  else return false;
+  if (text == "sensor")
+    *model = DepthModel::kSensor;
+  else if (text == "cgm")
+    *model = DepthModel::kCgm;
+  else if (text == "ogm")
+    *model = DepthModel::kOgm;
+  else
+    return false;
   return true;
 }
 

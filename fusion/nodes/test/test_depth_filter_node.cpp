@@ -1,14 +1,14 @@
 // pplvo-depth-filter: message conversions round trip, in-process memq:// run, bad input, and
 // bit-identical replay from a file:// log.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
+#include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
-#include <unistd.h>
 
 #include "analytic_scene.h"
 #include "pplvo/msgs/convert.h"
@@ -40,10 +40,12 @@ pplvo_msgs::rgbd_frame_t frameMsg(const AnalyticScene& scene, int i) {
   f.camera = scene.camera();
   f.bgr = cv::Mat(f.camera.height, f.camera.width, CV_8UC1, cv::Scalar(128));
   f.depth_m = scene.render(i).depth_m;
-  return msgs::toMsg(f, 5000.0, pplvo_msgs::image_t::ENCODING_RAW_GRAY8, pplvo_msgs::image_t::ENCODING_RAW_U16);
+  return msgs::toMsg(f, 5000.0, pplvo_msgs::image_t::ENCODING_RAW_GRAY8,
+                     pplvo_msgs::image_t::ENCODING_RAW_U16);
 }
 
-pplvo_msgs::pose_t poseMsg(const AnalyticScene& scene, int i, std::vector<std::pair<int64_t, double>> w = {}) {
+pplvo_msgs::pose_t poseMsg(const AnalyticScene& scene, int i,
+                           std::vector<std::pair<int64_t, double>> w = {}) {
   PoseInput p;
   p.utime = 1000000 + 33333 * i;
   p.seq = i;
@@ -77,8 +79,9 @@ TEST(DepthFilterConvert, PoseAndDepthRoundTrip) {
   p.seq = 7;
   p.stamp = "7.000";
   p.status = pplvo_msgs::pose_t::STATUS_VELOCITY_MODEL;
-  p.T_w_c = makePose(Eigen::Vector3d(1, -2, 3),
-                     Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())));
+  p.T_w_c =
+      makePose(Eigen::Vector3d(1, -2, 3),
+               Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())));
   p.window_uncertainty = {{5, 1e-5}, {6, 2e-4}};
   const PoseInput q = poseFromMsg(poseToMsg(p));
   EXPECT_EQ(q.utime, 123);
@@ -104,8 +107,8 @@ TEST(DepthFilterConvert, PoseAndDepthRoundTrip) {
   cam.cx = 2.5;
   cam.cy = 1.5;
   for (bool compress : {false, true}) {
-    const DepthWithVariance e = depthFromMsg(
-        depthToMsg(d, cam, 1, 2, "s", pplvo_msgs::depth_map_t::STAGE_OGM, compress));
+    const DepthWithVariance e =
+        depthFromMsg(depthToMsg(d, cam, 1, 2, "s", pplvo_msgs::depth_map_t::STAGE_OGM, compress));
     EXPECT_EQ(cv::norm(e.depth_m, d.depth_m, cv::NORM_INF), 0.0);
     EXPECT_EQ(cv::norm(e.var_m2, d.var_m2, cv::NORM_INF), 0.0);
     EXPECT_EQ(e.window_length, 4);
@@ -199,7 +202,8 @@ TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   z.camera = scene.camera();
   z.bgr = cv::Mat(z.camera.height, z.camera.width, CV_8UC1, cv::Scalar(0));
   z.depth_m = cv::Mat::zeros(z.camera.height, z.camera.width, CV_32FC1);
-  f = msgs::toMsg(z, 5000.0, pplvo_msgs::image_t::ENCODING_RAW_GRAY8, pplvo_msgs::image_t::ENCODING_RAW_U16);
+  f = msgs::toMsg(z, 5000.0, pplvo_msgs::image_t::ENCODING_RAW_GRAY8,
+                  pplvo_msgs::image_t::ENCODING_RAW_U16);
   lcm.publish(channels::kRgbd, &f);
   p = poseMsg(scene, 1);
   lcm.publish(channels::kPose, &p);

@@ -3,9 +3,8 @@
 /// Gaussian mixtures (C-GM, after Dryanovski et al. 2013) over a 3x3 neighbourhood.
 #include <cstdint>
 #include <memory>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/depth_filter/sensor_model.h"
@@ -14,10 +13,10 @@ namespace pplvo::depth_filter {
 
 struct CgmStats {
   int64_t frames = 0;
-  int64_t resizes = 0;          ///< buffer re-allocations (image size changed)
-  int64_t invalid_inputs = 0;   ///< non-finite or negative depth values treated as missing
-  int64_t last_valid_in = 0;    ///< valid pixels of the last input
-  int64_t last_valid_out = 0;   ///< valid pixels of the last output
+  int64_t resizes = 0;         ///< buffer re-allocations (image size changed)
+  int64_t invalid_inputs = 0;  ///< non-finite or negative depth values treated as missing
+  int64_t last_valid_in = 0;   ///< valid pixels of the last input
+  int64_t last_valid_out = 0;  ///< valid pixels of the last output
 };
 
 struct CgmOptions {
@@ -37,7 +36,6 @@ struct CgmOptions {
 class CgmFilter {
  public:
   using Options = CgmOptions;
-
 
   /// Uses the paper's Kinect model (QuadraticSensorModel defaults) when `model` is null.
   explicit CgmFilter(const Options& options = Options(),

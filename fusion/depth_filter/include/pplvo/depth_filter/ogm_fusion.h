@@ -3,10 +3,9 @@
 /// temporal fusion of the C-GM measurements of a sliding window of frames, with the
 /// consistency gate against occlusions and the window shortened by pose uncertainty.
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
 #include "pplvo/core/geometry.h"
@@ -17,17 +16,17 @@ namespace pplvo::depth_filter {
 struct OgmStats {
   int64_t frames_added = 0;
   int64_t frames_fused = 0;
-  int64_t window_resets = 0;            ///< camera/size changed (warning) or reset() called
-  int64_t size_changes = 0;             ///< frames whose camera differs from the window's
-  int64_t unknown_frame_poses = 0;      ///< fuse() for a seq not in the window
-  int64_t invalid_poses = 0;            ///< NaN / non-rigid T_w_c given to fuse()
-  int64_t invalid_inputs = 0;           ///< frames rejected by addFrame (bad type/size)
-  int64_t invalid_pixels = 0;           ///< non-finite / non-positive variance, treated missing
-  int64_t evicted_capacity = 0;         ///< oldest frame dropped because the window was full
-  int64_t evicted_uncertainty = 0;      ///< frames dropped by the pose-uncertainty threshold
-  int64_t points_projected = 0;         ///< past-frame points that landed in the image
-  int64_t points_gated = 0;             ///< rejected by the consistency gate
-  int64_t pixels_filled = 0;            ///< output pixels with no current measurement
+  int64_t window_resets = 0;        ///< camera/size changed (warning) or reset() called
+  int64_t size_changes = 0;         ///< frames whose camera differs from the window's
+  int64_t unknown_frame_poses = 0;  ///< fuse() for a seq not in the window
+  int64_t invalid_poses = 0;        ///< NaN / non-rigid T_w_c given to fuse()
+  int64_t invalid_inputs = 0;       ///< frames rejected by addFrame (bad type/size)
+  int64_t invalid_pixels = 0;       ///< non-finite / non-positive variance, treated missing
+  int64_t evicted_capacity = 0;     ///< oldest frame dropped because the window was full
+  int64_t evicted_uncertainty = 0;  ///< frames dropped by the pose-uncertainty threshold
+  int64_t points_projected = 0;     ///< past-frame points that landed in the image
+  int64_t points_gated = 0;         ///< rejected by the consistency gate
+  int64_t pixels_filled = 0;        ///< output pixels with no current measurement
   int64_t warnings = 0;
   std::string last_warning;
   int last_window_length = 0;
@@ -73,7 +72,6 @@ struct OgmOptions {
 class OgmFusion {
  public:
   using Options = OgmOptions;
-
 
   explicit OgmFusion(const Options& options = Options());
 

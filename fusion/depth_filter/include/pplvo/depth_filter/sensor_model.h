@@ -2,7 +2,6 @@
 /// Stage 1 of the probabilistic depth filter (paper section 3.1): per-pixel depth uncertainty
 /// from a sensor error model. Pluggable: derive from SensorModel (e.g. a ToF model later).
 #include <memory>
-
 #include <opencv2/core.hpp>
 
 #include "pplvo/core/rgbd_frame.h"

@@ -2,12 +2,11 @@
 /// Message conversions of the pplvo-depth-filter process (the only place it touches message
 /// layouts besides pplvo/msgs/convert.h). Round-trip tested in test_depth_filter_node.
 #include <cstdint>
+#include <pplvo_msgs/depth_map_t.hpp>
+#include <pplvo_msgs/pose_t.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <pplvo_msgs/depth_map_t.hpp>
-#include <pplvo_msgs/pose_t.hpp>
 
 #include "pplvo/core/camera.h"
 #include "pplvo/core/geometry.h"

@@ -10,11 +10,10 @@
 /// | PPLVO_STATUS        | node_status_t | out       | once a second                            |
 #include <cstdint>
 #include <deque>
-#include <string>
-
 #include <lcm/lcm-cpp.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
+#include <string>
 
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/depth_filter/cgm_filter.h"
