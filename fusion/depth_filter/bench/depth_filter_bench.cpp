@@ -1,0 +1,236 @@
+// Timing of the depth filter stages on the shared sequences (VGA, one core), and depth RMSE on
+// the synthetic sequence (which has noiseless truth). Prints tables; not part of ctest.
+//   pplvo_depth_filter_bench [--data DIR] [--synth-frames N] [--timing-only 1]
+// DIR defaults to $PPLVO_SHARED_DATA or ../shared/data.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "pplvo/core/rgbd_frame.h"
+#include "pplvo/core/stage_timer.h"
+#include "pplvo/core/trajectory.h"
+#include "pplvo/depth_filter/cgm_filter.h"
+#include "pplvo/depth_filter/ogm_fusion.h"
+#include "pplvo/synth/synthetic_sequence.h"
+
+using namespace pplvo;
+using namespace pplvo::depth_filter;
+
+namespace {
+
+struct Sequence {
+  std::string name;
+  PinholeCamera camera;
+  std::vector<cv::Mat> depth_m;
+  std::vector<Pose3> T_w_c;
+};
+
+bool loadCamera(const std::string& path, PinholeCamera* cam) {
+  cv::FileStorage fs(path, cv::FileStorage::READ);
+  if (!fs.isOpened()) return false;
+  cv::Mat K;
+  fs["RGB_intrinsic_params"] >> K;
+  if (K.rows != 3 || K.cols != 3) return false;
+  K.convertTo(K, CV_64F);
+  cam->fx = K.at<double>(0, 0);
+  cam->fy = K.at<double>(1, 1);
+  cam->cx = K.at<double>(0, 2);
+  cam->cy = K.at<double>(1, 2);
+  return true;
+}
+
+/// ICL: associations.txt (depth first) and the pose with the same integer stamp.
+/// TUM: depth.txt entries whose file exists and the ground-truth pose nearest in time (< 20 ms).
+bool loadSequence(const std::string& dir, Sequence* seq) {
+  if (!loadCamera(dir + "/calib_params.xml", &seq->camera)) return false;
+  const TrajectoryReadResult gt = readTumTrajectory(dir + "/groundtruth.txt");
+  std::vector<std::pair<double, std::string>> depth_files;
+  std::ifstream assoc(dir + "/associations.txt");
+  const bool icl = assoc.good();
+  std::ifstream list(icl ? dir + "/associations.txt" : dir + "/depth.txt");
+  std::string line;
+  while (std::getline(list, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    double stamp;
+    std::string file;
+    if (ss >> stamp >> file) depth_files.emplace_back(stamp, file);
+  }
+  for (const auto& [stamp, file] : depth_files) {
+    const StampedPose* best = nullptr;
+    double best_dt = icl ? 1e-6 : 0.02;
+    for (const StampedPose& p : gt.poses) {
+      const double dt = std::abs(p.stamp - stamp);
+      if (dt <= best_dt) {
+        best_dt = dt;
+        best = &p;
+      }
+    }
+    if (!best || !std::ifstream(dir + "/" + file).good()) continue;  // depth.txt lists absent files
+    const cv::Mat raw = cv::imread(dir + "/" + file, cv::IMREAD_ANYDEPTH);
+    if (raw.empty() || raw.type() != CV_16UC1) continue;
+    seq->depth_m.push_back(depthUnitsToMetres(raw, 5000.0));
+    seq->T_w_c.push_back(best->T_w_c);
+  }
+  if (seq->depth_m.empty()) return false;
+  seq->camera.width = seq->depth_m[0].cols;
+  seq->camera.height = seq->depth_m[0].rows;
+  return true;
+}
+
+/// Thread CPU time (ms): the machine is shared, wall time includes waiting for a core.
+double cpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+double mean(const std::vector<double>& v) {
+  double a = 0;
+  for (double x : v) a += x;
+  return v.empty() ? 0 : a / static_cast<double>(v.size());
+}
+
+void timeSequence(const Sequence& s) {
+  const int n = static_cast<int>(s.depth_m.size());
+  QuadraticSensorModel sensor;
+  CgmFilter cgm;
+  std::vector<DepthWithVariance> cgm_out;
+  std::vector<double> t_sensor, t_cgm, c_cgm;
+  DepthWithVariance buffer;  // steady state: output buffers reused (no page faults)
+  for (int i = 0; i < n; ++i) {
+    Stopwatch w;
+    DepthWithVariance d = applySensorModel(sensor, s.depth_m[i]);
+    t_sensor.push_back(w.elapsedMs());
+    w.restart();
+    const double c0 = cpuMs();
+    cgm.apply(s.depth_m[i], &buffer);
+    c_cgm.push_back(cpuMs() - c0);
+    t_cgm.push_back(w.elapsedMs());
+    cgm_out.push_back({buffer.depth_m.clone(), buffer.var_m2.clone(), 1});
+  }
+  std::printf("%-32s %4d frames %dx%d\n", s.name.c_str(), n, s.camera.width, s.camera.height);
+  std::printf("  %-10s mean %6.2f ms  median %6.2f ms\n", "sensor", mean(t_sensor),
+              median(t_sensor));
+  std::printf("  %-10s mean %6.2f ms  median %6.2f ms  (CPU mean %.2f median %.2f ms)\n", "C-GM",
+              mean(t_cgm), median(t_cgm), mean(c_cgm), median(c_cgm));
+  for (int window : {5, 10}) {
+    OgmOptions o;
+    o.max_window = window;
+    OgmFusion ogm(o);
+    std::vector<double> t, c;
+    double filled = 0, window_sum = 0;
+    OgmResult r;
+    for (int i = 0; i < n; ++i) {
+      Stopwatch w;
+      const double c0 = cpuMs();
+      ogm.addFrame(i, s.camera, cgm_out[i]);
+      ogm.fuse(i, s.T_w_c[i], &r);
+      c.push_back(cpuMs() - c0);
+      t.push_back(w.elapsedMs());
+      window_sum += r.depth.window_length;
+      filled += static_cast<double>(cv::countNonZero(r.depth.depth_m)) -
+                cv::countNonZero(cgm_out[i].depth_m);
+    }
+    std::printf(
+        "  O-GM_%-5d mean %6.2f ms  median %6.2f ms  (CPU mean %.2f median %.2f ms; mean "
+        "window %.1f, filled %.0f px/frame, gated %.1f%% of projected)\n",
+        window, mean(t), median(t), mean(c), median(c), window_sum / n, filled / n,
+        100.0 * static_cast<double>(ogm.stats().points_gated) /
+            std::max<double>(1.0, static_cast<double>(ogm.stats().points_projected)));
+  }
+}
+
+struct Err {
+  double sse = 0;
+  int64_t n = 0;
+  void add(double e) {
+    sse += e * e;
+    ++n;
+  }
+  double mm() const { return n ? 1e3 * std::sqrt(sse / static_cast<double>(n)) : 0; }
+};
+
+void synthRmse(int frames, bool moving) {
+  synth::SynthOptions so;
+  so.frames = frames;
+  so.seed = 1;
+  so.moving_object = moving;
+  synth::SyntheticSequence seq(so);
+  CgmFilter cgm;
+  OgmOptions o5, o10, o10k1;
+  o5.max_window = 5;
+  o10k1.k_consistency = 1;
+  OgmFusion f5(o5), f10(o10), f10k1(o10k1);
+  Err raw, c, e5, e10, e10k1;
+  for (int i = 0; i < frames; ++i) {
+    const synth::SynthFrame f = seq.render(i);
+    const DepthWithVariance d = cgm.apply(f.frame.depth_m);
+    f5.addFrame(i, seq.camera(), d);
+    f10.addFrame(i, seq.camera(), d);
+    f10k1.addFrame(i, seq.camera(), d);
+    const OgmResult r5 = f5.fuse(i, f.T_w_c), r10 = f10.fuse(i, f.T_w_c),
+                    r10k1 = f10k1.fuse(i, f.T_w_c);
+    if (i < 10) continue;
+    for (int v = 0; v < f.depth_true_m.rows; ++v)
+      for (int u = 0; u < f.depth_true_m.cols; ++u) {
+        const float t = f.depth_true_m.at<float>(v, u), z = f.frame.depth_m.at<float>(v, u);
+        if (!(t > 0 && z > 0) || f.dynamic_mask.at<uint8_t>(v, u)) continue;
+        raw.add(z - t);
+        c.add(d.depth_m.at<float>(v, u) - t);
+        e5.add(r5.depth.depth_m.at<float>(v, u) - t);
+        e10.add(r10.depth.depth_m.at<float>(v, u) - t);
+        e10k1.add(r10k1.depth.depth_m.at<float>(v, u) - t);
+      }
+  }
+  std::printf(
+      "synthetic room%s, frames 10..%d, static pixels with raw depth (%lld px):\n"
+      "  depth RMSE mm: raw %.2f  C-GM %.2f  O-GM_5 %.2f  O-GM_10 %.2f  O-GM_10(k=1) %.2f\n",
+      moving ? " + moving box" : "", frames - 1, static_cast<long long>(raw.n), raw.mm(), c.mm(),
+      e5.mm(), e10.mm(), e10k1.mm());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string data;
+  if (const char* e = std::getenv("PPLVO_SHARED_DATA")) data = e;
+  if (data.empty()) data = "../shared/data";
+  int synth_frames = 40;
+  bool timing_only = false;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--data")
+      data = argv[i + 1];
+    else if (a == "--synth-frames")
+      synth_frames = std::max(11, std::atoi(argv[i + 1]));
+    else if (a == "--timing-only")
+      timing_only = std::atoi(argv[i + 1]) != 0;
+  }
+  for (const char* name : {"icl_living_room_kt0_short", "tum_fr3_sitting_static_short"}) {
+    Sequence s;
+    s.name = name;
+    if (!loadSequence(data + "/" + name, &s)) {
+      std::fprintf(stderr, "cannot load %s/%s\n", data.c_str(), name);
+      continue;
+    }
+    timeSequence(s);
+  }
+  if (timing_only) return 0;
+  synthRmse(synth_frames, false);
+  synthRmse(synth_frames, true);
+  return 0;
+}

@@ -1,0 +1,70 @@
+#pragma once
+/// Stage 2 of the probabilistic depth filter (paper section 3.2, eqs. 2-5): convolution of
+/// Gaussian mixtures (C-GM, after Dryanovski et al. 2013) over a 3x3 neighbourhood.
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "pplvo/core/rgbd_frame.h"
+#include "pplvo/depth_filter/sensor_model.h"
+
+namespace pplvo::depth_filter {
+
+struct CgmStats {
+  int64_t frames = 0;
+  int64_t resizes = 0;         ///< buffer re-allocations (image size changed)
+  int64_t invalid_inputs = 0;  ///< non-finite or negative depth values treated as missing
+  int64_t last_valid_in = 0;   ///< valid pixels of the last input
+  int64_t last_valid_out = 0;  ///< valid pixels of the last output
+};
+
+struct CgmOptions {
+  /// When the centre pixel has no depth, output missing (true, the default) rather than the
+  /// mixture of its neighbours: C-GM then never invents depth in holes (the authors' code
+  /// behaves the same). Filling holes is left to the temporal stage (O-GM).
+  bool missing_centre_stays_missing = true;
+};
+
+/// C-GM filter. For pixel p with neighbours i (3x3, weights W = [1 2 1; 2 4 2; 1 2 1], eq. 3),
+/// y_i = 1 where depth is present, S = sum w_i y_i (eq. 5),
+///   z = (1/S) sum w_i y_i z_i                                   (eq. 4)
+///   var = (1/S) sum w_i y_i (z_i^2 + sigma_i^2) - z^2           (eq. 5, variance of eq. 2)
+/// with sigma_i^2 from the sensor model (stage 1). Pixels outside the image count as missing.
+/// Sums are accumulated in double precision (z^2 ~ 10 m^2 against variances ~ 1e-6 m^2).
+/// Buffers are sized once per image size; no per-pixel allocation.
+class CgmFilter {
+ public:
+  using Options = CgmOptions;
+
+  /// Uses the paper's Kinect model (QuadraticSensorModel defaults) when `model` is null.
+  explicit CgmFilter(const Options& options = Options(),
+                     std::shared_ptr<const SensorModel> model = nullptr);
+
+  /// Filters a CV_32FC1 depth map in metres (0 = missing; NaN/negative counted and treated as
+  /// missing). Returns depth and variance (CV_32FC1, 0 where missing), window_length = 1.
+  /// Throws std::invalid_argument if depth_m is not a non-empty CV_32FC1 matrix.
+  DepthWithVariance apply(const cv::Mat& depth_m);
+  /// Same, writing into `out`, whose matrices are reused when they already have the size and
+  /// type (no allocation in steady state). They must not share data with anything still in use.
+  void apply(const cv::Mat& depth_m, DepthWithVariance* out);
+
+  const CgmStats& stats() const { return stats_; }
+  const Options& options() const { return options_; }
+  const SensorModel& sensorModel() const { return *model_; }
+
+ private:
+  void resize(int rows, int cols);
+  void horizontalRow(const cv::Mat& depth_m, int r, int64_t* invalid, int64_t* valid);
+
+  Options options_;
+  std::shared_ptr<const SensorModel> model_;
+  CgmStats stats_;
+  int rows_ = 0, cols_ = 0;
+  // One row of clean depth and sensor variance; padded rows of y, z, z^2 + sigma^2; a ring of
+  // three rows of horizontal [1 2 1] sums and of the centre depth. Sized once per image size.
+  std::vector<float> z_, var_, centre_;
+  std::vector<double> pad_y_, pad_z_, pad_q_, h_s_, h_z_, h_q_, zero_;
+};
+
+}  // namespace pplvo::depth_filter

@@ -1,0 +1,100 @@
+#pragma once
+/// pplvo-depth-filter: the paper's probabilistic depth filter (section 3) as an LCM process.
+///
+/// | channel (default)   | type          | direction | content                                  |
+/// |---------------------|---------------|-----------|------------------------------------------|
+/// | PPLVO_RGBD          | rgbd_frame_t  | in        | frames                                   |
+/// | PPLVO_POSE          | pose_t        | in        | T_w_c of a frame + window uncertainties  |
+/// | PPLVO_DEPTH_CGM     | depth_map_t   | out       | stage 1 or 2, at once on each frame      |
+/// | PPLVO_DEPTH_FUSED   | depth_map_t   | out       | O-GM on the frame's pose (or C-GM copy)  |
+/// | PPLVO_STATUS        | node_status_t | out       | once a second                            |
+#include <cstdint>
+#include <deque>
+#include <lcm/lcm-cpp.hpp>
+#include <pplvo_msgs/pose_t.hpp>
+#include <pplvo_msgs/rgbd_frame_t.hpp>
+#include <string>
+
+#include "pplvo/core/stage_timer.h"
+#include "pplvo/depth_filter/cgm_filter.h"
+#include "pplvo/depth_filter/ogm_fusion.h"
+#include "pplvo/msgs/channels.h"
+#include "pplvo/msgs/convert.h"
+
+namespace pplvo::nodes {
+
+enum class DepthModel { kSensor, kCgm, kOgm };
+
+/// Parses "sensor", "cgm", "ogm"; returns false otherwise.
+bool parseDepthModel(const std::string& text, DepthModel* model);
+
+struct DepthFilterNodeOptions {
+  std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::string rgbd_channel = channels::kRgbd;
+  std::string pose_channel = channels::kPose;
+  std::string cgm_channel = channels::kDepthCgm;
+  std::string fused_channel = channels::kDepthFused;
+  std::string status_channel = channels::kStatus;
+  /// sensor: stage 1 only; cgm: stages 1-2; ogm: all three (paper's full filter). With sensor
+  /// or cgm the PPLVO_DEPTH_FUSED output is the stage-1/2 map, unchanged.
+  DepthModel model = DepthModel::kOgm;
+  /// Frames waiting for their pose (1 s at 30 Hz); older ones are dropped and counted.
+  int max_pending = 30;
+  bool compress = false;  ///< ZLIB_F32 instead of RAW_F32 on the outputs
+  depth_filter::CgmOptions cgm;
+  depth_filter::OgmOptions ogm;  ///< ogm.max_window = --window
+};
+
+/// Thin LCM shell: convert, call the library, convert, publish, count; every handler inside
+/// msgs::guarded(). Construct on a shared memq:// instance to run in one process.
+class DepthFilterNode {
+ public:
+  static constexpr const char* kName = "pplvo-depth-filter";
+
+  DepthFilterNode(const DepthFilterNodeOptions& options, lcm::LCM& lcm);
+  ~DepthFilterNode();
+  DepthFilterNode(const DepthFilterNode&) = delete;
+  DepthFilterNode& operator=(const DepthFilterNode&) = delete;
+
+  /// Publishes node_status_t (counters, stage timings).
+  void publishStatus(int64_t utime);
+
+  const msgs::NodeCounters& counters() const { return counters_; }
+  const depth_filter::OgmStats& ogmStats() const { return ogm_.stats(); }
+  const StageTimings& timings() const { return timings_; }
+  int64_t unknownPoses() const { return unknown_poses_; }
+  int pending() const { return static_cast<int>(pending_.size()); }
+
+  void onFrame(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+               const pplvo_msgs::rgbd_frame_t* msg);
+  void onPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+              const pplvo_msgs::pose_t* msg);
+
+ private:
+  struct Pending {
+    int64_t seq = 0;
+    int64_t utime = 0;
+    std::string stamp;
+    int8_t stage = 0;
+    PinholeCamera camera;
+    DepthWithVariance depth;
+  };
+  void handleFrame(const pplvo_msgs::rgbd_frame_t& msg);
+  void handlePose(const pplvo_msgs::pose_t& msg);
+  void publishDepth(const std::string& channel, const Pending& p, const DepthWithVariance& d,
+                    int8_t stage);
+
+  DepthFilterNodeOptions options_;
+  lcm::LCM& lcm_;
+  std::vector<lcm::Subscription*> subscriptions_;
+  depth_filter::QuadraticSensorModel sensor_;
+  depth_filter::CgmFilter cgm_;
+  depth_filter::OgmFusion ogm_;
+  depth_filter::OgmResult fused_;  ///< reused output buffers of the fusion
+  std::deque<Pending> pending_;
+  msgs::NodeCounters counters_;
+  StageTimings timings_;
+  int64_t unknown_poses_ = 0;
+};
+
+}  // namespace pplvo::nodes

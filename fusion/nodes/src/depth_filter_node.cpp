@@ -1,0 +1,139 @@
+#include "pplvo/nodes/depth_filter_node.h"
+
+#include <pplvo_msgs/depth_map_t.hpp>
+#include <utility>
+
+#include "pplvo/msgs/node_runtime.h"
+#include "pplvo/nodes/depth_filter_convert.h"
+
+namespace pplvo::nodes {
+
+bool parseDepthModel(const std::string& text, DepthModel* model) {
+  if (text == "sensor")
+    *model = DepthModel::kSensor;
+  else if (text == "cgm")
+    *model = DepthModel::kCgm;
+  else if (text == "ogm")
+    *model = DepthModel::kOgm;
+  else
+    return false;
+  return true;
+}
+
+DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, lcm::LCM& lcm)
+    : options_(options), lcm_(lcm), cgm_(options.cgm), ogm_(options.ogm) {
+  if (options_.max_pending < 1) options_.max_pending = 1;
+  subscriptions_.push_back(lcm_.subscribe(options_.rgbd_channel, &DepthFilterNode::onFrame, this));
+  subscriptions_.push_back(lcm_.subscribe(options_.pose_channel, &DepthFilterNode::onPose, this));
+}
+
+DepthFilterNode::~DepthFilterNode() {
+  for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+}
+
+void DepthFilterNode::onFrame(const lcm::ReceiveBuffer*, const std::string&,
+                              const pplvo_msgs::rgbd_frame_t* msg) {
+  msgs::guarded(counters_, kName, [&] { handleFrame(*msg); });
+}
+
+void DepthFilterNode::onPose(const lcm::ReceiveBuffer*, const std::string&,
+                             const pplvo_msgs::pose_t* msg) {
+  msgs::guarded(counters_, kName, [&] { handlePose(*msg); });
+}
+
+void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
+                                   const DepthWithVariance& d, int8_t stage) {
+  const pplvo_msgs::depth_map_t m =
+      depthToMsg(d, p.camera, p.utime, p.seq, p.stamp, stage, options_.compress);
+  lcm_.publish(channel, &m);
+}
+
+void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
+  ++counters_.frames_in;
+  counters_.last_seq = msg.seq;
+  RgbdFrame frame;
+  {
+    ScopedStageTimer t(timings_, "decode");
+    frame = msgs::fromMsg(msg);  // MessageError -> counted skip in guarded()
+  }
+  if (frame.depth_m.empty() || frame.depth_m.rows != frame.camera.height ||
+      frame.depth_m.cols != frame.camera.width) {
+    throw msgs::MessageError("rgbd_frame_t: depth size disagrees with camera_info");
+  }
+  Pending p;
+  p.seq = msg.seq;
+  p.utime = msg.utime;
+  p.stamp = msg.stamp;
+  p.camera = frame.camera;
+  if (options_.model == DepthModel::kSensor) {
+    ScopedStageTimer t(timings_, "sensor");
+    p.depth = depth_filter::applySensorModel(sensor_, frame.depth_m);
+    p.stage = pplvo_msgs::depth_map_t::STAGE_SENSOR;
+  } else {
+    ScopedStageTimer t(timings_, "cgm");
+    p.depth = cgm_.apply(frame.depth_m);
+    p.stage = pplvo_msgs::depth_map_t::STAGE_CGM;
+  }
+  publishDepth(options_.cgm_channel, p, p.depth, p.stage);
+  pending_.push_back(std::move(p));
+  while (static_cast<int>(pending_.size()) > options_.max_pending) {
+    pending_.pop_front();
+    ++counters_.frames_dropped;
+    counters_.last_warning = "frame dropped: no pose within the pending queue";
+  }
+}
+
+void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
+  const PoseInput pose = poseFromMsg(msg);
+  // Frames older than this pose will never get theirs: stale, drop and count.
+  while (!pending_.empty() && pending_.front().seq < pose.seq) {
+    pending_.pop_front();
+    ++counters_.frames_dropped;
+    counters_.last_warning = "frame dropped: its pose never came";
+  }
+  if (pending_.empty() || pending_.front().seq != pose.seq) {
+    ++unknown_poses_;
+    ++counters_.frames_skipped;
+    counters_.last_warning = "pose for unknown frame " + std::to_string(pose.seq);
+    return;
+  }
+  Pending p = std::move(pending_.front());
+  pending_.pop_front();
+  if (options_.model != DepthModel::kOgm) {
+    publishDepth(options_.fused_channel, p, p.depth, p.stage);
+    ++counters_.frames_out;
+    return;
+  }
+  depth_filter::OgmResult& result = fused_;  // buffers reused frame to frame
+  {
+    ScopedStageTimer t(timings_, "ogm");
+    if (pose.status == pplvo_msgs::pose_t::STATUS_LOST ||
+        pose.status == pplvo_msgs::pose_t::STATUS_REINITIALISED) {
+      ogm_.reset();  // poses across a tracking loss cannot register the window
+    }
+    for (const auto& w : pose.window_uncertainty) ogm_.setWindowUncertainty(w.first, w.second);
+    ogm_.addFrame(p.seq, p.camera, p.depth);
+    ogm_.fuse(p.seq, pose.T_w_c, &result);
+  }
+  if (!result.ok) {
+    // Downstream still gets a depth map: the frame's own stage-2 output.
+    ++counters_.frames_skipped;
+    counters_.last_warning = result.warning + " (published C-GM as fused)";
+    publishDepth(options_.fused_channel, p, p.depth, p.stage);
+  } else {
+    publishDepth(options_.fused_channel, p, result.depth, pplvo_msgs::depth_map_t::STAGE_OGM);
+  }
+  ++counters_.frames_out;
+}
+
+void DepthFilterNode::publishStatus(int64_t utime) {
+  msgs::guarded(counters_, kName, [&] {
+    if (counters_.last_warning.empty() && !ogm_.stats().last_warning.empty()) {
+      counters_.last_warning = ogm_.stats().last_warning;
+    }
+    const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, timings_, utime);
+    lcm_.publish(options_.status_channel, &m);
+  });
+}
+
+}  // namespace pplvo::nodes

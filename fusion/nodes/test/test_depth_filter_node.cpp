@@ -1,0 +1,312 @@
+// pplvo-depth-filter: message conversions round trip, in-process memq:// run, bad input, and
+// bit-identical replay from a file:// log.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "analytic_scene.h"
+#include "pplvo/msgs/convert.h"
+#include "pplvo/nodes/depth_filter_convert.h"
+#include "pplvo/nodes/depth_filter_node.h"
+
+namespace pplvo::nodes {
+namespace {
+
+using depth_filter::test::AnalyticScene;
+using depth_filter::test::SceneOptions;
+
+SceneOptions smallScene() {
+  SceneOptions o;
+  o.width = 160;
+  o.height = 120;
+  o.fx = o.fy = 131.25;
+  o.cx = 79.5;
+  o.cy = 59.5;
+  o.quantise_disparity = false;  // 1/8 px steps are ~11 cm at 3 m with fx = 131
+  return o;
+}
+
+pplvo_msgs::rgbd_frame_t frameMsg(const AnalyticScene& scene, int i) {
+  RgbdFrame f;
+  f.utime = 1000000 + 33333 * i;
+  f.seq = i;
+  f.stamp = std::to_string(i);
+  f.camera = scene.camera();
+  f.bgr = cv::Mat(f.camera.height, f.camera.width, CV_8UC1, cv::Scalar(128));
+  f.depth_m = scene.render(i).depth_m;
+  return msgs::toMsg(f, 5000.0, pplvo_msgs::image_t::ENCODING_RAW_GRAY8,
+                     pplvo_msgs::image_t::ENCODING_RAW_U16);
+}
+
+pplvo_msgs::pose_t poseMsg(const AnalyticScene& scene, int i,
+                           std::vector<std::pair<int64_t, double>> w = {}) {
+  PoseInput p;
+  p.utime = 1000000 + 33333 * i;
+  p.seq = i;
+  p.stamp = std::to_string(i);
+  p.status = pplvo_msgs::pose_t::STATUS_TRACKING;
+  p.T_w_c = scene.pose(i);
+  p.window_uncertainty = std::move(w);
+  return poseToMsg(p);
+}
+
+/// Collects depth maps (decoded and as encoded bytes).
+struct Collector {
+  std::vector<pplvo_msgs::depth_map_t> cgm, fused;
+  std::vector<std::vector<uint8_t>> bytes;
+  void onDepth(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+               const pplvo_msgs::depth_map_t* msg) {
+    (channel == channels::kDepthCgm ? cgm : fused).push_back(*msg);
+    const auto* b = static_cast<const uint8_t*>(rbuf->data);
+    bytes.emplace_back(b, b + rbuf->data_size);
+  }
+};
+
+void drain(lcm::LCM& lcm) {
+  while (lcm.handleTimeout(0) > 0) {
+  }
+}
+
+TEST(DepthFilterConvert, PoseAndDepthRoundTrip) {
+  PoseInput p;
+  p.utime = 123;
+  p.seq = 7;
+  p.stamp = "7.000";
+  p.status = pplvo_msgs::pose_t::STATUS_VELOCITY_MODEL;
+  p.T_w_c =
+      makePose(Eigen::Vector3d(1, -2, 3),
+               Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())));
+  p.window_uncertainty = {{5, 1e-5}, {6, 2e-4}};
+  const PoseInput q = poseFromMsg(poseToMsg(p));
+  EXPECT_EQ(q.utime, 123);
+  EXPECT_EQ(q.seq, 7);
+  EXPECT_EQ(q.stamp, "7.000");
+  EXPECT_EQ(q.status, p.status);
+  EXPECT_TRUE(q.T_w_c.isApprox(p.T_w_c, 1e-12));
+  EXPECT_EQ(q.window_uncertainty, p.window_uncertainty);
+  pplvo_msgs::pose_t bad = poseToMsg(p);
+  bad.n_window = 3;
+  EXPECT_THROW(poseFromMsg(bad), msgs::MessageError);
+
+  DepthWithVariance d;
+  d.depth_m = cv::Mat(4, 6, CV_32FC1, cv::Scalar(2.5f));
+  d.var_m2 = cv::Mat(4, 6, CV_32FC1, cv::Scalar(1e-4f));
+  d.depth_m.at<float>(1, 2) = 0.f;
+  d.var_m2.at<float>(1, 2) = 0.f;
+  d.window_length = 4;
+  PinholeCamera cam;
+  cam.width = 6;
+  cam.height = 4;
+  cam.fx = cam.fy = 5;
+  cam.cx = 2.5;
+  cam.cy = 1.5;
+  for (bool compress : {false, true}) {
+    const DepthWithVariance e =
+        depthFromMsg(depthToMsg(d, cam, 1, 2, "s", pplvo_msgs::depth_map_t::STAGE_OGM, compress));
+    EXPECT_EQ(cv::norm(e.depth_m, d.depth_m, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(e.var_m2, d.var_m2, cv::NORM_INF), 0.0);
+    EXPECT_EQ(e.window_length, 4);
+  }
+}
+
+TEST(DepthFilterNode, MemqFramesAndPosesGiveCgmAndFusedMaps) {
+  AnalyticScene scene(smallScene());
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  DepthFilterNodeOptions o;
+  o.ogm.max_window = 5;
+  DepthFilterNode node(o, lcm);
+  Collector c;
+  lcm.subscribe(channels::kDepthCgm, &Collector::onDepth, &c);
+  lcm.subscribe(channels::kDepthFused, &Collector::onDepth, &c);
+  const int n = 8;
+  for (int i = 0; i < n; ++i) {
+    pplvo_msgs::rgbd_frame_t f = frameMsg(scene, i);
+    lcm.publish(channels::kRgbd, &f);
+    drain(lcm);
+    ASSERT_EQ(static_cast<int>(c.cgm.size()), i + 1);  // C-GM at once, before the pose
+    pplvo_msgs::pose_t p = poseMsg(scene, i);
+    lcm.publish(channels::kPose, &p);
+    drain(lcm);
+    ASSERT_EQ(static_cast<int>(c.fused.size()), i + 1);
+    EXPECT_EQ(c.fused.back().seq, i);
+    EXPECT_EQ(c.fused.back().stage, pplvo_msgs::depth_map_t::STAGE_OGM);
+    EXPECT_EQ(c.fused.back().window_length, std::min(i + 1, 5));
+    EXPECT_EQ(c.cgm.back().stage, pplvo_msgs::depth_map_t::STAGE_CGM);
+  }
+  // The fused map is close to the truth on the wall centre.
+  const DepthWithVariance fused = depthFromMsg(c.fused.back());
+  const cv::Mat truth = scene.render(n - 1).depth_true_m;
+  EXPECT_NEAR(fused.depth_m.at<float>(10, 150), truth.at<float>(10, 150), 0.02);
+  EXPECT_GT(fused.var_m2.at<float>(10, 150), 0.f);
+  EXPECT_EQ(node.counters().frames_in, n);
+  EXPECT_EQ(node.counters().frames_out, n);
+  EXPECT_EQ(node.counters().errors, 0);
+  node.publishStatus(1);
+  drain(lcm);
+}
+
+TEST(DepthFilterNode, CgmModelPublishesCgmAsFused) {
+  AnalyticScene scene(smallScene());
+  lcm::LCM lcm("memq://");
+  DepthFilterNodeOptions o;
+  ASSERT_TRUE(parseDepthModel("cgm", &o.model));
+  DepthFilterNode node(o, lcm);
+  Collector c;
+  lcm.subscribe(channels::kDepthCgm, &Collector::onDepth, &c);
+  lcm.subscribe(channels::kDepthFused, &Collector::onDepth, &c);
+  for (int i = 0; i < 3; ++i) {
+    pplvo_msgs::rgbd_frame_t f = frameMsg(scene, i);
+    lcm.publish(channels::kRgbd, &f);
+    pplvo_msgs::pose_t p = poseMsg(scene, i);
+    lcm.publish(channels::kPose, &p);
+    drain(lcm);
+  }
+  ASSERT_EQ(c.fused.size(), 3u);
+  EXPECT_EQ(c.fused[2].stage, pplvo_msgs::depth_map_t::STAGE_CGM);
+  EXPECT_EQ(c.fused[2].depth.data, c.cgm[2].depth.data);
+  EXPECT_EQ(c.fused[2].variance.data, c.cgm[2].variance.data);
+  DepthModel m;
+  EXPECT_FALSE(parseDepthModel("bilateral", &m));
+}
+
+TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
+  AnalyticScene scene(smallScene());
+  lcm::LCM lcm("memq://");
+  DepthFilterNodeOptions o;
+  o.max_pending = 3;
+  DepthFilterNode node(o, lcm);
+  Collector c;
+  lcm.subscribe(channels::kDepthFused, &Collector::onDepth, &c);
+  // Pose for a frame never seen.
+  pplvo_msgs::pose_t p = poseMsg(scene, 42);
+  lcm.publish(channels::kPose, &p);
+  drain(lcm);
+  EXPECT_EQ(node.unknownPoses(), 1);
+  // Corrupt frame: depth payload size disagrees.
+  pplvo_msgs::rgbd_frame_t f = frameMsg(scene, 0);
+  f.depth.data.resize(10);
+  f.depth.size = 10;
+  lcm.publish(channels::kRgbd, &f);
+  drain(lcm);
+  EXPECT_EQ(node.counters().frames_skipped, 2);
+  // All-zero depth frame: C-GM and fusion run, empty map out.
+  RgbdFrame z;
+  z.seq = 1;
+  z.camera = scene.camera();
+  z.bgr = cv::Mat(z.camera.height, z.camera.width, CV_8UC1, cv::Scalar(0));
+  z.depth_m = cv::Mat::zeros(z.camera.height, z.camera.width, CV_32FC1);
+  f = msgs::toMsg(z, 5000.0, pplvo_msgs::image_t::ENCODING_RAW_GRAY8,
+                  pplvo_msgs::image_t::ENCODING_RAW_U16);
+  lcm.publish(channels::kRgbd, &f);
+  p = poseMsg(scene, 1);
+  lcm.publish(channels::kPose, &p);
+  drain(lcm);
+  ASSERT_EQ(c.fused.size(), 1u);
+  EXPECT_EQ(cv::countNonZero(depthFromMsg(c.fused[0]).depth_m), 0);
+  // NaN pose: the frame's C-GM is published as fused, counted.
+  f = frameMsg(scene, 2);
+  lcm.publish(channels::kRgbd, &f);
+  p = poseMsg(scene, 2);
+  p.position[0] = std::numeric_limits<double>::quiet_NaN();
+  lcm.publish(channels::kPose, &p);
+  drain(lcm);
+  ASSERT_EQ(c.fused.size(), 2u);
+  EXPECT_EQ(c.fused[1].stage, pplvo_msgs::depth_map_t::STAGE_CGM);
+  EXPECT_EQ(node.ogmStats().invalid_poses, 1);
+  EXPECT_EQ(node.counters().frames_skipped, 3);
+  // Frames whose pose never comes: bounded queue drops the oldest.
+  for (int i = 3; i < 9; ++i) {
+    f = frameMsg(scene, i);
+    lcm.publish(channels::kRgbd, &f);
+    drain(lcm);
+  }
+  EXPECT_EQ(node.pending(), 3);
+  EXPECT_EQ(node.counters().frames_dropped, 3);
+  // Pose of frame 8 drops the stale 6 and 7.
+  p = poseMsg(scene, 8);
+  lcm.publish(channels::kPose, &p);
+  drain(lcm);
+  EXPECT_EQ(node.counters().frames_dropped, 5);
+  EXPECT_EQ(c.fused.back().seq, 8);
+  // A frame of another size resets the window with a counted warning.
+  SceneOptions so = smallScene();
+  so.width = 80;
+  so.height = 60;
+  so.fx = so.fy = 65.6;
+  so.cx = 39.5;
+  so.cy = 29.5;
+  AnalyticScene small(so);
+  f = frameMsg(small, 9);
+  lcm.publish(channels::kRgbd, &f);
+  p = poseMsg(small, 9);
+  lcm.publish(channels::kPose, &p);
+  drain(lcm);
+  EXPECT_EQ(node.ogmStats().size_changes, 1);
+  EXPECT_EQ(c.fused.back().window_length, 1);
+  EXPECT_EQ(node.counters().errors, 0);
+}
+
+/// Replays a log onto a fresh node on a fresh memq:// instance; returns the output bytes.
+std::vector<std::vector<uint8_t>> replay(const std::string& path) {
+  lcm::LCM lcm("memq://");
+  DepthFilterNodeOptions o;
+  DepthFilterNode node(o, lcm);
+  Collector c;
+  lcm.subscribe(channels::kDepthCgm, &Collector::onDepth, &c);
+  lcm.subscribe(channels::kDepthFused, &Collector::onDepth, &c);
+  lcm::LogFile log(path, "r");
+  EXPECT_TRUE(log.good());
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    lcm.publish(e->channel, e->data, static_cast<unsigned int>(e->datalen));
+    drain(lcm);
+  }
+  return c.bytes;
+}
+
+TEST(DepthFilterNode, ReplayFromLogIsBitIdentical) {
+  AnalyticScene scene(smallScene());
+  const std::string path = "/tmp/pplvo_depth_filter_replay_" + std::to_string(getpid()) + ".lcmlog";
+  {
+    lcm::LogFile log(path, "w");
+    ASSERT_TRUE(log.good());
+    auto write = [&](const std::string& channel, const auto& msg, int64_t t) {
+      std::vector<uint8_t> buf(msg.getEncodedSize());
+      msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      lcm::LogEvent e;
+      e.eventnum = 0;
+      e.timestamp = t;
+      e.channel = channel;
+      e.datalen = static_cast<int32_t>(buf.size());
+      e.data = buf.data();
+      ASSERT_EQ(log.writeEvent(&e), 0);
+    };
+    for (int i = 0; i < 12; ++i) {
+      write(channels::kRgbd, frameMsg(scene, i), 2 * i);
+      // Window frames older than 3 get an uncertainty above the default threshold.
+      std::vector<std::pair<int64_t, double>> w;
+      for (int j = std::max(0, i - 9); j < i; ++j) w.emplace_back(j, (i - j) > 6 ? 2e-4 : 1e-5);
+      write(channels::kPose, poseMsg(scene, i, w), 2 * i + 1);
+    }
+  }
+  const auto a = replay(path);
+  const auto b = replay(path);
+  std::remove(path.c_str());
+  ASSERT_EQ(a.size(), 24u);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(a[i] == b[i]) << "message " << i;
+  // The uncertainty threshold kept the window at 7 frames (current + 6 within 1e-4 m^2).
+  pplvo_msgs::depth_map_t last;
+  ASSERT_EQ(last.decode(a.back().data(), 0, static_cast<int>(a.back().size())),
+            static_cast<int>(a.back().size()));
+  EXPECT_EQ(last.window_length, 7);
+}
+
+}  // namespace
+}  // namespace pplvo::nodes
