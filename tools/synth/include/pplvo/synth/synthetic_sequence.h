@@ -25,6 +25,8 @@ struct DepthNoiseOptions {
   bool edge_dropout = true;               ///< drop pixels at depth discontinuities
   double edge_jump_m = 0.1;               ///< neighbour depth jump that counts as a discontinuity
   double rgb_noise_sigma = 2.0;           ///< additive Gaussian noise on colour, grey levels
+  double baseline_m = 0.075;              ///< projector-camera baseline b for disparity f*b/z
+  double disparity_step_px = 0.125;       ///< disparity quantisation step (Kinect: 1/8 px)
 };
 
 struct SynthOptions {
@@ -67,10 +69,22 @@ class SyntheticSequence {
   std::string stamp(int i) const;
   /// Renders frame i (independent of the order frames are rendered in).
   SynthFrame render(int i) const;
-  /// Plane [n; d] (n.p + d = 0, world frame) of a surface id, if that surface is planar.
+  /// Plane [n; d] (n.p + d = 0, world frame) of a surface id, if that surface is planar and
+  /// static. n (unit) is the outward normal, pointing into the free space the surface is seen
+  /// from, so the plane transformed into any camera frame that sees it has d > 0.
   bool surfacePlane(int surface_id, Eigen::Vector4d* plane_w) const;
   /// The ground-truth trajectory (stamps as stamp(i)).
   Trajectory groundTruth() const;
+
+  /// Plane of a surface id at frame i: like surfacePlane() but also valid for the surfaces of
+  /// the moving object (whose planes change with time). Throws std::out_of_range for a bad i.
+  bool surfacePlaneAt(int surface_id, int i, Eigen::Vector4d* plane_w) const;
+  /// Number of surface ids (ids are 0 .. surfaceCount() - 1).
+  int surfaceCount() const;
+  /// True for the surfaces of the moving object (surfacePlane() returns false for them).
+  bool isDynamicSurface(int surface_id) const;
+  /// Human-readable name of a surface, e.g. "room+z" (floor) or "cabinet-x"; "" if unknown.
+  std::string surfaceName(int surface_id) const;
 
  private:
   struct Impl;
