@@ -2,7 +2,8 @@
 // sequences (VGA, one thread). Not a unit test: prints figures for docs/features.md.
 //
 //   pplvo_features_bench [--detectors orb,orb-nogrid,akaze,sift,brisk] [--lines 0.5,0.5f,1]
-//                        [--oversample 2] [--orb-levels 8] [--orb-fast 12]
+//                        [--oversample 2] [--orb-levels 4] [--orb-fast 12] [--ratio 0.85]
+//                        [--gate 40] [--min-sep 0]
 //                        [--max-points 800] [--max-frames N] [--no-lines] [--no-points]
 #include <algorithm>
 #include <cstdio>
@@ -68,6 +69,8 @@ int main(int argc, char** argv) {
   int max_points = 800, max_frames = 1 << 30;
   double oversample = PointExtractorOptions{}.oversample;
   int orb_levels = PointExtractorOptions{}.orb_levels;
+  double ratio = PointMatchOptions{}.ratio, gate = PointMatchOptions{}.max_px_distance;
+  double min_sep = PointExtractorOptions{}.min_separation_px;
   int orb_fast = PointExtractorOptions{}.orb_fast_threshold;
   bool do_lines = true, do_points = true;
   for (int i = 1; i < argc; ++i) {
@@ -76,6 +79,9 @@ int main(int argc, char** argv) {
     if (a == "--detectors") detectors = split(next());
     else if (a == "--lines") line_cfgs = split(next());
     else if (a == "--oversample") oversample = std::atof(next().c_str());
+    else if (a == "--ratio") ratio = std::atof(next().c_str());
+    else if (a == "--gate") gate = std::atof(next().c_str());
+    else if (a == "--min-sep") min_sep = std::atof(next().c_str());
     else if (a == "--orb-levels") orb_levels = std::atoi(next().c_str());
     else if (a == "--orb-fast") orb_fast = std::atoi(next().c_str()); else if (a == "--max-points") max_points = std::atoi(next().c_str());
     else if (a == "--max-frames") max_frames = std::atoi(next().c_str());
@@ -113,6 +119,7 @@ int main(int argc, char** argv) {
         po.max_points = max_points;
         po.oversample = oversample;
         po.orb_levels = orb_levels;
+        po.min_separation_px = min_sep;
         po.orb_fast_threshold = orb_fast;
         std::string dname = det;
         if (det == "orb-nogrid") {
@@ -125,6 +132,8 @@ int main(int argc, char** argv) {
         }
         PointExtractor ex(po);
         PointMatchOptions mo;
+        mo.ratio = ratio;
+        mo.max_px_distance = gate;
         Accum acc;
         PointExtraction prev;
         for (int k = 0; k < n; ++k) {

@@ -72,14 +72,62 @@ int PointExtractor::descriptorNorm() const {
   return options_.detector == PointDetector::kSift ? cv::NORM_L2 : cv::NORM_HAMMING;
 }
 
+namespace {
+
+/// Occupancy of kept points on a grid of cells of side r: is any kept point within r of p?
+class SeparationIndex {
+ public:
+  SeparationIndex(int width, int height, double r)
+      : r_(r), cols_(r > 0 ? static_cast<int>(width / r) + 1 : 0),
+        rows_(r > 0 ? static_cast<int>(height / r) + 1 : 0),
+        cells_(static_cast<size_t>(cols_) * rows_) {}
+  bool free(const cv::Point2f& p) const {
+    if (r_ <= 0) return true;
+    const int cx = cellX(p.x), cy = cellY(p.y);
+    for (int y = std::max(0, cy - 1); y <= std::min(rows_ - 1, cy + 1); ++y) {
+      for (int x = std::max(0, cx - 1); x <= std::min(cols_ - 1, cx + 1); ++x) {
+        for (const auto& q : cells_[y * cols_ + x]) {
+          const float dx = q.x - p.x, dy = q.y - p.y;
+          if (dx * dx + dy * dy < r_ * r_) return false;
+        }
+      }
+    }
+    return true;
+  }
+  void add(const cv::Point2f& p) {
+    if (r_ > 0) cells_[cellY(p.y) * cols_ + cellX(p.x)].push_back(p);
+  }
+
+ private:
+  int cellX(float x) const { return std::clamp(static_cast<int>(x / r_), 0, cols_ - 1); }
+  int cellY(float y) const { return std::clamp(static_cast<int>(y / r_), 0, rows_ - 1); }
+  double r_;
+  int cols_, rows_;
+  std::vector<std::vector<cv::Point2f>> cells_;
+};
+
+}  // namespace
+
 std::vector<int> selectSpread(const std::vector<cv::KeyPoint>& keypoints, int width, int height,
-                              int max_keep, int grid_cols, int grid_rows) {
+                              int max_keep, int grid_cols, int grid_rows,
+                              double min_separation_px) {
   std::vector<int> order(keypoints.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
     return keypoints[a].response > keypoints[b].response;
   });
   if (max_keep <= 0) return {};
+  SeparationIndex sep(std::max(1, width), std::max(1, height), min_separation_px);
+  if (min_separation_px > 0) {
+    std::vector<int> separated;
+    separated.reserve(order.size());
+    for (int idx : order) {
+      if (!sep.free(keypoints[idx].pt)) continue;
+      sep.add(keypoints[idx].pt);
+      separated.push_back(idx);
+    }
+    order.swap(separated);
+  }
   if (static_cast<int>(order.size()) <= max_keep) return order;
   grid_cols = std::max(1, grid_cols);
   grid_rows = std::max(1, grid_rows);
@@ -130,7 +178,8 @@ PointExtraction PointExtractor::extract(const cv::Mat& image, const PinholeCamer
     std::vector<cv::KeyPoint> selected;
     if (options_.grid_bucketing) {
       const auto idx = selectSpread(candidates, gray.cols, gray.rows, options_.max_points,
-                                    options_.grid_cols, options_.grid_rows);
+                                    options_.grid_cols, options_.grid_rows,
+                                    options_.min_separation_px);
       selected.reserve(idx.size());
       for (int i : idx) selected.push_back(candidates[i]);
     } else {

@@ -364,18 +364,3 @@ TEST(FrameFeatures, ExtractIntoFillsFields) {
   EXPECT_GT(fm.lines.size(), 20u);
 }
 
-TEST(Diagnostics, DISABLED_WrongPointMatches) {
-  const Pair p = makePair(vgaCamera());
-  PointExtractor ex;
-  const PointExtraction a = ex.extract(p.gray1, p.cam), b = ex.extract(p.gray2, p.cam);
-  const MatchResult m = matchPoints(a.points, a.descriptors, b.points, b.descriptors, {});
-  for (size_t k = 0; k < m.pairs.size(); ++k) {
-    const auto [i, j] = m.pairs[k];
-    const double z = depthAt(p.depth1, a.points[i].px);
-    const Eigen::Vector2d q = p.cam.project(p.T_c2_c1() * p.cam.backproject(a.points[i].px.x(), a.points[i].px.y(), z));
-    const double err = (q - b.points[j].px).norm();
-    if (err > 1.5)
-      std::printf("err %.1f oct %d/%d px (%.0f,%.0f) hd %.0f\n", err, a.points[i].octave,
-                  b.points[j].octave, a.points[i].px.x(), a.points[i].px.y(), m.descriptor_distance[k]);
-  }
-}

@@ -94,4 +94,4 @@ INSTANTIATE_TEST_SUITE_P(
     Sequences, SharedData,
     ::testing::Values(Expect{"icl_living_room_kt0_short", 100, 20, 0.95, 0.95},
                       Expect{"tum_fr3_sitting_static_short", 100, 20, 0.85, 0.85}),
-    [](const auto& info) { return std::string(info.param.name).substr(0, 3); });
+    [](const auto& p) { return std::string(p.param.name).substr(0, 3); });

@@ -27,7 +27,7 @@ struct PointMatchOptions {
   double predicted_max_px_distance = 15.0;
   /// Reject if best >= ratio * second best (Lowe); disabled when ratio_test is false.
   bool ratio_test = true;
-  double ratio = 0.85;
+  double ratio = 0.75;
   /// Maximum descriptor distance: bits for binary descriptors (ORB: 256 bits), L2 for float
   /// (SIFT, unit-normalised x512 in OpenCV). Negative disables.
   double max_hamming_bits = 70.0;

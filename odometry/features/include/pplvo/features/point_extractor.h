@@ -35,6 +35,10 @@ struct PointExtractorOptions {
   bool grid_bucketing = true;
   int grid_cols = 8;
   int grid_rows = 6;
+  /// Kept points are at least this far apart (strongest first): removes near-duplicates from
+  /// adjacent pyramid levels, which otherwise give near-miss matches (docs/features.md).
+  /// 0 disables.
+  double min_separation_px = 0.0;
   /// Candidates detected before bucketing, as a multiple of max_points (ORB, SIFT).
   double oversample = 2.0;
   /// Images smaller than this on either side give no points (ORB needs a border of ~31 px).
@@ -88,7 +92,9 @@ class PointExtractor {
 
 /// Grid bucketing used by PointExtractor: returns indices into `keypoints` (at most
 /// `max_keep`), strongest first within the two passes described in PointExtractorOptions.
+/// Candidates closer than min_separation_px to an already kept (stronger) one are dropped.
 std::vector<int> selectSpread(const std::vector<cv::KeyPoint>& keypoints, int width, int height,
-                              int max_keep, int grid_cols, int grid_rows);
+                              int max_keep, int grid_cols, int grid_rows,
+                              double min_separation_px = 0.0);
 
 }  // namespace pplvo::features
