@@ -7,6 +7,7 @@
 //                        [--max-points 800] [--max-frames N] [--no-lines] [--no-points]
 #include <algorithm>
 #include <cstdio>
+#include <ctime>
 #include <cstdlib>
 #include <sstream>
 #include <string>
@@ -28,6 +29,25 @@ using namespace pplvo::features::testdata;
 
 namespace {
 
+/// CPU time of the calling thread (ms): with cv::setNumThreads(1) all work runs on this
+/// thread, and it is far less sensitive than wall time to other processes sharing the cores.
+double threadCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+/// Wall and thread-CPU time since construction.
+struct DualTimer {
+  Stopwatch wall;
+  double cpu0 = threadCpuMs();
+  void restart() {
+    wall.restart();
+    cpu0 = threadCpuMs();
+  }
+  double cpuMs() const { return threadCpuMs() - cpu0; }
+};
+
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream ss(s);
@@ -38,7 +58,7 @@ std::vector<std::string> split(const std::string& s) {
 
 struct Accum {
   double frames = 0, pairs = 0, features = 0, matches = 0, judged = 0, correct = 0;
-  std::vector<double> detect_ms, match_ms;
+  std::vector<double> detect_ms, match_ms, detect_cpu_ms, match_cpu_ms;
 };
 
 double median(std::vector<double> v) {
@@ -54,11 +74,12 @@ double mean(const std::vector<double>& v) {
 
 void printRow(const char* kind, const std::string& cfg, const std::string& seq, const Accum& a) {
   std::printf(
-      "| %-5s | %-12s | %-28s | %7.0f | %7.0f | %6.1f%% | %6.3f | %6.2f | %6.2f | %5.2f |\n",
+      "| %-5s | %-12s | %-28s | %7.0f | %7.0f | %6.1f%% | %6.3f | %7.2f | %7.2f | %7.2f | "
+      "%7.2f | %7.2f |\n",
       kind, cfg.c_str(), seq.c_str(), a.features / std::max(1.0, a.frames),
       a.matches / std::max(1.0, a.pairs), 100.0 * a.judged / std::max(1.0, a.matches),
-      a.correct / std::max(1.0, a.judged), median(a.detect_ms), mean(a.detect_ms),
-      median(a.match_ms));
+      a.correct / std::max(1.0, a.judged), median(a.detect_cpu_ms), mean(a.detect_cpu_ms),
+      median(a.detect_ms), median(a.match_cpu_ms), median(a.match_ms));
 }
 
 }  // namespace
@@ -96,11 +117,12 @@ int main(int argc, char** argv) {
   const double tol_px = 3.0;
   std::printf("Columns: features/frame, matches/pair, %% of matches judged (depth present), "
               "precision of judged matches (GT pose + depth, %.0f px), detect+describe "
-              "ms/frame (median, mean), matching ms/pair (median). One thread.\n\n",
+              "ms/frame (thread CPU median, CPU mean, wall median), matching ms/pair (CPU median, wall "
+              "median). One thread.\n\n",
               tol_px);
   std::printf("| kind  | config       | sequence                     | feat/fr | match/p | "
-              "judged  | prec   | det med | det mean | match med |\n"
-              "|---|---|---|---|---|---|---|---|---|---|\n");
+              "judged  | prec   | det cpu | det cpu mean | det wall | match cpu | match wall |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string name : {"icl_living_room_kt0_short", "tum_fr3_sitting_static_short"}) {
     const auto seq = loadSharedSequence(name);
     if (!seq) {
@@ -137,16 +159,18 @@ int main(int argc, char** argv) {
         Accum acc;
         PointExtraction prev;
         for (int k = 0; k < n; ++k) {
-          Stopwatch sw;
+          DualTimer sw;
           PointExtraction cur = ex.extract(gray[k], seq->camera);
-          acc.detect_ms.push_back(sw.elapsedMs());
+          acc.detect_ms.push_back(sw.wall.elapsedMs());
+          acc.detect_cpu_ms.push_back(sw.cpuMs());
           acc.frames += 1;
           acc.features += cur.points.size();
           if (k > 0 && seq->frames[k].has_gt && seq->frames[k - 1].has_gt) {
             sw.restart();
             const MatchResult m = matchPoints(prev.points, prev.descriptors, cur.points,
                                               cur.descriptors, mo);
-            acc.match_ms.push_back(sw.elapsedMs());
+            acc.match_ms.push_back(sw.wall.elapsedMs());
+            acc.match_cpu_ms.push_back(sw.cpuMs());
             acc.pairs += 1;
             acc.matches += m.pairs.size();
             const Pose3 T_c2_c1 = seq->frames[k].T_w_c.inverse() * seq->frames[k - 1].T_w_c;
@@ -174,16 +198,18 @@ int main(int argc, char** argv) {
         Accum acc;
         LineExtraction prev;
         for (int k = 0; k < n; ++k) {
-          Stopwatch sw;
+          DualTimer sw;
           LineExtraction cur = ex.extract(gray[k], seq->camera);
-          acc.detect_ms.push_back(sw.elapsedMs());
+          acc.detect_ms.push_back(sw.wall.elapsedMs());
+          acc.detect_cpu_ms.push_back(sw.cpuMs());
           acc.frames += 1;
           acc.features += cur.lines.size();
           if (k > 0 && seq->frames[k].has_gt && seq->frames[k - 1].has_gt) {
             sw.restart();
             const MatchResult m =
                 matchLines(prev.lines, prev.descriptors, cur.lines, cur.descriptors, mo);
-            acc.match_ms.push_back(sw.elapsedMs());
+            acc.match_ms.push_back(sw.wall.elapsedMs());
+            acc.match_cpu_ms.push_back(sw.cpuMs());
             acc.pairs += 1;
             acc.matches += m.pairs.size();
             const Pose3 T_c2_c1 = seq->frames[k].T_w_c.inverse() * seq->frames[k - 1].T_w_c;
