@@ -3,7 +3,7 @@
 //
 //   pplvo_features_bench [--detectors orb,orb-nogrid,akaze,sift,brisk] [--lines 0.5,0.5f,1]
 //                        [--oversample 2] [--orb-levels 4] [--orb-fast 12] [--ratio 0.85]
-//                        [--gate 40] [--min-sep 0]
+//                        [--gate 40] [--min-sep 0] [--max-lines 150] [--min-line-px 25]
 //                        [--max-points 800] [--max-frames N] [--no-lines] [--no-points]
 #include <algorithm>
 #include <cstdio>
@@ -90,6 +90,8 @@ int main(int argc, char** argv) {
   int max_points = 800, max_frames = 1 << 30;
   double oversample = PointExtractorOptions{}.oversample;
   int orb_levels = PointExtractorOptions{}.orb_levels;
+  int max_lines = LineExtractorOptions{}.max_lines;
+  double min_line_px = LineExtractorOptions{}.min_length_px;
   double ratio = PointMatchOptions{}.ratio, gate = PointMatchOptions{}.max_px_distance;
   double min_sep = PointExtractorOptions{}.min_separation_px;
   int orb_fast = PointExtractorOptions{}.orb_fast_threshold;
@@ -103,6 +105,8 @@ int main(int argc, char** argv) {
     else if (a == "--ratio") ratio = std::atof(next().c_str());
     else if (a == "--gate") gate = std::atof(next().c_str());
     else if (a == "--min-sep") min_sep = std::atof(next().c_str());
+    else if (a == "--max-lines") max_lines = std::atoi(next().c_str());
+    else if (a == "--min-line-px") min_line_px = std::atof(next().c_str());
     else if (a == "--orb-levels") orb_levels = std::atoi(next().c_str());
     else if (a == "--orb-fast") orb_fast = std::atoi(next().c_str()); else if (a == "--max-points") max_points = std::atoi(next().c_str());
     else if (a == "--max-frames") max_frames = std::atoi(next().c_str());
@@ -193,6 +197,8 @@ int main(int argc, char** argv) {
         LineExtractorOptions lo;
         lo.detection_scale = std::atof(lc.c_str());
         lo.describe_full_resolution = !lc.empty() && lc.back() == 'f';
+        lo.max_lines = max_lines;
+        lo.min_length_px = min_line_px;
         LineExtractor ex(lo);
         LineMatchOptions mo;
         Accum acc;
