@@ -1,5 +1,6 @@
 #include "pplvo/features/matching.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -59,12 +60,12 @@ struct BestPair {
   double d2 = std::numeric_limits<double>::infinity();
 };
 
-/// Generic gated mutual-best matcher. gate(i, j) says whether pair (i, j) is geometrically
-/// admissible.
-template <typename Gate>
+/// Generic gated mutual-best matcher. candidates(i, fn) calls fn(j) for every current feature j
+/// geometrically admissible for query i.
+template <typename Candidates>
 MatchResult gatedMatch(int n_prev, const cv::Mat& d_prev, int n_curr, const cv::Mat& d_curr,
                        bool ratio_test, double ratio, double max_distance, bool cross_check,
-                       const Gate& gate) {
+                       const Candidates& candidates) {
   MatchResult r;
   if (!descriptorsCompatible(d_prev, n_prev, d_curr, n_curr)) {
     r.stats.queries = (d_prev.rows == n_prev) ? n_prev : 0;
@@ -79,8 +80,7 @@ MatchResult gatedMatch(int n_prev, const cv::Mat& d_prev, int n_curr, const cv::
   r.stats.queries = n_prev;
   for (int i = 0; i < n_prev; ++i) {
     BestPair& b = best[i];
-    for (int j = 0; j < n_curr; ++j) {
-      if (!gate(i, j)) continue;
+    candidates(i, [&](int j) {
       ++r.stats.candidates;
       const double d = dist(i, j);
       if (d < b.d1) {
@@ -94,7 +94,7 @@ MatchResult gatedMatch(int n_prev, const cv::Mat& d_prev, int n_curr, const cv::
         best_prev_d[j] = d;
         best_prev_i[j] = i;
       }
-    }
+    });
   }
   for (int i = 0; i < n_prev; ++i) {
     const BestPair& b = best[i];
@@ -163,13 +163,59 @@ MatchResult matchPoints(const std::vector<PointFeature>& prev_points,
     const double r = pred_ok ? options.predicted_max_px_distance : options.max_px_distance;
     r2[i] = r * r;
   }
-  const auto gate = [&](int i, int j) {
-    return (curr_points[j].px - centre[i]).squaredNorm() < r2[i];
+  // Bucket the current points on a grid of cells as large as the largest gate radius, so each
+  // query only looks at the 3x3 cells around its gate centre.
+  const double cell = std::max(1.0, std::max(options.max_px_distance,
+                                             use_pred ? options.predicted_max_px_distance : 0.0));
+  double min_u = 0, min_v = 0, max_u = 0, max_v = 0;
+  bool finite = n_curr > 0;
+  for (int j = 0; j < n_curr; ++j) {
+    const Eigen::Vector2d& q = curr_points[j].px;
+    if (!q.allFinite()) {
+      finite = false;
+      break;
+    }
+    if (j == 0 || q.x() < min_u) min_u = q.x();
+    if (j == 0 || q.y() < min_v) min_v = q.y();
+    if (j == 0 || q.x() > max_u) max_u = q.x();
+    if (j == 0 || q.y() > max_v) max_v = q.y();
+  }
+  const int gc = finite ? std::min(4096, static_cast<int>((max_u - min_u) / cell) + 1) : 1;
+  const int gr = finite ? std::min(4096, static_cast<int>((max_v - min_v) / cell) + 1) : 1;
+  std::vector<std::vector<int>> grid(static_cast<size_t>(gc) * gr);
+  const auto cellOf = [&](double u, double v, int* cu, int* cv) {
+    *cu = std::clamp(static_cast<int>(std::floor((u - min_u) / cell)), -1, gc);
+    *cv = std::clamp(static_cast<int>(std::floor((v - min_v) / cell)), -1, gr);
+  };
+  if (finite) {
+    for (int j = 0; j < n_curr; ++j) {
+      int cu, cv;
+      cellOf(curr_points[j].px.x(), curr_points[j].px.y(), &cu, &cv);
+      grid[std::clamp(cv, 0, gr - 1) * gc + std::clamp(cu, 0, gc - 1)].push_back(j);
+    }
+  }
+  const auto candidates = [&](int i, const auto& fn) {
+    if (!finite) {  // NaN pixels: fall back to testing every pair
+      for (int j = 0; j < n_curr; ++j) {
+        if ((curr_points[j].px - centre[i]).squaredNorm() < r2[i]) fn(j);
+      }
+      return;
+    }
+    if (!centre[i].allFinite()) return;
+    int cu, cv;
+    cellOf(centre[i].x(), centre[i].y(), &cu, &cv);
+    for (int y = std::max(0, cv - 1); y <= std::min(gr - 1, cv + 1); ++y) {
+      for (int x = std::max(0, cu - 1); x <= std::min(gc - 1, cu + 1); ++x) {
+        for (int j : grid[y * gc + x]) {
+          if ((curr_points[j].px - centre[i]).squaredNorm() < r2[i]) fn(j);
+        }
+      }
+    }
   };
   const bool binary = prev_descriptors.type() == CV_8U;
   const double max_d = binary ? options.max_hamming_bits : options.max_l2;
   return gatedMatch(n_prev, prev_descriptors, n_curr, curr_descriptors, options.ratio_test,
-                    options.ratio, max_d, options.cross_check, gate);
+                    options.ratio, max_d, options.cross_check, candidates);
 }
 
 MatchResult matchPoints(const FrameFeatures& prev, const FrameFeatures& curr,
@@ -201,13 +247,17 @@ MatchResult matchLines(const std::vector<LineFeature>& prev_lines,
                        const cv::Mat& prev_descriptors,
                        const std::vector<LineFeature>& curr_lines,
                        const cv::Mat& curr_descriptors, const LineMatchOptions& options) {
-  const auto gate = [&](int i, int j) {
-    return lineGate(prev_lines[i].eq, curr_lines[j].eq, options.max_angle_deg,
-                    options.max_rho_px);
+  const int n_curr = static_cast<int>(curr_lines.size());
+  const auto candidates = [&](int i, const auto& fn) {
+    for (int j = 0; j < n_curr; ++j) {
+      if (lineGate(prev_lines[i].eq, curr_lines[j].eq, options.max_angle_deg,
+                   options.max_rho_px))
+        fn(j);
+    }
   };
-  return gatedMatch(static_cast<int>(prev_lines.size()), prev_descriptors,
-                    static_cast<int>(curr_lines.size()), curr_descriptors, options.ratio_test,
-                    options.ratio, options.max_hamming_bits, options.cross_check, gate);
+  return gatedMatch(static_cast<int>(prev_lines.size()), prev_descriptors, n_curr,
+                    curr_descriptors, options.ratio_test, options.ratio,
+                    options.max_hamming_bits, options.cross_check, candidates);
 }
 
 MatchResult matchLines(const FrameFeatures& prev, const FrameFeatures& curr,
