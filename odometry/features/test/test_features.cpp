@@ -364,3 +364,64 @@ TEST(FrameFeatures, ExtractIntoFillsFields) {
   EXPECT_GT(fm.lines.size(), 20u);
 }
 
+
+TEST(PointMatching, GridBucketingEqualsBruteForce) {
+  // Random points and float descriptors (no distance ties); reference: test every pair.
+  cv::RNG rng(5);
+  const int n = 600;
+  std::vector<PointFeature> a(n), b(n);
+  cv::Mat da(n, 32, CV_32F), db(n, 32, CV_32F);
+  rng.fill(da, cv::RNG::UNIFORM, 0, 100);
+  rng.fill(db, cv::RNG::UNIFORM, 0, 100);
+  for (int i = 0; i < n; ++i) {
+    a[i].px = {rng.uniform(-20.0, 660.0), rng.uniform(-20.0, 500.0)};
+    b[i].px = a[i].px + Eigen::Vector2d(rng.gaussian(8), rng.gaussian(8));
+    // Half the points keep a similar descriptor.
+    if (i % 2 == 0) db.row(i) = da.row(i) + cv::Mat(1, 32, CV_32F, cv::Scalar(rng.uniform(0, 20)));
+  }
+  PointMatchOptions mo;
+  mo.max_l2 = -1;
+  std::vector<Eigen::Vector2d> pred(n, Eigen::Vector2d::Constant(NAN));
+  for (int i = 0; i < n; i += 3) pred[i] = b[i].px + Eigen::Vector2d(3, -2);
+  const std::vector<Eigen::Vector2d>* with_pred = &pred;
+  for (const auto* p : {with_pred, static_cast<const std::vector<Eigen::Vector2d>*>(nullptr)}) {
+    const MatchResult m = p ? matchPoints(a, da, b, db, mo, *p) : matchPoints(a, da, b, db, mo);
+    // Reference.
+    std::vector<std::pair<int, int>> ref;
+    std::vector<int> best_of_curr(n, -1);
+    std::vector<double> best_curr_d(n, 1e300);
+    std::vector<int> best_j(n, -1);
+    std::vector<double> d1(n, 1e300), d2(n, 1e300);
+    int candidates = 0;
+    for (int i = 0; i < n; ++i) {
+      const bool use = p && (*p)[i].allFinite();
+      const Eigen::Vector2d c = use ? (*p)[i] : a[i].px;
+      const double r = use ? mo.predicted_max_px_distance : mo.max_px_distance;
+      for (int j = 0; j < n; ++j) {
+        if ((b[j].px - c).squaredNorm() >= r * r) continue;
+        ++candidates;
+        const double d = cv::norm(da.row(i), db.row(j), cv::NORM_L2);
+        if (d < d1[i]) {
+          d2[i] = d1[i];
+          d1[i] = d;
+          best_j[i] = j;
+        } else if (d < d2[i]) {
+          d2[i] = d;
+        }
+        if (d < best_curr_d[j]) {
+          best_curr_d[j] = d;
+          best_of_curr[j] = i;
+        }
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      if (best_j[i] < 0) continue;
+      if (d2[i] < 1e300 && !(d1[i] < mo.ratio * d2[i])) continue;
+      if (best_of_curr[best_j[i]] != i) continue;
+      ref.emplace_back(i, best_j[i]);
+    }
+    EXPECT_EQ(m.stats.candidates, candidates);
+    EXPECT_EQ(m.pairs, ref);
+    EXPECT_GT(ref.size(), 100u);
+  }
+}
