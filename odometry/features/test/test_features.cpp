@@ -425,3 +425,32 @@ TEST(PointMatching, GridBucketingEqualsBruteForce) {
     EXPECT_GT(ref.size(), 100u);
   }
 }
+
+TEST(Options, VisitListsEveryField) {
+  // Counts fields and checks a visitor can modify them (the config loader's use).
+  PointExtractorOptions po;
+  int n = 0;
+  po.visit([&](const char*, auto&) { ++n; });
+  EXPECT_EQ(n, 15);
+  po.visit([](const char* name, auto& f) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(f)>, int>) {
+      if (std::string(name) == "max_points") f = 123;
+    }
+  });
+  EXPECT_EQ(po.max_points, 123);
+  const LineExtractorOptions lo;
+  n = 0;
+  lo.visit([&](const char*, const auto&) { ++n; });
+  EXPECT_EQ(n, 8);
+  n = 0;
+  PointMatchOptions{}.visit([&](const char*, auto&) { ++n; });
+  EXPECT_EQ(n, 7);
+  n = 0;
+  LineMatchOptions{}.visit([&](const char*, auto&) { ++n; });
+  EXPECT_EQ(n, 6);
+  PointDetector d;
+  EXPECT_TRUE(parsePointDetector("AKAZE", &d));
+  EXPECT_EQ(d, PointDetector::kAkaze);
+  EXPECT_STREQ(pointDetectorName(d), "akaze");
+  EXPECT_FALSE(parsePointDetector("surf", &d));
+}

@@ -32,6 +32,22 @@ struct LineExtractorOptions {
   int lbd_octaves = 1;
   /// Images smaller than this on either side give no lines.
   int min_image_side_px = 32;
+
+  /// Calls v(name, field) for every field (config load/dump/compare).
+  template <typename V> void visit(V&& v) { visitFields(*this, v); }
+  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
+
+ private:
+  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
+    v("detection_scale", s.detection_scale);
+    v("describe_full_resolution", s.describe_full_resolution);
+    v("min_length_px", s.min_length_px);
+    v("max_lines", s.max_lines);
+    v("lsd_refine", s.lsd_refine);
+    v("lbd_band_width", s.lbd_band_width);
+    v("lbd_octaves", s.lbd_octaves);
+    v("min_image_side_px", s.min_image_side_px);
+  }
 };
 
 struct LineExtractionStats {

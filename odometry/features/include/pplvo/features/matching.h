@@ -34,6 +34,21 @@ struct PointMatchOptions {
   double max_l2 = 250.0;
   /// One-to-one: keep (i, j) only if i is also the best gated candidate of j.
   bool cross_check = true;
+
+  /// Calls v(name, field) for every field (config load/dump/compare).
+  template <typename V> void visit(V&& v) { visitFields(*this, v); }
+  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
+
+ private:
+  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
+    v("max_px_distance", s.max_px_distance);
+    v("predicted_max_px_distance", s.predicted_max_px_distance);
+    v("ratio_test", s.ratio_test);
+    v("ratio", s.ratio);
+    v("max_hamming_bits", s.max_hamming_bits);
+    v("max_l2", s.max_l2);
+    v("cross_check", s.cross_check);
+  }
 };
 
 struct LineMatchOptions {
@@ -46,6 +61,20 @@ struct LineMatchOptions {
   /// LBD is 256 bits.
   double max_hamming_bits = 80.0;
   bool cross_check = true;
+
+  /// Calls v(name, field) for every field (config load/dump/compare).
+  template <typename V> void visit(V&& v) { visitFields(*this, v); }
+  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
+
+ private:
+  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
+    v("max_angle_deg", s.max_angle_deg);
+    v("max_rho_px", s.max_rho_px);
+    v("ratio_test", s.ratio_test);
+    v("ratio", s.ratio);
+    v("max_hamming_bits", s.max_hamming_bits);
+    v("cross_check", s.cross_check);
+  }
 };
 
 struct MatchStats {

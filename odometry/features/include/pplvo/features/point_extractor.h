@@ -53,6 +53,30 @@ struct PointExtractorOptions {
   double akaze_threshold = 0.0008;
   double sift_contrast_threshold = 0.03;
   int brisk_threshold = 20;
+
+  /// Calls v(name, field) for every field (config load/dump/compare; `detector` is passed as
+  /// PointDetector&: use parsePointDetector / pointDetectorName for text).
+  template <typename V> void visit(V&& v) { visitFields(*this, v); }
+  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
+
+ private:
+  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
+    v("detector", s.detector);
+    v("max_points", s.max_points);
+    v("grid_bucketing", s.grid_bucketing);
+    v("grid_cols", s.grid_cols);
+    v("grid_rows", s.grid_rows);
+    v("min_separation_px", s.min_separation_px);
+    v("oversample", s.oversample);
+    v("min_image_side_px", s.min_image_side_px);
+    v("orb_levels", s.orb_levels);
+    v("orb_scale_factor", s.orb_scale_factor);
+    v("orb_fast_threshold", s.orb_fast_threshold);
+    v("orb_edge_threshold_px", s.orb_edge_threshold_px);
+    v("akaze_threshold", s.akaze_threshold);
+    v("sift_contrast_threshold", s.sift_contrast_threshold);
+    v("brisk_threshold", s.brisk_threshold);
+  }
 };
 
 struct PointExtractionStats {
