@@ -1,7 +1,7 @@
 // Per-stage timing and ground-truth accuracy of the 2D feature front end on the shared
 // sequences (VGA, one thread). Not a unit test: prints figures for docs/features.md.
 //
-//   pplvo_features_bench [--detectors orb,orb-nogrid,akaze,sift,brisk] [--lines 0.5,0.5f,1]
+//   pplvo_features_bench [--detectors orb,orb-nogrid,akaze,sift,brisk] [--lines 0.4,0.5,0.5f,1]
 //                        [--oversample 2] [--orb-levels 4] [--orb-fast 12] [--ratio 0.85]
 //                        [--gate 40] [--min-sep 0] [--max-lines 150] [--min-line-px 25]
 //                        [--max-points 800] [--max-frames N] [--no-lines] [--no-points]
@@ -86,7 +86,7 @@ void printRow(const char* kind, const std::string& cfg, const std::string& seq, 
 
 int main(int argc, char** argv) {
   std::vector<std::string> detectors = {"orb", "orb-nogrid", "akaze", "sift", "brisk"};
-  std::vector<std::string> line_cfgs = {"0.5", "0.5f", "1"};
+  std::vector<std::string> line_cfgs = {"0.4", "0.5", "0.5f", "1"};
   int max_points = 800, max_frames = 1 << 30;
   double oversample = PointExtractorOptions{}.oversample;
   int orb_levels = PointExtractorOptions{}.orb_levels;
