@@ -454,3 +454,28 @@ TEST(Options, VisitListsEveryField) {
   EXPECT_STREQ(pointDetectorName(d), "akaze");
   EXPECT_FALSE(parsePointDetector("surf", &d));
 }
+
+TEST(LineExtractor, ReducedScaleKeepsSubpixelEdgePosition) {
+  // Step edges at x = 299.5 and y = 199.5 (pixel-centre coordinates); endpoints must come back
+  // at full resolution without a scale-dependent offset.
+  cv::Mat img(480, 640, CV_8UC1, cv::Scalar(50));
+  img(cv::Rect(300, 200, 340, 280)).setTo(200);
+  for (double scale : {1.0, 0.5, 0.4}) {
+    LineExtractorOptions o;
+    o.detection_scale = scale;
+    const LineExtraction r = LineExtractor(o).extract(img, vgaCamera());
+    ASSERT_EQ(r.lines.size(), 2u) << scale;
+    for (const auto& l : r.lines) {
+      const bool vertical = std::abs(l.px1.x() - l.px2.x()) < 1.0;
+      if (vertical) {
+        EXPECT_NEAR(l.px1.x(), 299.5, 0.1) << scale;
+        EXPECT_NEAR(l.px2.x(), 299.5, 0.1) << scale;
+        EXPECT_NEAR(std::abs(l.eq.x()), 1.0, 1e-6);
+      } else {
+        EXPECT_NEAR(l.px1.y(), 199.5, 0.1) << scale;
+        EXPECT_NEAR(l.px2.y(), 199.5, 0.1) << scale;
+      }
+      EXPECT_GT((l.px2 - l.px1).norm(), 270.0) << scale;
+    }
+  }
+}
