@@ -1,0 +1,127 @@
+#pragma once
+/// Frame-to-frame matching of 2D points and lines (paper Sec. "Matching Points, Lines and
+/// Planes"): descriptor nearest neighbours, then "the strongest match per query that satisfies
+/// an image geometric distance constraint" — points within a Euclidean pixel distance, lines
+/// with similar slope angle and distance to the origin (image top-left corner) in their
+/// Hessian normal form. Matches are one-to-one (cross-check).
+///
+/// Implementation note: the gate is applied before the descriptor search, i.e. the k-NN (k=2)
+/// search runs over the gated candidates only. The strongest gated match is the same as in
+/// "k-NN over the whole image, then keep the strongest that satisfies the gate" with k large
+/// enough; the ratio test (optional) compares the best and second-best gated candidates.
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "pplvo/core/features.h"
+
+namespace pplvo::features {
+
+struct PointMatchOptions {
+  /// Gate: |px_curr - px_prev| < max_px_distance (VGA, 30 Hz: hand-held motion rarely exceeds
+  /// 40 px between frames; the paper gives no value).
+  double max_px_distance = 40.0;
+  /// Gate used instead around a predicted position, when one is given for the query.
+  double predicted_max_px_distance = 15.0;
+  /// Reject if best >= ratio * second best (Lowe); disabled when ratio_test is false.
+  bool ratio_test = true;
+  double ratio = 0.75;
+  /// Maximum descriptor distance: bits for binary descriptors (ORB: 256 bits), L2 for float
+  /// (SIFT, unit-normalised x512 in OpenCV). Negative disables.
+  double max_hamming_bits = 70.0;
+  double max_l2 = 250.0;
+  /// One-to-one: keep (i, j) only if i is also the best gated candidate of j.
+  bool cross_check = true;
+
+  /// Calls v(name, field) for every field (config load/dump/compare).
+  template <typename V> void visit(V&& v) { visitFields(*this, v); }
+  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
+
+ private:
+  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
+    v("max_px_distance", s.max_px_distance);
+    v("predicted_max_px_distance", s.predicted_max_px_distance);
+    v("ratio_test", s.ratio_test);
+    v("ratio", s.ratio);
+    v("max_hamming_bits", s.max_hamming_bits);
+    v("max_l2", s.max_l2);
+    v("cross_check", s.cross_check);
+  }
+};
+
+struct LineMatchOptions {
+  /// Gate on the Hessian normal form (theta, rho) of the line a u + b v + c = 0 with the origin
+  /// at the image top-left corner: |theta - theta'| mod 180 deg and |rho - rho'|.
+  double max_angle_deg = 10.0;
+  double max_rho_px = 40.0;
+  bool ratio_test = true;
+  double ratio = 0.9;
+  /// LBD is 256 bits.
+  double max_hamming_bits = 80.0;
+  bool cross_check = true;
+
+  /// Calls v(name, field) for every field (config load/dump/compare).
+  template <typename V> void visit(V&& v) { visitFields(*this, v); }
+  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
+
+ private:
+  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
+    v("max_angle_deg", s.max_angle_deg);
+    v("max_rho_px", s.max_rho_px);
+    v("ratio_test", s.ratio_test);
+    v("ratio", s.ratio);
+    v("max_hamming_bits", s.max_hamming_bits);
+    v("cross_check", s.cross_check);
+  }
+};
+
+struct MatchStats {
+  int queries = 0;            ///< previous features with a descriptor
+  int candidates = 0;         ///< (prev, curr) pairs inside the geometric gate
+  int no_candidate = 0;       ///< queries with no current feature inside the gate
+  int rejected_distance = 0;  ///< best gated candidate above the descriptor distance limit
+  int rejected_ratio = 0;     ///< failed the ratio test
+  int rejected_cross_check = 0;  ///< not the mutual best
+  int matches = 0;
+};
+
+struct MatchResult {
+  std::vector<std::pair<int, int>> pairs;  ///< (index in previous, index in current)
+  std::vector<float> descriptor_distance;  ///< per pair (bits or L2)
+  MatchStats stats;
+};
+
+/// Descriptor norm (cv::NORM_HAMMING or cv::NORM_L2) inferred from the descriptor type:
+/// CV_8U is binary, CV_32F is float.
+int descriptorNormOf(const cv::Mat& descriptors);
+
+/// Matches points of `prev` to points of `curr` (descriptors one row per point, same type).
+/// `predicted_px` (optional): per previous point, its predicted pixel in the current frame
+/// (e.g. from a predicted pose and its depth); entries with NaN use the previous pixel and the
+/// normal gate. Must be empty or have prev_points.size() entries (otherwise it is ignored).
+MatchResult matchPoints(const std::vector<PointFeature>& prev_points,
+                        const cv::Mat& prev_descriptors,
+                        const std::vector<PointFeature>& curr_points,
+                        const cv::Mat& curr_descriptors, const PointMatchOptions& options,
+                        const std::vector<Eigen::Vector2d>& predicted_px = {});
+MatchResult matchPoints(const FrameFeatures& prev, const FrameFeatures& curr,
+                        const PointMatchOptions& options,
+                        const std::vector<Eigen::Vector2d>& predicted_px = {});
+
+/// Hessian normal form of a line equation: theta in (-pi, pi] the angle of (a, b), rho = -c
+/// (distance of the origin, top-left corner, to the line; sign follows (a, b)).
+void lineHessian(const Eigen::Vector3d& eq, double* theta_rad, double* rho_px);
+/// The gate test used by matchLines (direction sign of the segments is irrelevant).
+bool lineGate(const Eigen::Vector3d& eq_prev, const Eigen::Vector3d& eq_curr,
+              double max_angle_deg, double max_rho_px);
+
+MatchResult matchLines(const std::vector<LineFeature>& prev_lines,
+                       const cv::Mat& prev_descriptors,
+                       const std::vector<LineFeature>& curr_lines,
+                       const cv::Mat& curr_descriptors, const LineMatchOptions& options);
+MatchResult matchLines(const FrameFeatures& prev, const FrameFeatures& curr,
+                       const LineMatchOptions& options);
+
+}  // namespace pplvo::features

@@ -1,0 +1,228 @@
+#include "pplvo/features/point_extractor.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <numeric>
+
+#include <opencv2/imgproc.hpp>
+
+namespace pplvo::features {
+
+bool parsePointDetector(const std::string& name, PointDetector* out) {
+  std::string n = name;
+  for (auto& ch : n) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (n == "orb") *out = PointDetector::kOrb;
+  else if (n == "akaze") *out = PointDetector::kAkaze;
+  else if (n == "sift") *out = PointDetector::kSift;
+  else if (n == "brisk") *out = PointDetector::kBrisk;
+  else return false;
+  return true;
+}
+
+const char* pointDetectorName(PointDetector d) {
+  switch (d) {
+    case PointDetector::kOrb: return "orb";
+    case PointDetector::kAkaze: return "akaze";
+    case PointDetector::kSift: return "sift";
+    case PointDetector::kBrisk: return "brisk";
+  }
+  return "?";
+}
+
+namespace {
+
+int candidateCount(const PointExtractorOptions& o) {
+  const double f = o.grid_bucketing ? std::max(1.0, o.oversample) : 1.0;
+  return std::max(1, static_cast<int>(std::lround(f * std::max(1, o.max_points))));
+}
+
+cv::Mat toGray(const cv::Mat& image) {
+  if (image.channels() == 1) return image;
+  cv::Mat gray;
+  if (image.channels() == 3) cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  else if (image.channels() == 4) cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+  return gray;
+}
+
+}  // namespace
+
+PointExtractor::PointExtractor(const PointExtractorOptions& options) : options_(options) {
+  const int n = candidateCount(options_);
+  switch (options_.detector) {
+    case PointDetector::kOrb:
+      detector_ = cv::ORB::create(n, static_cast<float>(options_.orb_scale_factor),
+                                  options_.orb_levels, options_.orb_edge_threshold_px, 0, 2,
+                                  cv::ORB::HARRIS_SCORE, 31, options_.orb_fast_threshold);
+      break;
+    case PointDetector::kAkaze:
+      detector_ = cv::AKAZE::create(cv::AKAZE::DESCRIPTOR_MLDB, 0, 3,
+                                    static_cast<float>(options_.akaze_threshold));
+      break;
+    case PointDetector::kSift:
+      detector_ = cv::SIFT::create(n, 3, options_.sift_contrast_threshold);
+      break;
+    case PointDetector::kBrisk:
+      detector_ = cv::BRISK::create(options_.brisk_threshold);
+      break;
+  }
+}
+
+int PointExtractor::descriptorNorm() const {
+  return options_.detector == PointDetector::kSift ? cv::NORM_L2 : cv::NORM_HAMMING;
+}
+
+namespace {
+
+/// Occupancy of kept points on a grid of cells of side r: is any kept point within r of p?
+class SeparationIndex {
+ public:
+  SeparationIndex(int width, int height, double r)
+      : r_(r), cols_(r > 0 ? static_cast<int>(width / r) + 1 : 0),
+        rows_(r > 0 ? static_cast<int>(height / r) + 1 : 0),
+        cells_(static_cast<size_t>(cols_) * rows_) {}
+  bool free(const cv::Point2f& p) const {
+    if (r_ <= 0) return true;
+    const int cx = cellX(p.x), cy = cellY(p.y);
+    for (int y = std::max(0, cy - 1); y <= std::min(rows_ - 1, cy + 1); ++y) {
+      for (int x = std::max(0, cx - 1); x <= std::min(cols_ - 1, cx + 1); ++x) {
+        for (const auto& q : cells_[y * cols_ + x]) {
+          const float dx = q.x - p.x, dy = q.y - p.y;
+          if (dx * dx + dy * dy < r_ * r_) return false;
+        }
+      }
+    }
+    return true;
+  }
+  void add(const cv::Point2f& p) {
+    if (r_ > 0) cells_[cellY(p.y) * cols_ + cellX(p.x)].push_back(p);
+  }
+
+ private:
+  int cellX(float x) const { return std::clamp(static_cast<int>(x / r_), 0, cols_ - 1); }
+  int cellY(float y) const { return std::clamp(static_cast<int>(y / r_), 0, rows_ - 1); }
+  double r_;
+  int cols_, rows_;
+  std::vector<std::vector<cv::Point2f>> cells_;
+};
+
+}  // namespace
+
+std::vector<int> selectSpread(const std::vector<cv::KeyPoint>& keypoints, int width, int height,
+                              int max_keep, int grid_cols, int grid_rows,
+                              double min_separation_px) {
+  std::vector<int> order(keypoints.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return keypoints[a].response > keypoints[b].response;
+  });
+  if (max_keep <= 0) return {};
+  SeparationIndex sep(std::max(1, width), std::max(1, height), min_separation_px);
+  if (min_separation_px > 0) {
+    std::vector<int> separated;
+    separated.reserve(order.size());
+    for (int idx : order) {
+      if (!sep.free(keypoints[idx].pt)) continue;
+      sep.add(keypoints[idx].pt);
+      separated.push_back(idx);
+    }
+    order.swap(separated);
+  }
+  if (static_cast<int>(order.size()) <= max_keep) return order;
+  grid_cols = std::max(1, grid_cols);
+  grid_rows = std::max(1, grid_rows);
+  const int cells = grid_cols * grid_rows;
+  const int quota = (max_keep + cells - 1) / cells;
+  std::vector<int> per_cell(cells, 0);
+  std::vector<char> taken(keypoints.size(), 0);
+  std::vector<int> out;
+  out.reserve(max_keep);
+  for (int idx : order) {
+    const auto& kp = keypoints[idx];
+    const int cx = std::clamp(static_cast<int>(kp.pt.x * grid_cols / std::max(1, width)), 0,
+                              grid_cols - 1);
+    const int cy = std::clamp(static_cast<int>(kp.pt.y * grid_rows / std::max(1, height)), 0,
+                              grid_rows - 1);
+    int& count = per_cell[cy * grid_cols + cx];
+    if (count < quota) {
+      ++count;
+      taken[idx] = 1;
+      out.push_back(idx);
+      if (static_cast<int>(out.size()) == max_keep) return out;
+    }
+  }
+  for (int idx : order) {
+    if (taken[idx]) continue;
+    out.push_back(idx);
+    if (static_cast<int>(out.size()) == max_keep) break;
+  }
+  return out;
+}
+
+PointExtraction PointExtractor::extract(const cv::Mat& image, const PinholeCamera& camera) const {
+  PointExtraction result;
+  if (image.empty() || image.depth() != CV_8U || image.cols < options_.min_image_side_px ||
+      image.rows < options_.min_image_side_px || options_.max_points <= 0) {
+    if (!image.empty() && image.depth() != CV_8U) result.stats.error = "image is not 8-bit";
+    return result;
+  }
+  const cv::Mat gray = toGray(image);
+  if (gray.empty()) {
+    result.stats.error = "unsupported number of channels";
+    return result;
+  }
+  try {
+    std::vector<cv::KeyPoint> candidates;
+    detector_->detect(gray, candidates);
+    result.stats.candidates = static_cast<int>(candidates.size());
+    std::vector<cv::KeyPoint> selected;
+    if (options_.grid_bucketing) {
+      const auto idx = selectSpread(candidates, gray.cols, gray.rows, options_.max_points,
+                                    options_.grid_cols, options_.grid_rows,
+                                    options_.min_separation_px);
+      selected.reserve(idx.size());
+      for (int i : idx) selected.push_back(candidates[i]);
+    } else {
+      selected = std::move(candidates);
+      cv::KeyPointsFilter::retainBest(selected, options_.max_points);
+      if (static_cast<int>(selected.size()) > options_.max_points)
+        selected.resize(options_.max_points);
+    }
+    if (selected.empty()) return result;
+    // compute() may drop keypoints too close to the border; it updates `selected`.
+    detector_->compute(gray, selected, result.descriptors);
+    if (result.descriptors.rows != static_cast<int>(selected.size())) {
+      result.stats.error = "descriptor count disagrees with keypoints";
+      result.descriptors.release();
+      return result;
+    }
+    const bool undistort = camera.valid() && camera.hasDistortion();
+    result.points.reserve(selected.size());
+    for (const auto& kp : selected) {
+      PointFeature f;
+      const Eigen::Vector2d raw(kp.pt.x, kp.pt.y);
+      f.px = undistort ? camera.undistortPixel(raw) : raw;
+      f.response = kp.response;
+      f.size_px = kp.size;
+      f.angle_deg = kp.angle;
+      f.octave = kp.octave;
+      result.points.push_back(f);
+    }
+    result.keypoints = std::move(selected);
+    result.stats.kept = static_cast<int>(result.points.size());
+  } catch (const cv::Exception& e) {
+    result = PointExtraction{};
+    result.stats.error = e.what();
+  }
+  return result;
+}
+
+PointExtractionStats PointExtractor::extractInto(const cv::Mat& image, const PinholeCamera& camera,
+                                                 FrameFeatures& frame) const {
+  PointExtraction r = extract(image, camera);
+  frame.points = std::move(r.points);
+  frame.point_descriptors = r.descriptors;
+  return r.stats;
+}
+
+}  // namespace pplvo::features
