@@ -35,6 +35,16 @@ Eigen::Matrix3d crossMoment(const std::vector<Eigen::Vector3d>& Pp, const std::v
   return M;
 }
 
+// Matrix-weighted version: M = sum [P'_i]x^T W_i [P'_i]x, E = theta^T M theta / 2.
+Eigen::Matrix3d crossMoment(const std::vector<Eigen::Vector3d>& Pp, const std::vector<Eigen::Matrix3d>& W) {
+  Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < Pp.size(); ++i) {
+    const Eigen::Matrix3d S = skew(Pp[i]);
+    M.noalias() += S.transpose() * W[i] * S;
+  }
+  return M;
+}
+
 // Eqs. 13-14 for fixed dimension k: with m = the two free indices (ascending),
 // A = M(m, m), b = -M(m, k), theta_m = A^-1 b.
 bool solveDirection(const Eigen::Matrix3d& M, int k, Eigen::Vector3d* theta, Eigen::Matrix2d* A_out) {
@@ -109,29 +119,45 @@ LineFitResult fitLineWls(const std::vector<Eigen::Vector3d>& points,
     res.status = FitStatus::kDegenerate;
     return res;
   }
-  // Corrected weights: r_i = |P'_i x theta|, Sigma_ri = J_ri Sigma_Pi J_ri^T with
-  // J_ri = (c_i / |c_i|)^T (-[theta]x), c_i = P'_i x theta.
   const Eigen::Matrix3d S = skew(theta);
-  Eigen::Vector3d perp = theta.unitOrthogonal();
-  for (size_t i = 0; i < n; ++i) {
-    Eigen::Vector3d c = Pp[i].cross(theta);
-    if (c.norm() < 1e-12 * std::max(1.0, Pp[i].norm() * theta.norm())) {
-      c = (Pp[i] + options.zero_residual_perturbation_m * perp).cross(theta);
+  Eigen::Matrix3d M2;
+  if (options.weighting == LineFitOptions::Weighting::kPaperScalar) {
+    // Corrected weights: r_i = |P'_i x theta|, Sigma_ri = J_ri Sigma_Pi J_ri^T with
+    // J_ri = (c_i / |c_i|)^T (-[theta]x), c_i = P'_i x theta; perturb P'_i when r_i = 0.
+    const Eigen::Vector3d perp = theta.unitOrthogonal();
+    for (size_t i = 0; i < n; ++i) {
+      Eigen::Vector3d c = Pp[i].cross(theta);
+      if (c.norm() < 1e-12 * std::max(1.0, Pp[i].norm() * theta.norm())) {
+        c = (Pp[i] + options.zero_residual_perturbation_m * perp).cross(theta);
+      }
+      const Eigen::RowVector3d J = -(c / c.norm()).transpose() * S;
+      const double s = J * covs[i] * J.transpose();
+      w[i] = 1.0 / std::max(s, 1e-300);
     }
-    const Eigen::RowVector3d J = -(c / c.norm()).transpose() * S;
-    const double s = J * covs[i] * J.transpose();
-    w[i] = 1.0 / std::max(s, 1e-300);
+    M2 = crossMoment(Pp, w);
+  } else {
+    // W_i = S_i^+ with S_i = [theta]x Sigma_Pi [theta]x^T, inverted in the plane orthogonal to theta.
+    Eigen::Matrix<double, 3, 2> U;
+    U.col(0) = theta.unitOrthogonal();
+    U.col(1) = theta.normalized().cross(U.col(0));
+    std::vector<Eigen::Matrix3d> W(n);
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Matrix<double, 3, 2> H = S * U;  // c = -[theta]x P', so U^T S_i U = H^T Sigma H
+      const Eigen::Matrix2d Si = H.transpose() * covs[i] * H;
+      W[i] = U * Si.inverse() * U.transpose();
+    }
+    M2 = crossMoment(Pp, W);
   }
   Eigen::Vector3d theta2;
   Eigen::Matrix2d A2;
-  if (!solveDirection(crossMoment(Pp, w), k, &theta2, &A2)) {
+  if (!solveDirection(M2, k, &theta2, &A2)) {
     res.status = FitStatus::kDegenerate;
     return res;
   }
   if (options.resolve_with_corrected_weights) theta = theta2;
-  const Eigen::Matrix2d cov_m = A2.inverse();
   const int a = (k == 0) ? 1 : 0;
   const int b_i = (k == 2) ? 1 : 2;
+  const Eigen::Matrix2d cov_m = A2.inverse();  // Sigma_theta_m = A^-1 of the corrected system
   Eigen::Matrix3d cov_theta = Eigen::Matrix3d::Zero();
   cov_theta(a, a) = cov_m(0, 0);
   cov_theta(a, b_i) = cov_m(0, 1);

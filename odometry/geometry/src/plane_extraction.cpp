@@ -263,8 +263,9 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   }
   const int np = std::min(static_cast<int>(planes.size()), 253);
 
-  // 5) Pixel labels: interior cells keep their valid pixels; boundary cells (any 8-neighbour
-  // with another label) test each pixel against the planes of the 3x3 cell neighbourhood.
+  // 5) Pixel labels: each valid pixel of a cell joins the nearest plane among the segments of
+  // the (2R+1)^2 cell neighbourhood if it is within k sigma_z(z) + margin (cells far from any segment
+  // are skipped). Without refinement, the valid pixels of each segment cell are labelled.
   std::vector<int> count(np, 0);
   std::vector<Eigen::Vector3d> sum(np, Eigen::Vector3d::Zero());
   std::vector<int> umin(np, W), umax(np, -1), vmin(np, H), vmax(np, -1);
@@ -272,11 +273,12 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
     for (int cx = 0; cx < cells_x_; ++cx) {
       const int c = cy * cells_x_ + cx;
       const int own = cell_segment_[c];
-      int cand[9];
+      int cand[25];
       int ncand = 0;
       bool interior = own >= 0;
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
+      const int R = std::clamp(options_.refine_neighbourhood_cells, 1, 2);
+      for (int dy = -R; dy <= R; ++dy) {
+        for (int dx = -R; dx <= R; ++dx) {
           const int qx = cx + dx, qy = cy + dy;
           if (qx < 0 || qy < 0 || qx >= cells_x_ || qy >= cells_y_) continue;
           const int s = cell_segment_[qy * cells_x_ + qx];
@@ -285,11 +287,12 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
         }
       }
       if (ncand == 0) continue;
-      if (!options_.refine_boundaries) {
+      if (!options_.refine_boundaries) {  // cell-level labels only
         if (own < 0 || own >= np) continue;
         interior = true;
+      } else {
+        interior = false;  // every pixel near a segment is tested against the nearby planes
       }
-      if (interior && own >= np) continue;
       const int u0 = cx * cs, v0 = cy * cs, u1 = std::min(W, u0 + cs), v1 = std::min(H, v0 + cs);
       for (int v = v0; v < v1; ++v) {
         const float* zr = depth.depth_m.ptr<float>(v);

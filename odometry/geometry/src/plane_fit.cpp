@@ -104,6 +104,28 @@ PlaneFitResult fitPlaneWls(const std::vector<Eigen::Vector3d>& points,
     return res;
   }
   if (options.resolve_with_corrected_weights) theta_m = theta_corr;
+  if (options.outlier_sigma > 0) {
+    // Trim residuals beyond k sigma_ri and repeat the corrected solve once.
+    int n_out = 0;
+    std::vector<double> w2 = w;
+    for (size_t i = 0; i < n; ++i) {
+      const double r = theta_m.dot(points[i]) + 1.0;
+      if (r * r * w[i] > options.outlier_sigma * options.outlier_sigma) {
+        w2[i] = 0.0;
+        ++n_out;
+      }
+    }
+    if (n_out > 0 && static_cast<int>(n) - n_out >= std::max(3, options.min_points)) {
+      // Weights of the kept points from the current estimate.
+      for (size_t i = 0; i < n; ++i) {
+        if (w2[i] > 0) w2[i] = 1.0 / std::max(theta_m.dot(covs[i] * theta_m), 1e-300);
+      }
+      if (solve(w2, &A_corr, &theta_corr)) {
+        theta_m = theta_corr;
+        res.n_outliers = n_out;
+      }
+    }
+  }
   res.theta_m = theta_m;
   res.cov_theta_m = A_corr.inverse();
   if (!res.cov_theta_m.allFinite() || !(theta_m.norm() > 0.0)) {

@@ -98,7 +98,7 @@ TEST(LiftLines, RecoversSegmentOnWallAndAcrossDiscontinuity) {
   const Line3WithCov& L = f.lines[0].line;
   EXPECT_LT((L.p1 - A).norm(), 0.05);
   EXPECT_LT((L.p2 - B).norm(), 0.05);
-  EXPECT_GT(f.lines[0].n_inliers, 90);
+  EXPECT_GT(f.lines[0].n_inliers, 70);  // 2 cm threshold vs sigma_z(3 m) = 1.3 cm
   EXPECT_TRUE(L.cov1.allFinite());
   EXPECT_GT(L.cov1.determinant(), 0.0 - 1e-30);
   ASSERT_TRUE(f.lines[1].has_3d);

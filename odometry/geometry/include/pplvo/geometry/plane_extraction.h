@@ -45,9 +45,14 @@ struct PlaneExtractionOptions {
   /// A segment is kept if its MSE < (k sigma_z(z_mean) + margin)^2 (rejects curved surfaces).
   double segment_sigma_factor = 3.0;
   double segment_margin_m = 0.01;
-  /// Pixel refinement of boundary cells: a pixel joins the nearest neighbouring plane if
-  /// |n.p + d| < k sigma_z(z) + margin. Interior cells keep all their valid pixels.
+  /// Pixel refinement: every valid pixel of a cell in or next to a segment joins the nearest
+  /// plane among the segments of the (2R+1)^2 cell neighbourhood if |n.p + d| < k sigma_z(z) + margin
+  /// (this also trims pixels of planar-looking cells that straddle a corner at long range).
+  /// false: labels are the valid pixels of the segment cells (CAPE without refinement).
   bool refine_boundaries = true;
+  /// R: candidate planes of a cell are the segments within R cells (1 or 2: 3x3 or 5x5).
+  /// 2 reaches across the one or two non-planar cells that separate two surfaces at a corner.
+  int refine_neighbourhood_cells = 2;
   double refine_sigma_factor = 3.0;
   double refine_margin_m = 0.01;
   int min_plane_points = 1500;        ///< after refinement (about 4 cells at VGA)

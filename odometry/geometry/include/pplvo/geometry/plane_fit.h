@@ -20,6 +20,9 @@ struct PlaneFitOptions {
   /// false = keep the paper's first solution and only correct the covariance).
   bool resolve_with_corrected_weights = true;
   int min_points = 3;
+  /// One trimmed refit: points with |theta_m P_i + 1| > k sqrt(Sigma_ri) after the corrected
+  /// solve are dropped and the fit repeated (segment pixels from a neighbouring surface); 0 = off.
+  double outlier_sigma = 3.0;
 };
 
 enum class FitStatus { kOk, kTooFewPoints, kThroughCameraCentre, kDegenerate, kNonFinite };
@@ -34,6 +37,7 @@ struct PlaneFitResult {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();       ///< unweighted mean, m
   double rms_m = 0.0;                                       ///< rms point-to-plane distance
   int n_points = 0;
+  int n_outliers = 0;  ///< dropped by the trimmed refit
 };
 
 /// Fits a plane to points P_i (camera frame, m) with covariances Sigma_Pi and depth variances
