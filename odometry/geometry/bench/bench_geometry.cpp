@@ -143,6 +143,22 @@ Sequence load(const std::string& name) {
     f.feats.planes = r.planes;
     f.feats.plane_labels = r.labels;
   }
+  // Optional visual check: PPLVO_GEOMETRY_DUMP=<dir> writes the first frame's plane labels.
+  if (const char* dump = std::getenv("PPLVO_GEOMETRY_DUMP"); dump && !s.frames.empty()) {
+    const Frame& f = s.frames.front();
+    cv::Mat vis;
+    f.depth.depth_m.convertTo(vis, CV_8U, 50.0);
+    cv::cvtColor(vis, vis, cv::COLOR_GRAY2BGR);
+    for (int v = 0; v < vis.rows; ++v)
+      for (int u = 0; u < vis.cols; ++u)
+        if (const int l = f.feats.plane_labels.at<uint8_t>(v, u))
+          vis.at<cv::Vec3b>(v, u) = cv::Vec3b((l * 67) % 256, (l * 151) % 256, (l * 29 + 80) % 256);
+    cv::imwrite(std::string(dump) + "/" + name + "_planes.png", vis);
+    for (const auto& p : f.feats.planes)
+      std::fprintf(stderr, "%s plane %d: n [%.3f %.3f %.3f] d %.3f m, %d px, sigma_d %.4f m\n", name.c_str(),
+                   p.label, p.plane.normal().x(), p.plane.normal().y(), p.plane.normal().z(), p.plane.d(),
+                   p.n_points, std::sqrt(p.plane.cov(3, 3)));
+  }
   return s;
 }
 

@@ -45,7 +45,7 @@ Eigen::Matrix3d crossMoment(const std::vector<Eigen::Vector3d>& Pp, const std::v
   return M;
 }
 
-// Eqs. 13-14 for fixed dimension k: with m = the two free indices (ascending),
+// Eqs. 13-15 for fixed dimension k: with m = the two free indices (ascending),
 // A = M(m, m), b = -M(m, k), theta_m = A^-1 b.
 bool solveDirection(const Eigen::Matrix3d& M, int k, Eigen::Vector3d* theta, Eigen::Matrix2d* A_out) {
   const int a = (k == 0) ? 1 : 0;

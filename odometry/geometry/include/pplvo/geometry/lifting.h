@@ -1,6 +1,6 @@
 #pragma once
 /// Lifting 2D features to 3D with uncertainty: points by backprojection (eqs. 8-9), lines by
-/// depth sampling + RANSAC + WLS line fitting (eqs. 12-15). Camera frame of the features.
+/// depth sampling + RANSAC + WLS line fitting (eqs. 12-16). Camera frame of the features.
 #include <cstdint>
 #include <string>
 
