@@ -197,7 +197,15 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
       if (cell_bin_[c] >= 0) --bin_count_[cell_bin_[c]];
       cell_bin_[c] = -1;  // out of the histogram for good
     }
-    if (static_cast<int>(region.size()) < options_.min_region_cells) {
+    int cx_min = cells_x_, cx_max = -1, cy_min = cells_y_, cy_max = -1;
+    for (int c : region) {
+      cx_min = std::min(cx_min, c % cells_x_);
+      cx_max = std::max(cx_max, c % cells_x_);
+      cy_min = std::min(cy_min, c / cells_x_);
+      cy_max = std::max(cy_max, c / cells_x_);
+    }
+    const bool strip = std::min(cx_max - cx_min, cy_max - cy_min) + 1 < options_.min_region_span_cells;
+    if (static_cast<int>(region.size()) < options_.min_region_cells || strip) {
       ++st.n_regions_too_small;
       for (int c : region) cell_segment_[c] = -1;  // may still join a later region
       continue;
@@ -263,7 +271,8 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   }
   const int np = std::min(static_cast<int>(planes.size()), 253);
 
-  // 5) Pixel labels: each valid pixel of a cell joins the nearest plane among the segments of
+  // 5) Pixel labels: a pixel of an interior cell (whole neighbourhood in one segment) stays with
+  // it if within k sigma_z(z) + margin of its plane; in other cells it joins the nearest plane among the segments of
   // the (2R+1)^2 cell neighbourhood if it is within k sigma_z(z) + margin (cells far from any segment
   // are skipped). Without refinement, the valid pixels of each segment cell are labelled.
   std::vector<int> count(np, 0);
@@ -287,11 +296,10 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
         }
       }
       if (ncand == 0) continue;
+      if (own >= np) interior = false;  // beyond the label range
       if (!options_.refine_boundaries) {  // cell-level labels only
         if (own < 0 || own >= np) continue;
         interior = true;
-      } else {
-        interior = false;  // every pixel near a segment is tested against the nearby planes
       }
       const int u0 = cx * cs, v0 = cy * cs, u1 = std::min(W, u0 + cs), v1 = std::min(H, v0 + cs);
       for (int v = v0; v < v1; ++v) {
@@ -303,8 +311,10 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
           if (!(z > 0.0) || !std::isfinite(z)) continue;
           const Eigen::Vector3d p(x_factor_[u] * z, yf * z, z);
           int best = -1;
-          if (interior) {
-            best = own;
+          if (interior) {  // all (2R+1)^2 neighbours in the same segment: keep it if it fits
+            if (std::abs(planes[own].normal.dot(p) + planes[own].d) <
+                options_.refine_sigma_factor * sigmaZ(z) + options_.refine_margin_m || !options_.refine_boundaries)
+              best = own;
           } else {
             double best_dist = options_.refine_sigma_factor * sigmaZ(z) + options_.refine_margin_m;
             for (int k = 0; k < ncand; ++k) {

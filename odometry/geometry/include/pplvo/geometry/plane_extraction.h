@@ -39,13 +39,19 @@ struct PlaneExtractionOptions {
   double grow_dist_sigma_factor = 3.0;
   double grow_dist_margin_m = 0.02;
   int min_region_cells = 6;           ///< smaller regions are not planes
+  /// A region must span at least this many cells in both image directions: a one-cell strip
+  /// (e.g. the floor along the image border at a grazing angle) gives a normal that is
+  /// ill-conditioned across the strip and biased by depth quantisation.
+  int min_region_span_cells = 2;
   /// Merging of adjacent segments (both centroid-to-other-plane distances must pass).
   double merge_max_angle_deg = 15.0;
   double merge_max_dist_m = 0.05;     ///< CAPE: 50 mm
   /// A segment is kept if its MSE < (k sigma_z(z_mean) + margin)^2 (rejects curved surfaces).
   double segment_sigma_factor = 3.0;
   double segment_margin_m = 0.01;
-  /// Pixel refinement: every valid pixel of a cell in or next to a segment joins the nearest
+  /// Pixel refinement: a pixel of an interior cell (its whole (2R+1)^2 neighbourhood in one
+  /// segment) stays with that segment if within the distance below; in the other cells in or
+  /// next to a segment, every valid pixel joins the nearest
   /// plane among the segments of the (2R+1)^2 cell neighbourhood if |n.p + d| < k sigma_z(z) + margin
   /// (this also trims pixels of planar-looking cells that straddle a corner at long range).
   /// false: labels are the valid pixels of the segment cells (CAPE without refinement).
