@@ -302,6 +302,24 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
         interior = true;
       }
       const int u0 = cx * cs, v0 = cy * cs, u1 = std::min(W, u0 + cs), v1 = std::min(H, v0 + cs);
+      // Per-cell accumulators indexed by candidate slot; merged into the planes once per cell.
+      int own_slot = -1;
+      for (int k = 0; k < ncand; ++k)
+        if (cand[k] == own) own_slot = k;
+      if (interior && own_slot < 0) continue;
+      int local_count[25] = {0};
+      double local_sum[25][3] = {{0}};
+      // Plane coefficients as plain arrays for the inner loop.
+      double pn[25][4];
+      for (int k = 0; k < ncand; ++k) {
+        pn[k][0] = planes[cand[k]].normal.x();
+        pn[k][1] = planes[cand[k]].normal.y();
+        pn[k][2] = planes[cand[k]].normal.z();
+        pn[k][3] = planes[cand[k]].d;
+      }
+      const double k_sigma = options_.refine_sigma_factor * options_.noise.sigma_z_coeff_per_m;
+      const double margin = options_.refine_margin_m;
+      const bool test_interior = options_.refine_boundaries;
       for (int v = v0; v < v1; ++v) {
         const float* zr = depth.depth_m.ptr<float>(v);
         uint8_t* lr = res.labels.ptr<uint8_t>(v);
@@ -309,31 +327,39 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
         for (int u = u0; u < u1; ++u) {
           const double z = zr[u];
           if (!(z > 0.0) || !std::isfinite(z)) continue;
-          const Eigen::Vector3d p(x_factor_[u] * z, yf * z, z);
-          int best = -1;
-          if (interior) {  // all (2R+1)^2 neighbours in the same segment: keep it if it fits
-            if (std::abs(planes[own].normal.dot(p) + planes[own].d) <
-                options_.refine_sigma_factor * sigmaZ(z) + options_.refine_margin_m || !options_.refine_boundaries)
-              best = own;
+          const double px = x_factor_[u] * z, py = yf * z;
+          const double thr = k_sigma * z * z + margin;
+          int slot = -1;
+          if (interior) {  // whole neighbourhood in one segment: keep the pixel if it fits
+            const double* q = pn[own_slot];
+            if (!test_interior || std::abs(q[0] * px + q[1] * py + q[2] * z + q[3]) < thr) slot = own_slot;
           } else {
-            double best_dist = options_.refine_sigma_factor * sigmaZ(z) + options_.refine_margin_m;
+            double best_dist = thr;
             for (int k = 0; k < ncand; ++k) {
-              const double dist = std::abs(planes[cand[k]].normal.dot(p) + planes[cand[k]].d);
+              const double dist = std::abs(pn[k][0] * px + pn[k][1] * py + pn[k][2] * z + pn[k][3]);
               if (dist < best_dist) {
                 best_dist = dist;
-                best = cand[k];
+                slot = k;
               }
             }
           }
-          if (best < 0) continue;
-          lr[u] = static_cast<uint8_t>(best + 1);
-          ++count[best];
-          sum[best] += p;
-          umin[best] = std::min(umin[best], u);
-          umax[best] = std::max(umax[best], u);
-          vmin[best] = std::min(vmin[best], v);
-          vmax[best] = std::max(vmax[best], v);
+          if (slot < 0) continue;
+          lr[u] = static_cast<uint8_t>(cand[slot] + 1);
+          ++local_count[slot];
+          local_sum[slot][0] += px;
+          local_sum[slot][1] += py;
+          local_sum[slot][2] += z;
         }
+      }
+      for (int k = 0; k < ncand; ++k) {
+        if (local_count[k] == 0) continue;
+        const int b = cand[k];
+        count[b] += local_count[k];
+        sum[b] += Eigen::Vector3d(local_sum[k][0], local_sum[k][1], local_sum[k][2]);
+        umin[b] = std::min(umin[b], u0);  // bounding box at cell granularity
+        umax[b] = std::max(umax[b], u1 - 1);
+        vmin[b] = std::min(vmin[b], v0);
+        vmax[b] = std::max(vmax[b], v1 - 1);
       }
     }
   }
@@ -353,13 +379,14 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   for (int i : order) {
     if (static_cast<int>(res.planes.size()) >= options_.max_planes) break;
     const int step = std::max(
-        1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count[i]) / std::max(1, options_.max_fit_points)))));
+        1, static_cast<int>(std::floor(std::sqrt(static_cast<double>(count[i]) / std::max(1, options_.max_fit_points)))));
     P.clear();
     C.clear();
     V.clear();
-    for (int v = vmin[i]; v <= vmax[i]; v += step) {
+    // Grid anchored at multiples of the step (independent of the bounding box).
+    for (int v = (vmin[i] + step - 1) / step * step; v <= vmax[i]; v += step) {
       const uint8_t* lr = res.labels.ptr<uint8_t>(v);
-      for (int u = umin[i]; u <= umax[i]; u += step) {
+      for (int u = (umin[i] + step - 1) / step * step; u <= umax[i]; u += step) {
         if (lr[u] != i + 1) continue;
         double z, var;
         if (!depthAt(depth, u, v, noise, &z, &var)) continue;

@@ -62,7 +62,9 @@ struct PlaneExtractionOptions {
   double refine_sigma_factor = 3.0;
   double refine_margin_m = 0.01;
   int min_plane_points = 1500;        ///< after refinement (about 4 cells at VGA)
-  int max_fit_points = 3000;          ///< WLS fit on a regular subsample of the segment pixels
+  /// WLS fit on a regular grid subsample of the segment pixels with step
+  /// floor(sqrt(n_pixels / max_fit_points)) (so between max_fit_points and 4x as many points).
+  int max_fit_points = 3000;
   int max_planes = 64;                ///< labels are CV_8U (<= 254)
   PlaneFitOptions fit;
 };
