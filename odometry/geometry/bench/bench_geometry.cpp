@@ -3,18 +3,18 @@
 // Data: $PPLVO_SHARED_DATA (default ../shared/data from the repository root). Depth PNG / 5000
 // metres; variance from the sensor model (1.425e-3 z^2)^2 since no depth filter runs here.
 // Line segments: OpenCV LSD on the grey image, only to have realistic inputs.
+#include <benchmark/benchmark.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
-#include <sstream>
-#include <string>
-#include <vector>
-
-#include <benchmark/benchmark.h>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "pplvo/geometry/lifting.h"
 #include "pplvo/geometry/plane_extraction.h"
@@ -110,7 +110,8 @@ Sequence load(const std::string& name) {
     if (static_cast<int>(s.frames.size()) >= kMaxFrames) break;
     const cv::Mat d16 = cv::imread(dir + "/" + d, cv::IMREAD_UNCHANGED);
     const cv::Mat grey = cv::imread(dir + "/" + r, cv::IMREAD_GRAYSCALE);
-    if (d16.empty() || grey.empty() || d16.type() != CV_16UC1 || d16.size() != grey.size()) continue;
+    if (d16.empty() || grey.empty() || d16.type() != CV_16UC1 || d16.size() != grey.size())
+      continue;
     Frame f;
     f.depth.depth_m = depthUnitsToMetres(d16, 5000.0);
     f.depth.var_m2 = cv::Mat(f.depth.depth_m.size(), CV_32F);
@@ -155,15 +156,16 @@ Sequence load(const std::string& name) {
           vis.at<cv::Vec3b>(v, u) = cv::Vec3b((l * 67) % 256, (l * 151) % 256, (l * 29 + 80) % 256);
     cv::imwrite(std::string(dump) + "/" + name + "_planes.png", vis);
     for (const auto& p : f.feats.planes)
-      std::fprintf(stderr, "%s plane %d: n [%.3f %.3f %.3f] d %.3f m, %d px, sigma_d %.4f m\n", name.c_str(),
-                   p.label, p.plane.normal().x(), p.plane.normal().y(), p.plane.normal().z(), p.plane.d(),
-                   p.n_points, std::sqrt(p.plane.cov(3, 3)));
+      std::fprintf(stderr, "%s plane %d: n [%.3f %.3f %.3f] d %.3f m, %d px, sigma_d %.4f m\n",
+                   name.c_str(), p.label, p.plane.normal().x(), p.plane.normal().y(),
+                   p.plane.normal().z(), p.plane.d(), p.n_points, std::sqrt(p.plane.cov(3, 3)));
   }
   return s;
 }
 
 const std::vector<Sequence>& sequences() {
-  static const std::vector<Sequence> s = {load("icl_living_room_kt0_short"), load("tum_fr3_sitting_static_short")};
+  static const std::vector<Sequence> s = {load("icl_living_room_kt0_short"),
+                                          load("tum_fr3_sitting_static_short")};
   return s;
 }
 

@@ -19,7 +19,8 @@ std::string validateDepth(const DepthWithVariance& depth, const PinholeCamera& c
   return {};
 }
 
-LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth, const LiftOptions& options) {
+LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth,
+                     const LiftOptions& options) {
   LiftStats st;
   for (auto& f : frame.points) f.has_3d = false;
   st.error = validateDepth(depth, frame.camera);
@@ -55,7 +56,8 @@ LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth, const
       ++st.points_no_depth;
       continue;
     }
-    f.point = backprojectWithCov(frame.camera, f.px.x(), f.px.y(), z, var, options.pixel_variance_px2);
+    f.point =
+        backprojectWithCov(frame.camera, f.px.x(), f.px.y(), z, var, options.pixel_variance_px2);
     f.has_3d = true;
     ++st.points_lifted;
   }
@@ -64,14 +66,15 @@ LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth, const
 
 LineFitResult liftLine(const PinholeCamera& camera, const DepthWithVariance& depth,
                        const Eigen::Vector2d& px1, const Eigen::Vector2d& px2,
-                       const LiftOptions& options, uint64_t seed, int* n_valid_samples, int* n_inliers) {
+                       const LiftOptions& options, uint64_t seed, int* n_valid_samples,
+                       int* n_inliers) {
   LineFitResult bad;
   *n_valid_samples = 0;
   *n_inliers = 0;
   if (!px1.allFinite() || !px2.allFinite()) return bad;
   const double len = (px2 - px1).norm();
-  const int n_samples =
-      std::max(2, std::min(std::max(2, options.max_line_samples), static_cast<int>(std::floor(len)) + 1));
+  const int n_samples = std::max(
+      2, std::min(std::max(2, options.max_line_samples), static_cast<int>(std::floor(len)) + 1));
   std::vector<Eigen::Vector3d> P;
   std::vector<Eigen::Matrix3d> C;
   std::vector<double> V;
@@ -140,7 +143,8 @@ LineFitResult liftLine(const PinholeCamera& camera, const DepthWithVariance& dep
   return fitLineWls(Pi, Ci, Vi, Pi.front(), Pi.back(), options.line_fit);
 }
 
-LiftStats liftLines(FrameFeatures& frame, const DepthWithVariance& depth, const LiftOptions& options) {
+LiftStats liftLines(FrameFeatures& frame, const DepthWithVariance& depth,
+                    const LiftOptions& options) {
   LiftStats st;
   for (auto& l : frame.lines) {
     l.has_3d = false;

@@ -1,20 +1,21 @@
 #include "pplvo/geometry/line_fit.h"
 
-#include <cmath>
-
 #include <Eigen/LU>
+#include <cmath>
 
 #include "pplvo/core/geometry.h"
 
 namespace pplvo::geometry {
 
 Point3WithCov interpolateLineEndpoint(const Eigen::Vector3d& O, const Eigen::Matrix3d& cov_O,
-                                      const Eigen::Vector3d& theta, const Eigen::Matrix3d& cov_theta,
+                                      const Eigen::Vector3d& theta,
+                                      const Eigen::Matrix3d& cov_theta,
                                       const Eigen::Vector3d& P_end) {
   const double t2 = theta.squaredNorm();
   const Eigen::Vector3d Pp = P_end - O;
   const double lambda = theta.dot(Pp) / t2;
-  // d lambda / d O = -theta^T / |theta|^2;  d lambda / d theta = (P'^T - 2 lambda theta^T) / |theta|^2
+  // d lambda / d O = -theta^T / |theta|^2;  d lambda / d theta = (P'^T - 2 lambda theta^T) /
+  // |theta|^2
   const Eigen::Matrix3d J_O = Eigen::Matrix3d::Identity() - theta * theta.transpose() / t2;
   const Eigen::Matrix3d J_t =
       lambda * Eigen::Matrix3d::Identity() + theta * (Pp - 2.0 * lambda * theta).transpose() / t2;
@@ -30,13 +31,15 @@ namespace {
 Eigen::Matrix3d crossMoment(const std::vector<Eigen::Vector3d>& Pp, const std::vector<double>& w) {
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
   for (size_t i = 0; i < Pp.size(); ++i) {
-    M.noalias() += w[i] * (Pp[i].squaredNorm() * Eigen::Matrix3d::Identity() - Pp[i] * Pp[i].transpose());
+    M.noalias() +=
+        w[i] * (Pp[i].squaredNorm() * Eigen::Matrix3d::Identity() - Pp[i] * Pp[i].transpose());
   }
   return M;
 }
 
 // Matrix-weighted version: M = sum [P'_i]x^T W_i [P'_i]x, E = theta^T M theta / 2.
-Eigen::Matrix3d crossMoment(const std::vector<Eigen::Vector3d>& Pp, const std::vector<Eigen::Matrix3d>& W) {
+Eigen::Matrix3d crossMoment(const std::vector<Eigen::Vector3d>& Pp,
+                            const std::vector<Eigen::Matrix3d>& W) {
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
   for (size_t i = 0; i < Pp.size(); ++i) {
     const Eigen::Matrix3d S = skew(Pp[i]);
@@ -47,7 +50,8 @@ Eigen::Matrix3d crossMoment(const std::vector<Eigen::Vector3d>& Pp, const std::v
 
 // Eqs. 13-15 for fixed dimension k: with m = the two free indices (ascending),
 // A = M(m, m), b = -M(m, k), theta_m = A^-1 b.
-bool solveDirection(const Eigen::Matrix3d& M, int k, Eigen::Vector3d* theta, Eigen::Matrix2d* A_out) {
+bool solveDirection(const Eigen::Matrix3d& M, int k, Eigen::Vector3d* theta,
+                    Eigen::Matrix2d* A_out) {
   const int a = (k == 0) ? 1 : 0;
   const int b_i = (k == 2) ? 1 : 2;
   Eigen::Matrix2d A;
@@ -136,7 +140,8 @@ LineFitResult fitLineWls(const std::vector<Eigen::Vector3d>& points,
     }
     M2 = crossMoment(Pp, w);
   } else {
-    // W_i = S_i^+ with S_i = [theta]x Sigma_Pi [theta]x^T, inverted in the plane orthogonal to theta.
+    // W_i = S_i^+ with S_i = [theta]x Sigma_Pi [theta]x^T, inverted in the plane orthogonal to
+    // theta.
     Eigen::Matrix<double, 3, 2> U;
     U.col(0) = theta.unitOrthogonal();
     U.col(1) = theta.normalized().cross(U.col(0));

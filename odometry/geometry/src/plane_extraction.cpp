@@ -1,18 +1,25 @@
 #include "pplvo/geometry/plane_extraction.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-
-#include <Eigen/Eigenvalues>
 
 #include "pplvo/geometry/lifting.h"  // validateDepth
 
 namespace pplvo::geometry {
 
 void PlaneExtractor::Moments::add(const Moments& o) {
-  n += o.n; sx += o.sx; sy += o.sy; sz += o.sz; sxx += o.sxx; syy += o.syy; szz += o.szz;
-  sxy += o.sxy; sxz += o.sxz; syz += o.syz;
+  n += o.n;
+  sx += o.sx;
+  sy += o.sy;
+  sz += o.sz;
+  sxx += o.sxx;
+  syy += o.syy;
+  szz += o.szz;
+  sxy += o.sxy;
+  sxz += o.sxz;
+  syz += o.syz;
 }
 
 bool PlaneExtractor::fitMoments(const Moments& m, CellPlane* out) {
@@ -57,7 +64,8 @@ PlaneExtractor::PlaneExtractor(const PinholeCamera& camera, const PlaneExtractio
     x_factor_[u] = static_cast<float>((u - camera_.cx) / camera_.fx);
     cell_of_col_[u] = u / cs;
   }
-  for (int v = 0; v < camera_.height; ++v) y_factor_[v] = static_cast<float>((v - camera_.cy) / camera_.fy);
+  for (int v = 0; v < camera_.height; ++v)
+    y_factor_[v] = static_cast<float>((v - camera_.cy) / camera_.fy);
   const size_t nc = static_cast<size_t>(cells_x_) * cells_y_;
   cell_moments_.resize(nc);
   cell_planes_.resize(nc);
@@ -90,11 +98,19 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
     for (int u = 0; u < W; ++u) {
       const float z = zr[u];
       if (!(z > 0.0f) || !std::isfinite(z)) continue;
-      const double x = static_cast<double>(x_factor_[u]) * z, y = static_cast<double>(yf) * z, zz = z;
+      const double x = static_cast<double>(x_factor_[u]) * z, y = static_cast<double>(yf) * z,
+                   zz = z;
       Moments& m = row_cells[cell_of_col_[u]];
-      m.n += 1; m.sx += x; m.sy += y; m.sz += zz;
-      m.sxx += x * x; m.syy += y * y; m.szz += zz * zz;
-      m.sxy += x * y; m.sxz += x * zz; m.syz += y * zz;
+      m.n += 1;
+      m.sx += x;
+      m.sy += y;
+      m.sz += zz;
+      m.sxx += x * x;
+      m.syy += y * y;
+      m.szz += zz * zz;
+      m.sxy += x * y;
+      m.sxz += x * zz;
+      m.syz += y * zz;
     }
   }
 
@@ -128,12 +144,14 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
       planar_[c] = 0;
       cell_segment_[c] = -1;
       cell_bin_[c] = -1;
-      const int area = (std::min(W, (cx + 1) * cs) - cx * cs) * (std::min(H, (cy + 1) * cs) - cy * cs);
+      const int area =
+          (std::min(W, (cx + 1) * cs) - cx * cs) * (std::min(H, (cy + 1) * cs) - cy * cs);
       const Moments& m = cell_moments_[c];
       if (m.n < std::max(3.0, options_.min_valid_fraction * area)) continue;
       CellPlane& p = cell_planes_[c];
       if (!fitMoments(m, &p)) continue;
-      const double thr = options_.planarity_sigma_factor * sigmaZ(p.mean.z()) + options_.planarity_margin_m;
+      const double thr =
+          options_.planarity_sigma_factor * sigmaZ(p.mean.z()) + options_.planarity_margin_m;
       if (p.mse > thr * thr) continue;
       if (!continuous(cx, cy)) continue;
       planar_[c] = 1;
@@ -187,7 +205,9 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
         const CellPlane& np = cell_planes_[n];
         if (np.normal.dot(sp.normal) < cos_grow) continue;
         const double dist = std::abs(sp.normal.dot(np.mean) + sp.d);
-        if (dist > options_.grow_dist_sigma_factor * sigmaZ(np.mean.z()) + options_.grow_dist_margin_m) continue;
+        if (dist >
+            options_.grow_dist_sigma_factor * sigmaZ(np.mean.z()) + options_.grow_dist_margin_m)
+          continue;
         cell_segment_[n] = sid;
         queue_.push_back(n);
       }
@@ -204,7 +224,8 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
       cy_min = std::min(cy_min, c / cells_x_);
       cy_max = std::max(cy_max, c / cells_x_);
     }
-    const bool strip = std::min(cx_max - cx_min, cy_max - cy_min) + 1 < options_.min_region_span_cells;
+    const bool strip =
+        std::min(cx_max - cx_min, cy_max - cy_min) + 1 < options_.min_region_span_cells;
     if (static_cast<int>(region.size()) < options_.min_region_cells || strip) {
       ++st.n_regions_too_small;
       for (int c : region) cell_segment_[c] = -1;  // may still join a later region
@@ -257,7 +278,8 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   for (int i = 0; i < nseg; ++i) {
     if (!segs[i].alive) continue;
     const CellPlane& p = segs[i].plane;
-    const double thr = options_.segment_sigma_factor * sigmaZ(p.mean.z()) + options_.segment_margin_m;
+    const double thr =
+        options_.segment_sigma_factor * sigmaZ(p.mean.z()) + options_.segment_margin_m;
     if (p.mse > thr * thr) {
       ++st.n_segments_not_planar;
       continue;
@@ -272,9 +294,10 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   const int np = std::min(static_cast<int>(planes.size()), 253);
 
   // 5) Pixel labels: a pixel of an interior cell (whole neighbourhood in one segment) stays with
-  // it if within k sigma_z(z) + margin of its plane; in other cells it joins the nearest plane among the segments of
-  // the (2R+1)^2 cell neighbourhood if it is within k sigma_z(z) + margin (cells far from any segment
-  // are skipped). Without refinement, the valid pixels of each segment cell are labelled.
+  // it if within k sigma_z(z) + margin of its plane; in other cells it joins the nearest plane
+  // among the segments of the (2R+1)^2 cell neighbourhood if it is within k sigma_z(z) + margin
+  // (cells far from any segment are skipped). Without refinement, the valid pixels of each segment
+  // cell are labelled.
   std::vector<int> count(np, 0);
   std::vector<Eigen::Vector3d> sum(np, Eigen::Vector3d::Zero());
   std::vector<int> umin(np, W), umax(np, -1), vmin(np, H), vmax(np, -1);
@@ -292,11 +315,12 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
           if (qx < 0 || qy < 0 || qx >= cells_x_ || qy >= cells_y_) continue;
           const int s = cell_segment_[qy * cells_x_ + qx];
           if (s != own) interior = false;
-          if (s >= 0 && s < np && std::find(cand, cand + ncand, s) == cand + ncand) cand[ncand++] = s;
+          if (s >= 0 && s < np && std::find(cand, cand + ncand, s) == cand + ncand)
+            cand[ncand++] = s;
         }
       }
       if (ncand == 0) continue;
-      if (own >= np) interior = false;  // beyond the label range
+      if (own >= np) interior = false;    // beyond the label range
       if (!options_.refine_boundaries) {  // cell-level labels only
         if (own < 0 || own >= np) continue;
         interior = true;
@@ -332,7 +356,8 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
           int slot = -1;
           if (interior) {  // whole neighbourhood in one segment: keep the pixel if it fits
             const double* q = pn[own_slot];
-            if (!test_interior || std::abs(q[0] * px + q[1] * py + q[2] * z + q[3]) < thr) slot = own_slot;
+            if (!test_interior || std::abs(q[0] * px + q[1] * py + q[2] * z + q[3]) < thr)
+              slot = own_slot;
           } else {
             double best_dist = thr;
             for (int k = 0; k < ncand; ++k) {
@@ -367,8 +392,10 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   // 6) WLS fit (eqs. 10-11) on a regular subsample of each segment's pixels; order by size.
   std::vector<int> order;
   for (int i = 0; i < np; ++i) {
-    if (count[i] >= options_.min_plane_points) order.push_back(i);
-    else ++st.n_too_few_points;
+    if (count[i] >= options_.min_plane_points)
+      order.push_back(i);
+    else
+      ++st.n_too_few_points;
   }
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return count[a] > count[b]; });
   std::vector<uint8_t> lut(256, 0);
@@ -378,8 +405,9 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   DepthNoiseModel noise = options_.noise;
   for (int i : order) {
     if (static_cast<int>(res.planes.size()) >= options_.max_planes) break;
-    const int step = std::max(
-        1, static_cast<int>(std::floor(std::sqrt(static_cast<double>(count[i]) / std::max(1, options_.max_fit_points)))));
+    const int step =
+        std::max(1, static_cast<int>(std::floor(std::sqrt(static_cast<double>(count[i]) /
+                                                          std::max(1, options_.max_fit_points)))));
     P.clear();
     C.clear();
     V.clear();
@@ -390,7 +418,8 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
         if (lr[u] != i + 1) continue;
         double z, var;
         if (!depthAt(depth, u, v, noise, &z, &var)) continue;
-        const Point3WithCov pt = backprojectWithCov(camera_, u, v, z, var, options_.pixel_variance_px2);
+        const Point3WithCov pt =
+            backprojectWithCov(camera_, u, v, z, var, options_.pixel_variance_px2);
         P.push_back(pt.p);
         C.push_back(pt.cov);
         V.push_back(var);

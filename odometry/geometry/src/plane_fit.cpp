@@ -1,19 +1,23 @@
 #include "pplvo/geometry/plane_fit.h"
 
-#include <cmath>
-
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <cmath>
 
 namespace pplvo::geometry {
 
 const char* toString(FitStatus s) {
   switch (s) {
-    case FitStatus::kOk: return "ok";
-    case FitStatus::kTooFewPoints: return "too_few_points";
-    case FitStatus::kThroughCameraCentre: return "through_camera_centre";
-    case FitStatus::kDegenerate: return "degenerate";
-    case FitStatus::kNonFinite: return "non_finite";
+    case FitStatus::kOk:
+      return "ok";
+    case FitStatus::kTooFewPoints:
+      return "too_few_points";
+    case FitStatus::kThroughCameraCentre:
+      return "through_camera_centre";
+    case FitStatus::kDegenerate:
+      return "degenerate";
+    case FitStatus::kNonFinite:
+      return "non_finite";
   }
   return "unknown";
 }
@@ -26,7 +30,7 @@ PlaneWithCov hessianFromMinimal(const Eigen::Vector3d& theta_m, const Eigen::Mat
   const double d = 1.0 / s;
   Eigen::Matrix<double, 4, 3> J;
   J.topRows<3>() = (Eigen::Matrix3d::Identity() - n * n.transpose()) / s;  // dn/dtheta_m
-  J.row(3) = -n.transpose() / (s * s);                                      // dd/dtheta_m
+  J.row(3) = -n.transpose() / (s * s);                                     // dd/dtheta_m
   PlaneWithCov out;
   out.hessian << n, d;
   out.cov = J * cov_theta_m * J.transpose();

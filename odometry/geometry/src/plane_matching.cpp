@@ -16,7 +16,8 @@ PlaneMatchResult matchPlanesWithStats(const FrameFeatures& prev, const FrameFeat
   if (np == 0 || nc == 0) return res;
   const cv::Mat& Lp = prev.plane_labels;
   const cv::Mat& Lc = curr.plane_labels;
-  if (Lp.empty() || Lc.empty() || Lp.type() != CV_8UC1 || Lc.type() != CV_8UC1 || Lp.size() != Lc.size()) {
+  if (Lp.empty() || Lc.empty() || Lp.type() != CV_8UC1 || Lc.type() != CV_8UC1 ||
+      Lp.size() != Lc.size()) {
     st.error = "plane label images missing, not CV_8UC1 or of different sizes";
     return res;
   }
@@ -47,7 +48,8 @@ PlaneMatchResult matchPlanesWithStats(const FrameFeatures& prev, const FrameFeat
   };
   std::vector<Cand> cands;
   for (int i = 0; i < np; ++i) {
-    const PlaneWithCov pl = T_curr_prev ? prev.planes[i].plane.transformed(*T_curr_prev) : prev.planes[i].plane;
+    const PlaneWithCov pl =
+        T_curr_prev ? prev.planes[i].plane.transformed(*T_curr_prev) : prev.planes[i].plane;
     for (int j = 0; j < nc; ++j) {
       const int ov = overlap[static_cast<size_t>(i) * nc + j];
       const int smaller = std::min(cnt_p[i], cnt_c[j]);
@@ -63,7 +65,8 @@ PlaneMatchResult matchPlanesWithStats(const FrameFeatures& prev, const FrameFeat
     }
   }
   // One-to-one: accept candidates by increasing eq. 17 distance.
-  std::stable_sort(cands.begin(), cands.end(), [](const Cand& a, const Cand& b) { return a.dist < b.dist; });
+  std::stable_sort(cands.begin(), cands.end(),
+                   [](const Cand& a, const Cand& b) { return a.dist < b.dist; });
   std::vector<char> used_p(np, 0), used_c(nc, 0);
   for (const Cand& c : cands) {
     if (used_p[c.p] || used_c[c.c]) continue;

@@ -1,12 +1,11 @@
 #pragma once
 // Small analytic scenes for the geometry tests: a box-shaped room rendered by ray casting with
 // the pinhole model (signed focal lengths), optional depth noise from the sensor model.
+#include <Eigen/Core>
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <random>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
 #include "pplvo/core/geometry.h"
@@ -33,7 +32,8 @@ struct WorldPlane {
 };
 
 /// Room [x0,x1] x [y0,y1] x [z0,z1] (metres), planes with inward normals.
-inline std::vector<WorldPlane> boxRoom(double x0, double x1, double y0, double y1, double z0, double z1) {
+inline std::vector<WorldPlane> boxRoom(double x0, double x1, double y0, double y1, double z0,
+                                       double z1) {
   return {{{1, 0, 0}, -x0}, {{-1, 0, 0}, x1}, {{0, 1, 0}, -y0},
           {{0, -1, 0}, y1}, {{0, 0, 1}, -z0}, {{0, 0, -1}, z1}};
 }
@@ -55,8 +55,9 @@ struct Rendered {
 
 /// Ray-casts the room; noise_seed >= 0 adds N(0, sigma_z(z)^2) depth noise with
 /// sigma_z = coeff z^2 and stores the model variance in var_m2.
-inline Rendered renderRoom(const PinholeCamera& cam, const Pose3& T_w_c, const std::vector<WorldPlane>& room,
-                           int noise_seed, double coeff = 1.425e-3, double max_depth_m = 10.0) {
+inline Rendered renderRoom(const PinholeCamera& cam, const Pose3& T_w_c,
+                           const std::vector<WorldPlane>& room, int noise_seed,
+                           double coeff = 1.425e-3, double max_depth_m = 10.0) {
   Rendered r;
   r.depth.depth_m = cv::Mat::zeros(cam.height, cam.width, CV_32F);
   r.depth.var_m2 = cv::Mat::zeros(cam.height, cam.width, CV_32F);
@@ -96,7 +97,8 @@ inline double angleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 /// Camera looking from inside the room towards a corner.
-inline Pose3 cornerView(double yaw_deg = 35.0, double pitch_deg = 20.0, Eigen::Vector3d t = {0.5, 0.6, 0.3}) {
+inline Pose3 cornerView(double yaw_deg = 35.0, double pitch_deg = 20.0,
+                        Eigen::Vector3d t = {0.5, 0.6, 0.3}) {
   // Camera axes: z forward. Start looking along world +z, then yaw about world y and pitch down.
   const Eigen::Matrix3d R = (Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()) *
                              Eigen::AngleAxisd(pitch_deg * M_PI / 180.0, Eigen::Vector3d::UnitX()))

@@ -1,8 +1,7 @@
-#include <random>
+#include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-
-#include <gtest/gtest.h>
+#include <random>
 
 #include "pplvo/geometry/backprojection.h"
 #include "scene.h"
@@ -32,7 +31,8 @@ void checkMonteCarlo(const PinholeCamera& cam, double u, double v, double z, dou
   for (int r = 0; r < 3; ++r) {
     EXPECT_NEAR(M(r, r), p.cov(r, r), 0.03 * p.cov(r, r)) << "diag " << r;
     for (int c = r + 1; c < 3; ++c) {
-      EXPECT_NEAR(M(r, c), p.cov(r, c), 0.03 * std::sqrt(p.cov(r, r) * p.cov(c, c))) << r << "," << c;
+      EXPECT_NEAR(M(r, c), p.cov(r, c), 0.03 * std::sqrt(p.cov(r, r) * p.cov(c, c)))
+          << r << "," << c;
     }
   }
 }

@@ -1,7 +1,7 @@
-#include <random>
+#include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-#include <gtest/gtest.h>
+#include <random>
 
 #include "pplvo/geometry/backprojection.h"
 #include "pplvo/geometry/line_fit.h"
@@ -18,8 +18,8 @@ struct Samples {
 
 // n points uniformly along the true segment A-B, measured with pixel and depth noise
 // (sigma_z = coeff z^2) drawn from the model of eqs. 8-9.
-Samples sampleLine(const PinholeCamera& cam, const Eigen::Vector3d& A, const Eigen::Vector3d& B, int n,
-                   std::mt19937& rng, double coeff = 1.425e-3) {
+Samples sampleLine(const PinholeCamera& cam, const Eigen::Vector3d& A, const Eigen::Vector3d& B,
+                   int n, std::mt19937& rng, double coeff = 1.425e-3) {
   std::normal_distribution<double> N(0.0, 1.0);
   std::uniform_real_distribution<double> jitter(-0.5, 0.5);
   Samples s;
@@ -108,9 +108,9 @@ TEST(LineFit, CovarianceIsConsistentNees) {
     int n;
   };
   const Case cases[] = {
-      {{-0.6, 0.3, 2.0}, {0.5, -0.2, 2.8}, 100},  // oblique
+      {{-0.6, 0.3, 2.0}, {0.5, -0.2, 2.8}, 100},   // oblique
       {{-0.3, -0.5, 1.5}, {-0.25, 0.6, 1.6}, 80},  // nearly vertical, y fixed
-      {{0.1, 0.2, 1.0}, {0.5, 0.05, 3.0}, 60},    // receding in depth, z fixed
+      {{0.1, 0.2, 1.0}, {0.5, 0.05, 3.0}, 60},     // receding in depth, z fixed
   };
   for (const Case& c : cases) {
     const NeesOut o = neesExperiment(c.A, c.B, c.n);

@@ -1,6 +1,6 @@
-#include <map>
-
 #include <gtest/gtest.h>
+
+#include <map>
 
 #include "pplvo/geometry/plane_extraction.h"
 #include "scene.h"
@@ -52,9 +52,11 @@ Check checkExtraction(const PlaneExtractionResult& res, const test::Rendered& r,
     if (ang > 2.0 || derr > 0.02 || found[best]) ++c.n_spurious;  // wrong or duplicate
     if (ang > 2.0 || derr > 0.02 || found[best] || best_n < 0.97 * total) {
       for (const auto& [id, nv] : votes) std::printf("  votes surface %d: %d\n", id, nv);
-      std::printf("  plane %d: %d px, surface %d (purity %.3f), angle %.3f deg, d err %.4f m, n [%.3f %.3f %.3f] d %.3f\n",
-                  p.label, total, best, static_cast<double>(best_n) / total, ang, derr, p.plane.normal().x(),
-                  p.plane.normal().y(), p.plane.normal().z(), p.plane.d());
+      std::printf(
+          "  plane %d: %d px, surface %d (purity %.3f), angle %.3f deg, d err %.4f m, n [%.3f %.3f "
+          "%.3f] d %.3f\n",
+          p.label, total, best, static_cast<double>(best_n) / total, ang, derr,
+          p.plane.normal().x(), p.plane.normal().y(), p.plane.normal().z(), p.plane.d());
     }
     found[best] = 1;
     c.max_angle_deg = std::max(c.max_angle_deg, ang);
@@ -80,9 +82,11 @@ TEST(PlaneExtraction, RoomCornerFindsEachPlane) {
       const PlaneExtractionResult res = ex.extract(r.depth);
       ASSERT_TRUE(res.stats.error.empty());
       const Check c = checkExtraction(res, r, room, T, 8000);
-      std::printf("seed %d: %d planes, %d/%d visible found, spurious %d, max angle %.3f deg, max d err %.4f m, purity %.4f\n",
-                  seed, static_cast<int>(res.planes.size()), c.n_found, c.n_true_visible, c.n_spurious,
-                  c.max_angle_deg, c.max_d_err_m, c.min_purity);
+      std::printf(
+          "seed %d: %d planes, %d/%d visible found, spurious %d, max angle %.3f deg, max d err "
+          "%.4f m, purity %.4f\n",
+          seed, static_cast<int>(res.planes.size()), c.n_found, c.n_true_visible, c.n_spurious,
+          c.max_angle_deg, c.max_d_err_m, c.min_purity);
       EXPECT_GE(c.n_true_visible, 2);
       EXPECT_EQ(c.n_found, c.n_true_visible);
       EXPECT_EQ(c.n_spurious, 0);

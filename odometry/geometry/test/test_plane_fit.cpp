@@ -1,7 +1,7 @@
-#include <random>
+#include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-#include <gtest/gtest.h>
+#include <random>
 
 #include "pplvo/geometry/backprojection.h"
 #include "pplvo/geometry/plane_fit.h"
@@ -18,8 +18,8 @@ struct Samples {
 
 // Pixels of a window; the true point is where the ray through a sub-pixel position (uniform
 // over the pixel) meets the plane; the measurement uses the integer pixel and a noisy depth.
-Samples samplePlane(const PinholeCamera& cam, const Eigen::Vector4d& plane, int u0, int v0, int w, int h,
-                    int step, std::mt19937& rng, double coeff = 1.425e-3) {
+Samples samplePlane(const PinholeCamera& cam, const Eigen::Vector4d& plane, int u0, int v0, int w,
+                    int h, int step, std::mt19937& rng, double coeff = 1.425e-3) {
   std::uniform_real_distribution<double> U(-0.5, 0.5);
   std::normal_distribution<double> N(0.0, 1.0);
   Samples s;
@@ -62,8 +62,8 @@ TEST(PlaneFit, RecoversTruePlane) {
 
 // NEES over many trials: 3-dof theta_m and the Hessian form projected on its 3-dof tangent
 // (two normal directions + d). Mean within [0.8, 1.25] x dof.
-void neesExperiment(const Eigen::Vector4d& truth, int u0, int v0, int w, int h, int step, double* nees_m,
-                    double* nees_h) {
+void neesExperiment(const Eigen::Vector4d& truth, int u0, int v0, int w, int h, int step,
+                    double* nees_m, double* nees_h) {
   const PinholeCamera cam = test::vgaCamera(true);
   std::mt19937 rng(12345);
   const Eigen::Vector3d theta_true = truth.head<3>() / truth(3);
@@ -107,8 +107,9 @@ TEST(PlaneFit, CovarianceIsConsistentNees) {
     EXPECT_LT(nm, 1.25 * 3) << c.plane.transpose();
     EXPECT_GT(nh, 0.8 * 3) << c.plane.transpose();
     EXPECT_LT(nh, 1.25 * 3) << c.plane.transpose();
-    std::printf("plane [%.3f %.3f %.3f %.3f]: mean NEES theta_m %.3f, Hessian tangent %.3f (dof 3)\n",
-                c.plane(0), c.plane(1), c.plane(2), c.plane(3), nm, nh);
+    std::printf(
+        "plane [%.3f %.3f %.3f %.3f]: mean NEES theta_m %.3f, Hessian tangent %.3f (dof 3)\n",
+        c.plane(0), c.plane(1), c.plane(2), c.plane(3), nm, nh);
   }
 }
 
@@ -160,8 +161,9 @@ TEST(PlaneFit, HessianJacobianMatchesNumeric) {
     Eigen::Vector3d a = tm, b = tm;
     a(k) += h;
     b(k) -= h;
-    const Eigen::Vector4d num =
-        (hessianFromMinimal(a, Eigen::Matrix3d::Zero()).hessian - hessianFromMinimal(b, Eigen::Matrix3d::Zero()).hessian) / (2 * h);
+    const Eigen::Vector4d num = (hessianFromMinimal(a, Eigen::Matrix3d::Zero()).hessian -
+                                 hessianFromMinimal(b, Eigen::Matrix3d::Zero()).hessian) /
+                                (2 * h);
     EXPECT_LT((num - J.col(k)).norm(), 1e-6) << k;
   }
 }

@@ -1,12 +1,11 @@
 // Plane extraction and matching on pplvo::synth::SyntheticSequence frames (noisy depth with
 // disparity quantisation and edge dropout): extracted planes must match the true planes of
 // the surfaces they cover.
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <map>
-
 #include <opencv2/imgcodecs.hpp>
-
-#include <gtest/gtest.h>
 
 #include "pplvo/geometry/plane_extraction.h"
 #include "pplvo/geometry/plane_matching.h"
@@ -25,8 +24,8 @@ bool coplanarWorld(const Eigen::Vector4d& a, const Eigen::Vector4d& b) {
 
 // Majority surface id under a plane's label, and the share of the plane's pixels on surfaces
 // coplanar with it (posters lie on their wall: different ids, same plane).
-std::pair<int, double> majoritySurface(const synth::SyntheticSequence& seq, const cv::Mat& labels, int label,
-                                       const cv::Mat& surface_id) {
+std::pair<int, double> majoritySurface(const synth::SyntheticSequence& seq, const cv::Mat& labels,
+                                       int label, const cv::Mat& surface_id) {
   std::map<int, int> votes;
   int total = 0;
   for (int v = 0; v < labels.rows; ++v)
@@ -82,12 +81,15 @@ TEST(SynthPlanes, ExtractedPlanesMatchTruePlanes) {
       f.surface_id.convertTo(s, CV_8U, 7, 7);
       cv::imwrite(std::string(dump) + "/synth_labels_" + std::to_string(i) + ".png", l);
       cv::imwrite(std::string(dump) + "/synth_surfaces_" + std::to_string(i) + ".png", s);
-      std::printf("stats: planar %d grown %d small %d segs %d merges %d notplanar %d few %d rejected %d\n",
-                  r.stats.n_planar_cells, r.stats.n_regions_grown, r.stats.n_regions_too_small, r.stats.n_segments,
-                  r.stats.n_merges, r.stats.n_segments_not_planar, r.stats.n_too_few_points, r.stats.n_fit_rejected);
+      std::printf(
+          "stats: planar %d grown %d small %d segs %d merges %d notplanar %d few %d rejected %d\n",
+          r.stats.n_planar_cells, r.stats.n_regions_grown, r.stats.n_regions_too_small,
+          r.stats.n_segments, r.stats.n_merges, r.stats.n_segments_not_planar,
+          r.stats.n_too_few_points, r.stats.n_fit_rejected);
       for (const PlaneFeature& p : r.planes)
-        std::printf("frame %d plane %d: n [%.3f %.3f %.3f] d %.3f, %d px\n", i, p.label, p.plane.normal().x(),
-                    p.plane.normal().y(), p.plane.normal().z(), p.plane.d(), p.n_points);
+        std::printf("frame %d plane %d: n [%.3f %.3f %.3f] d %.3f, %d px\n", i, p.label,
+                    p.plane.normal().x(), p.plane.normal().y(), p.plane.normal().z(), p.plane.d(),
+                    p.n_points);
     }
     Extracted e;
     e.feats.camera = cam;
@@ -133,7 +135,8 @@ TEST(SynthPlanes, ExtractedPlanesMatchTruePlanes) {
     for (const synth::VisibleSurface& s : seq.visibleSurfaces(f, 30000)) {
       if (s.dynamic || s.pixels_with_depth < 30000) continue;
       ++n_big_visible;
-      // Found if an extracted plane lies on this surface or on a coplanar one (a poster on its wall).
+      // Found if an extracted plane lies on this surface or on a coplanar one (a poster on its
+      // wall).
       bool hit = false;
       for (const auto& [sid, cnt] : found) {
         Eigen::Vector4d pw;
@@ -143,17 +146,21 @@ TEST(SynthPlanes, ExtractedPlanesMatchTruePlanes) {
     }
     frames.push_back(std::move(e));
   }
-  std::printf("synth: %d planes over %zu frames, max angle %.3f deg (small planes %.3f), max d err %.4f m, "
-              "max centroid-to-true-plane %.4f m, large surfaces found %d/%d\n",
-              n_planes, frames.size(), max_angle, max_angle_small, max_d, max_centroid, n_big_found, n_big_visible);
+  std::printf(
+      "synth: %d planes over %zu frames, max angle %.3f deg (small planes %.3f), max d err %.4f m, "
+      "max centroid-to-true-plane %.4f m, large surfaces found %d/%d\n",
+      n_planes, frames.size(), max_angle, max_angle_small, max_d, max_centroid, n_big_found,
+      n_big_visible);
   EXPECT_GT(n_planes, static_cast<int>(frames.size()));
   EXPECT_GE(n_big_found, 0.9 * n_big_visible);
 
   // Matching consecutive rendered frames (10 frames apart): matched planes are the same surface.
   int n_matches = 0, n_wrong = 0;
   for (size_t k = 0; k + 1 < frames.size(); ++k) {
-    const auto T_curr_prev = seq.pose(static_cast<int>(10 * (k + 1))).inverse() * seq.pose(static_cast<int>(10 * k));
-    const PlaneMatchResult m = matchPlanesWithStats(frames[k].feats, frames[k + 1].feats, {}, T_curr_prev);
+    const auto T_curr_prev =
+        seq.pose(static_cast<int>(10 * (k + 1))).inverse() * seq.pose(static_cast<int>(10 * k));
+    const PlaneMatchResult m =
+        matchPlanesWithStats(frames[k].feats, frames[k + 1].feats, {}, T_curr_prev);
     for (const auto& [a, b] : m.matches) {
       ++n_matches;
       Eigen::Vector4d pa, pb;

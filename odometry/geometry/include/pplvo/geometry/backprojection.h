@@ -1,9 +1,8 @@
 #pragma once
 /// Point backprojection with first-order covariance (paper eqs. 8-9) and the depth noise model
 /// used as a fallback when no per-pixel variance is available. Camera frame, metres.
-#include <cmath>
-
 #include <Eigen/Core>
+#include <cmath>
 #include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
@@ -22,13 +21,19 @@ struct DepthNoiseModel {
   double sigma_z_coeff_per_m = 1.425e-3;
   /// Minimum standard deviation, metres (keeps weights finite for tiny depths / zero variance).
   double sigma_z_floor_m = 1e-4;
-  double sigmaZ(double z_m) const { return std::max(sigma_z_floor_m, sigma_z_coeff_per_m * z_m * z_m); }
-  double varianceZ(double z_m) const { const double s = sigmaZ(z_m); return s * s; }
+  double sigmaZ(double z_m) const {
+    return std::max(sigma_z_floor_m, sigma_z_coeff_per_m * z_m * z_m);
+  }
+  double varianceZ(double z_m) const {
+    const double s = sigmaZ(z_m);
+    return s * s;
+  }
 };
 
 /// Jacobian of eq. 8, P = Z [(u-cx)/fx, (v-cy)/fy, 1], with respect to (u, v, Z).
 /// Uses the signed focal lengths (fy < 0 for ICL-NUIM).
-inline Eigen::Matrix3d backprojectionJacobian(const PinholeCamera& cam, double u, double v, double z_m) {
+inline Eigen::Matrix3d backprojectionJacobian(const PinholeCamera& cam, double u, double v,
+                                              double z_m) {
   Eigen::Matrix3d J;
   J << z_m / cam.fx, 0.0, (u - cam.cx) / cam.fx,  //
       0.0, z_m / cam.fy, (v - cam.cy) / cam.fy,   //
@@ -54,7 +59,8 @@ inline Point3WithCov backprojectWithCov(const PinholeCamera& cam, double u, doub
 /// to `model` (documented in docs/geometry.md).
 inline bool depthAt(const DepthWithVariance& dv, int u, int v, const DepthNoiseModel& model,
                     double* z_m, double* var_m2) {
-  if (dv.depth_m.empty() || u < 0 || v < 0 || u >= dv.depth_m.cols || v >= dv.depth_m.rows) return false;
+  if (dv.depth_m.empty() || u < 0 || v < 0 || u >= dv.depth_m.cols || v >= dv.depth_m.rows)
+    return false;
   const float z = dv.depth_m.at<float>(v, u);
   if (!(z > 0.0f) || !std::isfinite(z)) return false;
   double var = 0.0;

@@ -12,7 +12,7 @@
 namespace pplvo::geometry {
 
 struct LiftOptions {
-  DepthNoiseModel noise;                  ///< fallback variance where var_m2 is absent or 0
+  DepthNoiseModel noise;                          ///< fallback variance where var_m2 is absent or 0
   double pixel_variance_px2 = kPixelVariancePx2;  ///< sigma_p^2 = 1/12 px^2 (paper)
   /// Points: depth at the nearest pixel; if it is missing, the valid pixel of lowest variance
   /// within this Chebyshev radius (0 = nearest pixel only).
@@ -40,13 +40,16 @@ struct LiftStats {
 std::string validateDepth(const DepthWithVariance& depth, const PinholeCamera& camera);
 
 /// Sets has_3d / point for every PointFeature of `frame` (frame.camera intrinsics).
-LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth, const LiftOptions& options = {});
+LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth,
+                     const LiftOptions& options = {});
 /// Sets has_3d / line / n_inliers for every LineFeature of `frame`.
-LiftStats liftLines(FrameFeatures& frame, const DepthWithVariance& depth, const LiftOptions& options = {});
+LiftStats liftLines(FrameFeatures& frame, const DepthWithVariance& depth,
+                    const LiftOptions& options = {});
 
 /// One line (exposed for tests): samples, RANSAC, WLS fit. `n_inliers` receives the consensus size.
 LineFitResult liftLine(const PinholeCamera& camera, const DepthWithVariance& depth,
                        const Eigen::Vector2d& px1, const Eigen::Vector2d& px2,
-                       const LiftOptions& options, uint64_t seed, int* n_valid_samples, int* n_inliers);
+                       const LiftOptions& options, uint64_t seed, int* n_valid_samples,
+                       int* n_inliers);
 
 }  // namespace pplvo::geometry

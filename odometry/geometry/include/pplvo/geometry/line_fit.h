@@ -2,9 +2,8 @@
 /// Analytic weighted least-squares 3D line fitting (paper eqs. 12-16): centroid O, direction
 /// theta with one entry fixed to 1, corrected covariance, interpolated endpoints.
 /// Derivations: docs/geometry.md.
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "pplvo/core/primitives.h"
 #include "pplvo/geometry/plane_fit.h"  // FitStatus
@@ -33,10 +32,10 @@ struct LineFitOptions {
 struct LineFitResult {
   FitStatus status = FitStatus::kTooFewPoints;
   bool ok() const { return status == FitStatus::kOk; }
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();   ///< O, m
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();      ///< O, m
   Eigen::Matrix3d cov_centroid = Eigen::Matrix3d::Zero();  ///< Sigma_O, m^2
-  Eigen::Vector3d theta = Eigen::Vector3d::UnitX();    ///< direction with theta(fixed_dim) = 1
-  Eigen::Matrix3d cov_theta = Eigen::Matrix3d::Zero();  ///< zero row/col at fixed_dim
+  Eigen::Vector3d theta = Eigen::Vector3d::UnitX();        ///< direction with theta(fixed_dim) = 1
+  Eigen::Matrix3d cov_theta = Eigen::Matrix3d::Zero();     ///< zero row/col at fixed_dim
   int fixed_dim = 0;
   Line3WithCov line;  ///< endpoints O + lambda theta (eq. 16) with covariances
 };
@@ -52,7 +51,8 @@ LineFitResult fitLineWls(const std::vector<Eigen::Vector3d>& points,
 /// Endpoint of eq. 16, P_hat = O + lambda theta with lambda = theta^T (P_end - O) / |theta|^2,
 /// and its covariance J_O Sigma_O J_O^T + J_theta Sigma_theta J_theta^T.
 Point3WithCov interpolateLineEndpoint(const Eigen::Vector3d& O, const Eigen::Matrix3d& cov_O,
-                                      const Eigen::Vector3d& theta, const Eigen::Matrix3d& cov_theta,
+                                      const Eigen::Vector3d& theta,
+                                      const Eigen::Matrix3d& cov_theta,
                                       const Eigen::Vector3d& P_end);
 
 }  // namespace pplvo::geometry

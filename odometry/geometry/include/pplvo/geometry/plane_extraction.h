@@ -4,10 +4,9 @@
 /// to pick seeds, region growing over cells, O(1) merging of adjacent segments by moment
 /// addition, pixel refinement of boundary cells, then the WLS plane fit (eqs. 10-11) on the
 /// pixels of each segment. Camera frame, metres. Details: docs/geometry.md.
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "pplvo/core/features.h"
 #include "pplvo/core/rgbd_frame.h"
@@ -17,8 +16,8 @@
 namespace pplvo::geometry {
 
 struct PlaneExtractionOptions {
-  int cell_size_px = 20;              ///< CAPE: 20x20 px cells at VGA
-  DepthNoiseModel noise;              ///< sigma_z(z) = 1.425e-3 z^2 m (paper eq. 1)
+  int cell_size_px = 20;  ///< CAPE: 20x20 px cells at VGA
+  DepthNoiseModel noise;  ///< sigma_z(z) = 1.425e-3 z^2 m (paper eq. 1)
   double pixel_variance_px2 = kPixelVariancePx2;
   /// Cell planarity: at least this fraction of valid pixels, and
   /// MSE (smallest eigenvalue of the cell covariance) < (k sigma_z(z_mean) + margin)^2.
@@ -35,25 +34,25 @@ struct PlaneExtractionOptions {
   int min_seed_bin_count = 3;
   /// Region growing from the seed cell's plane: normal angle and centroid-to-plane distance
   /// (k sigma_z(z_cell) + margin).
-  double grow_max_angle_deg = 15.0;   ///< CAPE: pi/12
+  double grow_max_angle_deg = 15.0;  ///< CAPE: pi/12
   double grow_dist_sigma_factor = 3.0;
   double grow_dist_margin_m = 0.02;
-  int min_region_cells = 6;           ///< smaller regions are not planes
+  int min_region_cells = 6;  ///< smaller regions are not planes
   /// A region must span at least this many cells in both image directions: a one-cell strip
   /// (e.g. the floor along the image border at a grazing angle) gives a normal that is
   /// ill-conditioned across the strip and biased by depth quantisation.
   int min_region_span_cells = 2;
   /// Merging of adjacent segments (both centroid-to-other-plane distances must pass).
   double merge_max_angle_deg = 15.0;
-  double merge_max_dist_m = 0.05;     ///< CAPE: 50 mm
+  double merge_max_dist_m = 0.05;  ///< CAPE: 50 mm
   /// A segment is kept if its MSE < (k sigma_z(z_mean) + margin)^2 (rejects curved surfaces).
   double segment_sigma_factor = 3.0;
   double segment_margin_m = 0.01;
   /// Pixel refinement: a pixel of an interior cell (its whole (2R+1)^2 neighbourhood in one
   /// segment) stays with that segment if within the distance below; in the other cells in or
   /// next to a segment, every valid pixel joins the nearest
-  /// plane among the segments of the (2R+1)^2 cell neighbourhood if |n.p + d| < k sigma_z(z) + margin
-  /// (this also trims pixels of planar-looking cells that straddle a corner at long range).
+  /// plane among the segments of the (2R+1)^2 cell neighbourhood if |n.p + d| < k sigma_z(z) +
+  /// margin (this also trims pixels of planar-looking cells that straddle a corner at long range).
   /// false: labels are the valid pixels of the segment cells (CAPE without refinement).
   bool refine_boundaries = true;
   /// R: candidate planes of a cell are the segments within R cells (1 or 2: 3x3 or 5x5).
@@ -61,11 +60,11 @@ struct PlaneExtractionOptions {
   int refine_neighbourhood_cells = 2;
   double refine_sigma_factor = 3.0;
   double refine_margin_m = 0.01;
-  int min_plane_points = 1500;        ///< after refinement (about 4 cells at VGA)
+  int min_plane_points = 1500;  ///< after refinement (about 4 cells at VGA)
   /// WLS fit on a regular grid subsample of the segment pixels with step
   /// floor(sqrt(n_pixels / max_fit_points)) (so between max_fit_points and 4x as many points).
   int max_fit_points = 3000;
-  int max_planes = 64;                ///< labels are CV_8U (<= 254)
+  int max_planes = 64;  ///< labels are CV_8U (<= 254)
   PlaneFitOptions fit;
 };
 

@@ -1,10 +1,9 @@
 #pragma once
 /// Weighted least-squares plane fitting with the corrected covariance (paper eqs. 10-11 and the
 /// Hessian-form recovery with its Jacobian). Derivations: docs/geometry.md.
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pplvo/core/primitives.h"
 
@@ -31,11 +30,11 @@ const char* toString(FitStatus s);
 struct PlaneFitResult {
   FitStatus status = FitStatus::kTooFewPoints;
   bool ok() const { return status == FitStatus::kOk; }
-  Eigen::Vector3d theta_m = Eigen::Vector3d::Zero();        ///< N/d, 1/m (theta_m . P + 1 = 0)
-  Eigen::Matrix3d cov_theta_m = Eigen::Matrix3d::Zero();    ///< 1/m^2, inverse corrected A
-  PlaneWithCov plane;                                       ///< n.p + d = 0, d > 0, 4x4 cov
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();       ///< unweighted mean, m
-  double rms_m = 0.0;                                       ///< rms point-to-plane distance
+  Eigen::Vector3d theta_m = Eigen::Vector3d::Zero();      ///< N/d, 1/m (theta_m . P + 1 = 0)
+  Eigen::Matrix3d cov_theta_m = Eigen::Matrix3d::Zero();  ///< 1/m^2, inverse corrected A
+  PlaneWithCov plane;                                     ///< n.p + d = 0, d > 0, 4x4 cov
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();     ///< unweighted mean, m
+  double rms_m = 0.0;                                     ///< rms point-to-plane distance
   int n_points = 0;
   int n_outliers = 0;  ///< dropped by the trimmed refit
 };
