@@ -1,0 +1,75 @@
+#pragma once
+/// Point backprojection with first-order covariance (paper eqs. 8-9) and the depth noise model
+/// used as a fallback when no per-pixel variance is available. Camera frame, metres.
+#include <Eigen/Core>
+#include <cmath>
+#include <opencv2/core.hpp>
+
+#include "pplvo/core/camera.h"
+#include "pplvo/core/primitives.h"
+#include "pplvo/core/rgbd_frame.h"
+
+namespace pplvo::geometry {
+
+/// Pixel quantisation variance: uniform error over one pixel, 1/12 px^2 (paper, sec. "Point
+/// Backprojection").
+constexpr double kPixelVariancePx2 = 1.0 / 12.0;
+
+/// Structured-light depth noise sigma_z = c z^2 (paper eq. 1, Khoshelham & Elberink 2012):
+/// c = 1.425e-6 mm^-1 = 1.425e-3 m^-1.
+struct DepthNoiseModel {
+  double sigma_z_coeff_per_m = 1.425e-3;
+  /// Minimum standard deviation, metres (keeps weights finite for tiny depths / zero variance).
+  double sigma_z_floor_m = 1e-4;
+  double sigmaZ(double z_m) const {
+    return std::max(sigma_z_floor_m, sigma_z_coeff_per_m * z_m * z_m);
+  }
+  double varianceZ(double z_m) const {
+    const double s = sigmaZ(z_m);
+    return s * s;
+  }
+};
+
+/// Jacobian of eq. 8, P = Z [(u-cx)/fx, (v-cy)/fy, 1], with respect to (u, v, Z).
+/// Uses the signed focal lengths (fy < 0 for ICL-NUIM).
+inline Eigen::Matrix3d backprojectionJacobian(const PinholeCamera& cam, double u, double v,
+                                              double z_m) {
+  Eigen::Matrix3d J;
+  J << z_m / cam.fx, 0.0, (u - cam.cx) / cam.fx,  //
+      0.0, z_m / cam.fy, (v - cam.cy) / cam.fy,   //
+      0.0, 0.0, 1.0;
+  return J;
+}
+
+/// Eqs. 8-9: the point at depth z_m seen at undistorted pixel (u, v), with
+/// Sigma_P = J diag(var_px2, var_px2, var_z_m2) J^T.
+inline Point3WithCov backprojectWithCov(const PinholeCamera& cam, double u, double v, double z_m,
+                                        double var_z_m2, double var_px2 = kPixelVariancePx2) {
+  const Eigen::Matrix3d J = backprojectionJacobian(cam, u, v, z_m);
+  const Eigen::Vector3d s(var_px2, var_px2, var_z_m2);
+  Point3WithCov out;
+  out.p = cam.backproject(u, v, z_m);
+  out.cov = J * s.asDiagonal() * J.transpose();
+  return out;
+}
+
+/// Depth (metres) and its variance at integer pixel (u, v) of a depth map with variance.
+/// Returns false when the pixel is outside, missing (0), non-finite or non-positive. When the
+/// variance map is empty, or its value is not a positive finite number, the variance falls back
+/// to `model` (documented in docs/geometry.md).
+inline bool depthAt(const DepthWithVariance& dv, int u, int v, const DepthNoiseModel& model,
+                    double* z_m, double* var_m2) {
+  if (dv.depth_m.empty() || u < 0 || v < 0 || u >= dv.depth_m.cols || v >= dv.depth_m.rows)
+    return false;
+  const float z = dv.depth_m.at<float>(v, u);
+  if (!(z > 0.0f) || !std::isfinite(z)) return false;
+  double var = 0.0;
+  if (!dv.var_m2.empty() && dv.var_m2.size() == dv.depth_m.size()) var = dv.var_m2.at<float>(v, u);
+  if (!(var > 0.0) || !std::isfinite(var)) var = model.varianceZ(z);
+  const double floor2 = model.sigma_z_floor_m * model.sigma_z_floor_m;
+  *z_m = z;
+  *var_m2 = std::max(var, floor2);
+  return true;
+}
+
+}  // namespace pplvo::geometry

@@ -1,0 +1,55 @@
+#pragma once
+/// Lifting 2D features to 3D with uncertainty: points by backprojection (eqs. 8-9), lines by
+/// depth sampling + RANSAC + WLS line fitting (eqs. 12-16). Camera frame of the features.
+#include <cstdint>
+#include <string>
+
+#include "pplvo/core/features.h"
+#include "pplvo/core/rgbd_frame.h"
+#include "pplvo/geometry/backprojection.h"
+#include "pplvo/geometry/line_fit.h"
+
+namespace pplvo::geometry {
+
+struct LiftOptions {
+  DepthNoiseModel noise;                          ///< fallback variance where var_m2 is absent or 0
+  double pixel_variance_px2 = kPixelVariancePx2;  ///< sigma_p^2 = 1/12 px^2 (paper)
+  /// Points: depth at the nearest pixel; if it is missing, the valid pixel of lowest variance
+  /// within this Chebyshev radius (0 = nearest pixel only).
+  int point_search_radius_px = 1;
+  /// Lines: at most this many depth pixels sampled uniformly along the segment (paper: 100).
+  int max_line_samples = 100;
+  /// RANSAC on 3D point-to-line Euclidean distance (paper; threshold not given there).
+  double line_ransac_threshold_m = 0.02;
+  int line_ransac_iterations = 50;
+  /// Minimum valid depth samples and RANSAC inliers for a 3D line (at least 3 each).
+  int min_line_samples = 3;
+  int min_line_inliers = 5;
+  uint64_t seed = 42;  ///< RANSAC seed; line i uses seed + i, so results do not depend on order
+  LineFitOptions line_fit;
+};
+
+struct LiftStats {
+  std::string error;  ///< non-empty when the input was rejected (nothing lifted)
+  int points_lifted = 0, points_no_depth = 0;
+  int lines_lifted = 0, lines_too_few_samples = 0, lines_too_few_inliers = 0, lines_fit_failed = 0;
+};
+
+/// Checks that `depth` is usable with `camera` (CV_32FC1, same size, variance CV_32FC1 of the
+/// same size or empty). Returns an empty string if so, else the reason.
+std::string validateDepth(const DepthWithVariance& depth, const PinholeCamera& camera);
+
+/// Sets has_3d / point for every PointFeature of `frame` (frame.camera intrinsics).
+LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth,
+                     const LiftOptions& options = {});
+/// Sets has_3d / line / n_inliers for every LineFeature of `frame`.
+LiftStats liftLines(FrameFeatures& frame, const DepthWithVariance& depth,
+                    const LiftOptions& options = {});
+
+/// One line (exposed for tests): samples, RANSAC, WLS fit. `n_inliers` receives the consensus size.
+LineFitResult liftLine(const PinholeCamera& camera, const DepthWithVariance& depth,
+                       const Eigen::Vector2d& px1, const Eigen::Vector2d& px2,
+                       const LiftOptions& options, uint64_t seed, int* n_valid_samples,
+                       int* n_inliers);
+
+}  // namespace pplvo::geometry

@@ -1,0 +1,120 @@
+#pragma once
+/// Fast plane segmentation of an organised point cloud, CAPE-style (Proenca & Gao 2018):
+/// per-cell moments, a planarity test tied to the depth noise model, a histogram of cell normals
+/// to pick seeds, region growing over cells, O(1) merging of adjacent segments by moment
+/// addition, pixel refinement of boundary cells, then the WLS plane fit (eqs. 10-11) on the
+/// pixels of each segment. Camera frame, metres. Details: docs/geometry.md.
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "pplvo/core/features.h"
+#include "pplvo/core/rgbd_frame.h"
+#include "pplvo/geometry/backprojection.h"
+#include "pplvo/geometry/plane_fit.h"
+
+namespace pplvo::geometry {
+
+struct PlaneExtractionOptions {
+  int cell_size_px = 20;  ///< CAPE: 20x20 px cells at VGA
+  DepthNoiseModel noise;  ///< sigma_z(z) = 1.425e-3 z^2 m (paper eq. 1)
+  double pixel_variance_px2 = kPixelVariancePx2;
+  /// Cell planarity: at least this fraction of valid pixels, and
+  /// MSE (smallest eigenvalue of the cell covariance) < (k sigma_z(z_mean) + margin)^2.
+  double min_valid_fraction = 0.5;
+  double planarity_sigma_factor = 2.0;
+  double planarity_margin_m = 0.002;
+  /// Continuity along the middle row and column of a cell: no jump between consecutive valid
+  /// pixels larger than k sigma_z(z) + margin.
+  double jump_sigma_factor = 6.0;
+  double jump_margin_m = 0.02;
+  /// Histogram of cell normals (n_x, n_y) in [-1, 1]^2 (x 2 for the sign of n_z): bins per axis,
+  /// and the smallest bin count that may still seed a region.
+  int histogram_bins = 20;
+  int min_seed_bin_count = 3;
+  /// Region growing from the seed cell's plane: normal angle and centroid-to-plane distance
+  /// (k sigma_z(z_cell) + margin).
+  double grow_max_angle_deg = 15.0;  ///< CAPE: pi/12
+  double grow_dist_sigma_factor = 3.0;
+  double grow_dist_margin_m = 0.02;
+  int min_region_cells = 6;  ///< smaller regions are not planes
+  /// A region must span at least this many cells in both image directions: a one-cell strip
+  /// (e.g. the floor along the image border at a grazing angle) gives a normal that is
+  /// ill-conditioned across the strip and biased by depth quantisation.
+  int min_region_span_cells = 2;
+  /// Merging of adjacent segments (both centroid-to-other-plane distances must pass).
+  double merge_max_angle_deg = 15.0;
+  double merge_max_dist_m = 0.05;  ///< CAPE: 50 mm
+  /// A segment is kept if its MSE < (k sigma_z(z_mean) + margin)^2 (rejects curved surfaces).
+  double segment_sigma_factor = 3.0;
+  double segment_margin_m = 0.01;
+  /// Pixel refinement: a pixel of an interior cell (its whole (2R+1)^2 neighbourhood in one
+  /// segment) stays with that segment if within the distance below; in the other cells in or
+  /// next to a segment, every valid pixel joins the nearest
+  /// plane among the segments of the (2R+1)^2 cell neighbourhood if |n.p + d| < k sigma_z(z) +
+  /// margin (this also trims pixels of planar-looking cells that straddle a corner at long range).
+  /// false: labels are the valid pixels of the segment cells (CAPE without refinement).
+  bool refine_boundaries = true;
+  /// R: candidate planes of a cell are the segments within R cells (1 or 2: 3x3 or 5x5).
+  /// 2 reaches across the one or two non-planar cells that separate two surfaces at a corner.
+  int refine_neighbourhood_cells = 2;
+  double refine_sigma_factor = 3.0;
+  double refine_margin_m = 0.01;
+  int min_plane_points = 1500;  ///< after refinement (about 4 cells at VGA)
+  /// WLS fit on a regular grid subsample of the segment pixels with step
+  /// floor(sqrt(n_pixels / max_fit_points)) (so between max_fit_points and 4x as many points).
+  int max_fit_points = 3000;
+  int max_planes = 64;  ///< labels are CV_8U (<= 254)
+  PlaneFitOptions fit;
+};
+
+struct PlaneExtractionStats {
+  std::string error;  ///< non-empty when the input was rejected
+  int n_cells = 0, n_planar_cells = 0, n_regions_grown = 0, n_regions_too_small = 0;
+  int n_segments = 0, n_merges = 0, n_segments_not_planar = 0, n_too_few_points = 0;
+  int n_fit_rejected = 0;  ///< WLS fit failed (e.g. plane through the camera centre)
+  int n_planes = 0;
+};
+
+struct PlaneExtractionResult {
+  std::vector<PlaneFeature> planes;  ///< plane i has label i + 1, sorted by n_points (desc)
+  cv::Mat labels;                    ///< CV_8UC1, 0 = no plane
+  PlaneExtractionStats stats;
+};
+
+/// Holds the buffers sized once from the camera; call extract() per depth map.
+class PlaneExtractor {
+ public:
+  PlaneExtractor(const PinholeCamera& camera, const PlaneExtractionOptions& options = {});
+  PlaneExtractionResult extract(const DepthWithVariance& depth);
+  const PinholeCamera& camera() const { return camera_; }
+
+ private:
+  struct Moments {  // sums over valid pixels (double for stable covariances)
+    double n = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
+    void add(const Moments& o);
+  };
+  struct CellPlane {
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero(), mean = Eigen::Vector3d::Zero();
+    double d = 0, mse = 0;
+  };
+  static bool fitMoments(const Moments& m, CellPlane* out);
+  double sigmaZ(double z) const { return options_.noise.sigma_z_coeff_per_m * z * z; }
+
+  PinholeCamera camera_;
+  PlaneExtractionOptions options_;
+  int cells_x_ = 0, cells_y_ = 0;
+  std::vector<float> x_factor_, y_factor_;  // (u - cx)/fx per column, (v - cy)/fy per row
+  std::vector<int> cell_of_col_;
+  std::vector<Moments> cell_moments_;
+  std::vector<CellPlane> cell_planes_;
+  std::vector<char> planar_;
+  std::vector<int> cell_segment_, cell_bin_, bin_count_, queue_;
+};
+
+/// Convenience: extracts planes of `depth` with frame.camera and stores them in frame.planes
+/// and frame.plane_labels (allocates a PlaneExtractor; keep one per camera for speed).
+PlaneExtractionStats extractPlanes(FrameFeatures& frame, const DepthWithVariance& depth,
+                                   const PlaneExtractionOptions& options = {});
+
+}  // namespace pplvo::geometry

@@ -1,0 +1,137 @@
+#include <gtest/gtest.h>
+
+#include "pplvo/geometry/lifting.h"
+#include "scene.h"
+
+namespace pplvo::geometry {
+namespace {
+
+FrameFeatures frameWith(const PinholeCamera& cam) {
+  FrameFeatures f;
+  f.camera = cam;
+  return f;
+}
+
+TEST(LiftPoints, BackprojectsNearestPixelAndNeighbourFallback) {
+  const PinholeCamera cam = test::vgaCamera(true);
+  const Pose3 T = test::cornerView();
+  const test::Rendered r = test::renderRoom(cam, T, test::boxRoom(-2, 2, -1.2, 1.5, -2, 3), -1);
+  FrameFeatures f = frameWith(cam);
+  PointFeature a;
+  a.px = {200.3, 150.6};
+  PointFeature b;
+  b.px = {400.0, 300.0};
+  PointFeature c;  // outside the image
+  c.px = {-20.0, 5.0};
+  f.points = {a, b, c};
+  DepthWithVariance d = r.depth;
+  d.depth_m.at<float>(300, 400) = 0.0f;  // missing: fallback to the 3x3 neighbourhood
+  const LiftStats st = liftPoints(f, d);
+  ASSERT_TRUE(st.error.empty()) << st.error;
+  EXPECT_EQ(st.points_lifted, 2);
+  EXPECT_EQ(st.points_no_depth, 1);
+  ASSERT_TRUE(f.points[0].has_3d);
+  const double z = r.depth.depth_m.at<float>(151, 200);
+  EXPECT_LT((f.points[0].point.p - cam.backproject(200.3, 150.6, z)).norm(), 1e-9);
+  EXPECT_TRUE(f.points[1].has_3d);
+  EXPECT_NEAR(f.points[1].point.p.z(), r.depth.depth_m.at<float>(299, 400), 0.02);
+  EXPECT_FALSE(f.points[2].has_3d);
+  // Radius 0: the missing pixel is not replaced.
+  LiftOptions o;
+  o.point_search_radius_px = 0;
+  liftPoints(f, d, o);
+  EXPECT_FALSE(f.points[1].has_3d);
+}
+
+TEST(LiftPoints, RejectsBadDepthInput) {
+  FrameFeatures f = frameWith(test::vgaCamera(true));
+  f.points.resize(3);
+  DepthWithVariance d;  // empty
+  LiftStats st = liftPoints(f, d);
+  EXPECT_FALSE(st.error.empty());
+  EXPECT_EQ(st.points_no_depth, 3);
+  d.depth_m = cv::Mat::zeros(240, 320, CV_32F);  // wrong size
+  EXPECT_FALSE(liftPoints(f, d).error.empty());
+  d.depth_m = cv::Mat::zeros(480, 640, CV_16U);  // wrong type
+  EXPECT_FALSE(liftPoints(f, d).error.empty());
+  d.depth_m = cv::Mat::zeros(480, 640, CV_32F);  // no depth at all
+  st = liftPoints(f, d);
+  EXPECT_TRUE(st.error.empty());
+  EXPECT_EQ(st.points_lifted, 0);
+  for (const auto& p : f.points) EXPECT_FALSE(p.has_3d);
+}
+
+// The projection of a true 3D segment lying on a wall; depth from the rendered (noisy) room.
+TEST(LiftLines, RecoversSegmentOnWallAndAcrossDiscontinuity) {
+  const PinholeCamera cam = test::vgaCamera(true);
+  const Pose3 T_w_c = Pose3::Identity();
+  const auto room = test::boxRoom(-2, 2, -1.5, 1.5, -1, 3);
+  const test::Rendered r = test::renderRoom(cam, T_w_c, room, 11);
+  FrameFeatures f = frameWith(cam);
+  // Segment on the back wall z = 3 (camera frame == world frame).
+  const Eigen::Vector3d A(-0.8, 0.4, 3.0), B(0.9, -0.3, 3.0);
+  LineFeature l;
+  l.px1 = cam.project(A);
+  l.px2 = cam.project(B);
+  // A segment crossing from the back wall onto the left wall x = -2 (a bent line: RANSAC keeps
+  // the larger straight part).
+  LineFeature bent;
+  bent.px1 = cam.project(Eigen::Vector3d(-2.0, 0.0, 1.6));
+  bent.px2 = cam.project(Eigen::Vector3d(-0.5, 0.0, 3.0));
+  // Tiny segment (1 px) and one with fewer than 3 valid depth samples.
+  LineFeature tiny;
+  tiny.px1 = {100, 100};
+  tiny.px2 = {100.8, 100};
+  LineFeature sparse;
+  sparse.px1 = {50, 400};
+  sparse.px2 = {250, 400};
+  f.lines = {l, bent, tiny, sparse};
+  DepthWithVariance d = r.depth;
+  for (int u = 45; u <= 255; ++u) {
+    if (u != 60 && u != 200) d.depth_m.at<float>(400, u) = 0.0f;  // only 2 valid samples
+  }
+  const LiftStats st = liftLines(f, d);
+  ASSERT_TRUE(st.error.empty());
+  EXPECT_EQ(st.lines_lifted, 2);
+  EXPECT_EQ(st.lines_too_few_samples, 2);
+  ASSERT_TRUE(f.lines[0].has_3d);
+  const Line3WithCov& L = f.lines[0].line;
+  EXPECT_LT((L.p1 - A).norm(), 0.05);
+  EXPECT_LT((L.p2 - B).norm(), 0.05);
+  EXPECT_GT(f.lines[0].n_inliers, 70);  // 2 cm threshold vs sigma_z(3 m) = 1.3 cm
+  EXPECT_TRUE(L.cov1.allFinite());
+  EXPECT_GT(L.cov1.determinant(), 0.0 - 1e-30);
+  ASSERT_TRUE(f.lines[1].has_3d);
+  // The bent segment: the kept part lies on one of the two walls.
+  const Line3WithCov& M = f.lines[1].line;
+  const bool on_back = std::abs(M.p1.z() - 3.0) < 0.05 && std::abs(M.p2.z() - 3.0) < 0.05;
+  const bool on_left = std::abs(M.p1.x() + 2.0) < 0.05 && std::abs(M.p2.x() + 2.0) < 0.05;
+  EXPECT_TRUE(on_back || on_left) << M.p1.transpose() << " / " << M.p2.transpose();
+  EXPECT_FALSE(f.lines[2].has_3d);
+  EXPECT_FALSE(f.lines[3].has_3d);
+  // Deterministic: same seed, same result.
+  FrameFeatures g = f;
+  liftLines(g, d);
+  EXPECT_EQ((g.lines[1].line.p1 - f.lines[1].line.p1).norm(), 0.0);
+}
+
+TEST(LiftLines, NoDepthAndNanEndpoints) {
+  FrameFeatures f = frameWith(test::vgaCamera(true));
+  LineFeature a;
+  a.px1 = {10, 10};
+  a.px2 = {300, 200};
+  LineFeature b;
+  b.px1 = {std::numeric_limits<double>::quiet_NaN(), 1};
+  b.px2 = {30, 40};
+  f.lines = {a, b};
+  DepthWithVariance d;
+  d.depth_m = cv::Mat::zeros(480, 640, CV_32F);
+  const LiftStats st = liftLines(f, d);
+  EXPECT_TRUE(st.error.empty());
+  EXPECT_EQ(st.lines_lifted, 0);
+  EXPECT_EQ(st.lines_too_few_samples, 2);
+  EXPECT_FALSE(liftLines(f, DepthWithVariance{}).error.empty());
+}
+
+}  // namespace
+}  // namespace pplvo::geometry
