@@ -222,9 +222,9 @@ struct Range {
 /// Axes with a grid, ticks and labels; one polyline per series with >= 2 points.
 void drawAxes(Painter& p, cv::Rect2d box, const std::vector<Series>& series, Range xr, Range yr,
               const std::string& xlabel, const std::string& ylabel, const std::string& title,
-              bool equal_scale) {
+              bool equal_scale, double min_span_y = 0.05) {
   xr.pad(0.03, 1e-3);
-  yr.pad(0.05, 1e-3);
+  yr.pad(0.05, min_span_y);
   if (equal_scale) {
     const double sx = (xr.hi - xr.lo) / box.width, sy = (yr.hi - yr.lo) / box.height;
     if (sx > sy) {
@@ -261,11 +261,11 @@ void drawAxes(Painter& p, cv::Rect2d box, const std::vector<Series>& series, Ran
   }
   p.rect(box, kAxisColour, 1);
   if (!xlabel.empty()) {
-    p.text({box.x + box.width / 2, box.y + box.height + 34}, xlabel, kAxisColour, 13,
+    p.text({box.x + box.width / 2, box.y + box.height + 38}, xlabel, kAxisColour, 13,
            Anchor::kMiddle);
   }
   if (!ylabel.empty()) {
-    p.text({box.x - 46, box.y + box.height / 2}, ylabel, kAxisColour, 13, Anchor::kMiddle, true);
+    p.text({box.x - 58, box.y + box.height / 2}, ylabel, kAxisColour, 13, Anchor::kMiddle, true);
   }
   if (!title.empty()) p.text({box.x, box.y - 6}, title, kAxisColour, 14, Anchor::kStart);
 }
@@ -274,15 +274,15 @@ const char* kAxisNames[] = {"x", "y", "z"};
 
 void drawFigure(Painter& p, const PlotData& d, cv::Size size, const std::string& title) {
   const double W = size.width, H = size.height;
-  const double top = 70, bottom = 50;
+  const double top = 86, bottom = 50;
   p.text({W / 2, 24}, title.empty() ? "trajectories against ground truth (ATE-aligned)" : title,
          kAxisColour, 18, Anchor::kMiddle);
   // Legend row.
   double lx = 70;
   auto legend = [&](const std::string& label, Rgb c) {
-    p.line({lx, 46}, {lx + 28, 46}, c, 3);
-    p.text({lx + 34, 50}, label, kAxisColour, 13, Anchor::kStart);
-    lx += 34 + 8.0 * static_cast<double>(label.size()) + 30;
+    p.line({lx, 50}, {lx + 28, 50}, c, 3);
+    p.text({lx + 34, 55}, label, kAxisColour, 13, Anchor::kStart);
+    lx += 34 + 9.5 * static_cast<double>(label.size()) + 30;
   };
   legend("ground truth", kGtColour);
   for (size_t i = 0; i < d.runs.size(); ++i) {
@@ -291,7 +291,7 @@ void drawFigure(Painter& p, const PlotData& d, cv::Size size, const std::string&
     legend(d.runs[i].label + buf, runColour(i));
   }
   // Top view.
-  const cv::Rect2d topbox(70, top, W * 0.42, H - top - bottom - 20);
+  const cv::Rect2d topbox(80, top, W * 0.42, H - top - bottom - 20);
   {
     std::vector<Series> s;
     Range xr, yr;
@@ -317,7 +317,7 @@ void drawFigure(Painter& p, const PlotData& d, cv::Size size, const std::string&
              std::string(kAxisNames[d.top_v]) + " [m]", "top view (ground-truth frame)", true);
   }
   // Per-axis and error over time.
-  const double rx = topbox.x + topbox.width + 110, rw = W - rx - 25;
+  const double rx = topbox.x + topbox.width + 125, rw = W - rx - 25;
   const double gap = 38, rh = (H - top - bottom - 3 * gap) / 4;
   Range tr;
   for (double t : d.gt_t_s) tr.add(t);
@@ -353,7 +353,7 @@ void drawFigure(Painter& p, const PlotData& d, cv::Size size, const std::string&
       for (double e : d.runs[i].err_m) yr.add(e);
     }
     const cv::Rect2d box(rx, top + 3 * (rh + gap), rw, rh);
-    drawAxes(p, box, s, tr, yr, "time [s]", "error [m]", "", false);
+    drawAxes(p, box, s, tr, yr, "time [s]", "error [m]", "", false, 1e-3);
   }
   p.text({rx, top - 6}, "position over time and translational error (ATE pairs)", kAxisColour, 14,
          Anchor::kStart);
