@@ -378,6 +378,7 @@ int ViewerNode::run() {
   }
   drawIfNew();
   publishStatus();
+  if (video_) video_->release();  // finish the AVI index now, not at destruction
   return output_failed_ ? 1 : 0;
 }
 
