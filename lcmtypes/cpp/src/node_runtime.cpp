@@ -44,7 +44,8 @@ int64_t spin(lcm::LCM& lcm, const std::function<bool()>& done,
   while (!shutdownRequested() && !(done && done())) {
     const int rc = lcm.handleTimeout(50);
     if (rc > 0) ++handled;
-    if (rc < 0) throw std::runtime_error("LCM handle failed");
+    // A signal (Ctrl-C) interrupts the wait with EINTR: that is a shutdown, not a failure.
+    if (rc < 0 && !shutdownRequested()) throw std::runtime_error("LCM handle failed");
     if (periodic && Clock::now() >= next) {
       periodic();
       next = Clock::now() + std::chrono::duration<double>(period_s);

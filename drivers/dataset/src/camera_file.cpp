@@ -1,0 +1,153 @@
+// Camera files: OpenCV FileStorage calib_params.xml and the pplvo YAML camera file.
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <opencv2/core/persistence.hpp>
+#include <set>
+#include <sstream>
+
+#include "pplvo/dataset/dataset.h"
+
+namespace pplvo::dataset {
+namespace {
+
+void checkIntrinsics(const DatasetCamera& cam, const std::string& path,
+                     std::vector<std::string>& errors) {
+  const auto& c = cam.camera;
+  auto finite_nonzero = [](double v) { return std::isfinite(v) && v != 0.0; };
+  if (!finite_nonzero(c.fx)) errors.push_back("fx must be finite and non-zero");
+  if (!finite_nonzero(c.fy)) errors.push_back("fy must be finite and non-zero");
+  if (!std::isfinite(c.cx) || !std::isfinite(c.cy)) errors.push_back("cx, cy must be finite");
+  for (double d : c.distortion) {
+    if (!std::isfinite(d)) errors.push_back("distortion must be finite");
+  }
+  if (c.width < 0 || c.height < 0) errors.push_back("width/height must be >= 0");
+  if (!(cam.depth_scale > 0) || !std::isfinite(cam.depth_scale)) {
+    errors.push_back("depth_scale must be positive");
+  }
+  if (!errors.empty()) {
+    std::ostringstream s;
+    s << "invalid camera file " << path << ":";
+    for (const auto& e : errors) s << "\n  - " << e;
+    throw DatasetError(s.str());
+  }
+}
+
+}  // namespace
+
+DatasetCamera loadCalibParamsXml(const std::string& path) {
+  DatasetCamera cam;
+  cam.source = path;
+  std::vector<std::string> errors;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw DatasetError("calibration file does not exist: " + path);
+  }
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::READ);
+    if (!fs.isOpened()) throw DatasetError("cannot open calibration file " + path);
+    cv::Mat K, D;
+    fs["RGB_intrinsic_params"] >> K;
+    fs["RGB_distortion_coefficients"] >> D;
+    if (K.empty()) {
+      errors.push_back("missing RGB_intrinsic_params");
+    } else if (K.rows != 3 || K.cols != 3) {
+      errors.push_back("RGB_intrinsic_params must be 3x3");
+    } else {
+      K.convertTo(K, CV_64F);
+      cam.camera.fx = K.at<double>(0, 0);
+      cam.camera.fy = K.at<double>(1, 1);
+      cam.camera.cx = K.at<double>(0, 2);
+      cam.camera.cy = K.at<double>(1, 2);
+    }
+    if (!D.empty()) {
+      if (D.total() < 4 || D.total() > 5) {
+        errors.push_back("RGB_distortion_coefficients must have 4 or 5 values (k1 k2 p1 p2 k3)");
+      } else {
+        D.convertTo(D, CV_64F);
+        D = D.reshape(1, 1);
+        for (size_t i = 0; i < D.total(); ++i) cam.camera.distortion[i] = D.at<double>(0, int(i));
+      }
+    }
+    const cv::FileNode scale = fs["depth_scale"];
+    if (!scale.empty()) cam.depth_scale = static_cast<double>(scale);
+    const cv::FileNode w = fs["width"], h = fs["height"];
+    if (!w.empty()) cam.camera.width = static_cast<int>(w);
+    if (!h.empty()) cam.camera.height = static_cast<int>(h);
+  } catch (const cv::Exception& e) {
+    throw DatasetError("cannot parse calibration file " + path + ": " + e.what());
+  }
+  checkIntrinsics(cam, path, errors);
+  return cam;
+}
+
+DatasetCamera loadCameraYaml(const std::string& path) {
+  DatasetCamera cam;
+  cam.source = path;
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw DatasetError("cannot open camera file " + path);
+  } catch (const YAML::Exception& e) {
+    throw DatasetError("cannot parse camera file " + path + ": " + e.what());
+  }
+  if (!root.IsMap()) throw DatasetError("camera file " + path + " must be a YAML map");
+  std::vector<std::string> errors;
+  const std::set<std::string> known = {"width", "height", "fx",         "fy",
+                                       "cx",    "cy",     "distortion", "depth_scale"};
+  for (const auto& kv : root) {
+    const std::string key = kv.first.as<std::string>("?");
+    if (!known.count(key)) errors.push_back("unknown key '" + key + "'");
+  }
+  auto getDouble = [&](const char* key, double& out, bool required) {
+    const YAML::Node n = root[key];
+    if (!n) {
+      if (required) errors.push_back(std::string("missing key '") + key + "'");
+      return;
+    }
+    try {
+      out = n.as<double>();
+    } catch (const YAML::Exception&) {
+      errors.push_back(std::string("'") + key + "' must be a number");
+    }
+  };
+  auto getInt = [&](const char* key, int& out) {
+    const YAML::Node n = root[key];
+    if (!n) return;
+    try {
+      out = n.as<int>();
+    } catch (const YAML::Exception&) {
+      errors.push_back(std::string("'") + key + "' must be an integer");
+    }
+  };
+  getInt("width", cam.camera.width);
+  getInt("height", cam.camera.height);
+  getDouble("fx", cam.camera.fx, true);
+  getDouble("fy", cam.camera.fy, true);
+  getDouble("cx", cam.camera.cx, true);
+  getDouble("cy", cam.camera.cy, true);
+  getDouble("depth_scale", cam.depth_scale, false);
+  if (const YAML::Node d = root["distortion"]) {
+    if (!d.IsSequence() || d.size() < 4 || d.size() > 5) {
+      errors.push_back("'distortion' must be a list of 4 or 5 numbers (k1 k2 p1 p2 [k3])");
+    } else {
+      try {
+        for (size_t i = 0; i < d.size(); ++i) cam.camera.distortion[i] = d[i].as<double>();
+      } catch (const YAML::Exception&) {
+        errors.push_back("'distortion' must hold numbers");
+      }
+    }
+  }
+  if (!errors.empty()) {
+    std::ostringstream s;
+    s << "invalid camera file " << path << ":";
+    for (const auto& e : errors) s << "\n  - " << e;
+    throw DatasetError(s.str());
+  }
+  checkIntrinsics(cam, path, errors);
+  return cam;
+}
+
+}  // namespace pplvo::dataset

@@ -1,0 +1,152 @@
+// Frame loading and sequential reading.
+#include "pplvo/dataset/dataset.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <opencv2/imgcodecs.hpp>
+
+namespace fs = std::filesystem;
+
+namespace pplvo::dataset {
+namespace {
+
+std::vector<uchar> readBytes(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw FrameLoadError(path, "missing image file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FrameLoadError(path, "cannot open image file");
+  std::vector<uchar> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw FrameLoadError(path, "read error on image file");
+  if (bytes.empty()) throw FrameLoadError(path, "empty image file");
+  return bytes;
+}
+
+cv::Mat decode(const std::vector<uchar>& bytes, int flags, const std::string& path) {
+  cv::Mat m;
+  try {
+    m = cv::imdecode(bytes, flags);
+  } catch (const cv::Exception& e) {
+    throw FrameLoadError(path, std::string("corrupt image file (") + e.what() + ")");
+  }
+  if (m.empty()) throw FrameLoadError(path, "corrupt or unsupported image file");
+  return m;
+}
+
+}  // namespace
+
+RawFrame loadRawFrame(const DatasetEntry& entry, double depth_scale,
+                      const FrameLoadOptions& options) {
+  RawFrame f;
+  f.bgr = decode(readBytes(entry.rgb_path), cv::IMREAD_COLOR, entry.rgb_path);
+  if (f.bgr.type() != CV_8UC3) throw FrameLoadError(entry.rgb_path, "colour image is not 8-bit");
+  f.depth_units = decode(readBytes(entry.depth_path), cv::IMREAD_UNCHANGED, entry.depth_path);
+  if (f.depth_units.type() != CV_16UC1) {
+    throw FrameLoadError(entry.depth_path, "depth image is not a 16-bit single-channel PNG");
+  }
+  if (f.depth_units.size() != f.bgr.size()) {
+    throw FrameLoadError(entry.depth_path,
+                         "depth size " + std::to_string(f.depth_units.cols) + "x" +
+                             std::to_string(f.depth_units.rows) + " differs from colour size " +
+                             std::to_string(f.bgr.cols) + "x" + std::to_string(f.bgr.rows));
+  }
+  // 65535 is the usual invalid marker; a configured max range removes far depth too.
+  double max_units = 65534.0;
+  if (options.max_depth_m > 0)
+    max_units = std::min(max_units, std::floor(options.max_depth_m * depth_scale));
+  if (max_units < 65535.0) f.depth_units.setTo(0, f.depth_units > max_units);
+  return f;
+}
+
+Dataset Dataset::open(const std::string& dir, const DatasetOptions& options) {
+  Dataset d;
+  d.dir_ = dir;
+  d.index_ = buildIndex(dir, options);  // throws on a missing folder or index
+  if (!options.camera_file.empty()) {
+    const std::string ext = fs::path(options.camera_file).extension().string();
+    d.camera_ = (ext == ".xml") ? loadCalibParamsXml(options.camera_file)
+                                : loadCameraYaml(options.camera_file);
+  } else {
+    const std::string xml = (fs::path(dir) / "calib_params.xml").string();
+    std::error_code ec;
+    if (!fs::is_regular_file(xml, ec)) {
+      throw DatasetError("no camera calibration: " + xml +
+                         " does not exist; give a YAML camera file (--camera)");
+    }
+    d.camera_ = loadCalibParamsXml(xml);
+  }
+  if (d.index_.entries.empty()) {
+    throw DatasetError("dataset " + dir + " has no frames: " + d.index_.summary.text());
+  }
+  // Image size from the first frame that loads.
+  std::string first_error;
+  for (const auto& e : d.index_.entries) {
+    try {
+      const RawFrame f = loadRawFrame(e, d.camera_.depth_scale);
+      auto& cam = d.camera_.camera;
+      if ((cam.width > 0 && cam.width != f.bgr.cols) ||
+          (cam.height > 0 && cam.height != f.bgr.rows)) {
+        throw DatasetError("camera file " + d.camera_.source + " says " +
+                           std::to_string(cam.width) + "x" + std::to_string(cam.height) + " but " +
+                           e.rgb_path + " is " + std::to_string(f.bgr.cols) + "x" +
+                           std::to_string(f.bgr.rows));
+      }
+      cam.width = f.bgr.cols;
+      cam.height = f.bgr.rows;
+      return d;
+    } catch (const FrameLoadError& err) {
+      if (first_error.empty()) first_error = err.what();
+    }
+  }
+  throw DatasetError("no frame of " + dir + " could be loaded (first error: " + first_error + ")");
+}
+
+RawFrame Dataset::loadRaw(size_t i, const FrameLoadOptions& options) const {
+  const DatasetEntry& e = entry(i);
+  RawFrame f = loadRawFrame(e, camera_.depth_scale, options);
+  if (f.bgr.cols != camera_.camera.width || f.bgr.rows != camera_.camera.height) {
+    throw FrameLoadError(
+        e.rgb_path, "image size " + std::to_string(f.bgr.cols) + "x" + std::to_string(f.bgr.rows) +
+                        " differs from " + std::to_string(camera_.camera.width) + "x" +
+                        std::to_string(camera_.camera.height) + " of the first frame");
+  }
+  return f;
+}
+
+RgbdFrame Dataset::loadFrame(size_t i, const FrameLoadOptions& options) const {
+  RawFrame raw = loadRaw(i, options);
+  const DatasetEntry& e = entry(i);
+  RgbdFrame f;
+  f.utime = e.utime;
+  f.seq = static_cast<int64_t>(i);
+  f.stamp = e.stamp_text;
+  f.camera = camera_.camera;
+  f.bgr = std::move(raw.bgr);
+  f.depth_m = depthUnitsToMetres(raw.depth_units, camera_.depth_scale);
+  return f;
+}
+
+DatasetReader::DatasetReader(const Dataset& dataset, bool skip_bad, const FrameLoadOptions& options,
+                             size_t start)
+    : dataset_(dataset), skip_bad_(skip_bad), options_(options), pos_(start) {}
+
+std::optional<DatasetReader::Item> DatasetReader::next() {
+  while (pos_ < dataset_.size()) {
+    const size_t i = pos_++;
+    try {
+      Item item;
+      item.index = i;
+      item.frame = dataset_.loadRaw(i, options_);
+      ++stats_.frames_read;
+      return item;
+    } catch (const FrameLoadError& e) {
+      if (!skip_bad_) throw;
+      ++stats_.frames_skipped;
+      stats_.last_error = e.what();
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace pplvo::dataset

@@ -1,0 +1,333 @@
+// Index files and association (TUM RGB-D layout).
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "pplvo/dataset/dataset.h"
+
+namespace fs = std::filesystem;
+
+namespace pplvo::dataset {
+namespace {
+
+bool parseDouble(const std::string& s, double& out) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  out = std::strtod(s.c_str(), &end);
+  return end == s.c_str() + s.size() && std::isfinite(out);
+}
+
+/// True when the relative path has a directory component named `name` (e.g. "depth/0.png").
+bool underDir(const std::string& rel, const std::string& name) {
+  const fs::path p = fs::path(rel).lexically_normal();
+  for (auto it = p.begin(); it != p.end(); ++it) {
+    auto next = it;
+    ++next;
+    if (next == p.end()) break;  // last component is the file name
+    if (it->string() == name) return true;
+  }
+  return false;
+}
+
+std::string joinPath(const std::string& dir, const std::string& rel) {
+  return (fs::path(dir) / fs::path(rel)).lexically_normal().string();
+}
+
+bool fileExists(const std::string& path) {
+  std::error_code ec;
+  return fs::is_regular_file(path, ec);
+}
+
+/// Integer frame indices (ICL-NUIM): every stamp integral, sorted steps >= 1, smallest step 1.
+bool looksLikeFrameIndices(std::vector<double> stamps) {
+  if (stamps.empty()) return false;
+  for (double s : stamps) {
+    if (s != std::floor(s) || s < 0) return false;
+  }
+  if (stamps.size() == 1) return true;
+  std::sort(stamps.begin(), stamps.end());
+  double min_step = 1e300;
+  for (size_t i = 1; i < stamps.size(); ++i) {
+    const double step = stamps[i] - stamps[i - 1];
+    if (step < 1.0) return false;
+    min_step = std::min(min_step, step);
+  }
+  return min_step == 1.0;
+}
+
+}  // namespace
+
+IndexFile parseIndexFile(std::istream& in) {
+  IndexFile out;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const auto first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream ss(line);
+    IndexEntry e;
+    if (!(ss >> e.stamp_text >> e.path) || !parseDouble(e.stamp_text, e.stamp)) {
+      ++out.malformed_lines;
+      continue;
+    }
+    out.entries.push_back(std::move(e));
+  }
+  return out;
+}
+
+std::vector<std::pair<size_t, size_t>> associateStamps(const std::vector<double>& a,
+                                                       const std::vector<double>& b,
+                                                       double max_difference_s) {
+  // Candidates within the window, found on sorted copies (O((n + m) log) rather than O(n m)).
+  std::vector<size_t> ia(a.size()), ib(b.size());
+  for (size_t i = 0; i < ia.size(); ++i) ia[i] = i;
+  for (size_t i = 0; i < ib.size(); ++i) ib[i] = i;
+  std::sort(ia.begin(), ia.end(), [&](size_t x, size_t y) { return a[x] < a[y]; });
+  std::sort(ib.begin(), ib.end(), [&](size_t x, size_t y) { return b[x] < b[y]; });
+  struct Candidate {
+    double diff;
+    size_t i, j;
+  };
+  std::vector<Candidate> cand;
+  size_t lo = 0;
+  for (size_t x : ia) {
+    while (lo < ib.size() && b[ib[lo]] <= a[x] - max_difference_s) ++lo;
+    for (size_t k = lo; k < ib.size() && b[ib[k]] < a[x] + max_difference_s; ++k) {
+      const double d = std::abs(a[x] - b[ib[k]]);
+      if (d < max_difference_s) cand.push_back({d, x, ib[k]});
+    }
+  }
+  std::sort(cand.begin(), cand.end(), [&](const Candidate& p, const Candidate& q) {
+    if (p.diff != q.diff) return p.diff < q.diff;
+    if (a[p.i] != a[q.i]) return a[p.i] < a[q.i];
+    return b[p.j] < b[q.j];
+  });
+  std::vector<char> used_a(a.size(), 0), used_b(b.size(), 0);
+  std::vector<std::pair<size_t, size_t>> out;
+  for (const auto& c : cand) {
+    if (used_a[c.i] || used_b[c.j]) continue;
+    used_a[c.i] = used_b[c.j] = 1;
+    out.emplace_back(c.i, c.j);
+  }
+  std::sort(out.begin(), out.end(), [&](const auto& p, const auto& q) {
+    return a[p.first] < a[q.first] || (a[p.first] == a[q.first] && p.first < q.first);
+  });
+  return out;
+}
+
+std::optional<int64_t> stampTextToUtime(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  int64_t whole = 0;
+  int64_t frac_us = 0;
+  size_t i = 0;
+  bool any_digit = false;
+  for (; i < text.size() && std::isdigit(static_cast<unsigned char>(text[i])); ++i) {
+    if (whole > (INT64_MAX / 10 - 10) / 1000000) return std::nullopt;
+    whole = whole * 10 + (text[i] - '0');
+    any_digit = true;
+  }
+  if (i < text.size()) {
+    if (text[i] != '.') return std::nullopt;
+    ++i;
+    int digits = 0;
+    bool round_up = false;
+    for (; i < text.size(); ++i) {
+      const char ch = text[i];
+      if (!std::isdigit(static_cast<unsigned char>(ch))) return std::nullopt;
+      any_digit = true;
+      if (digits < 6) {
+        frac_us = frac_us * 10 + (ch - '0');
+      } else if (digits == 6) {
+        round_up = ch >= '5';
+      }
+      ++digits;
+    }
+    for (int d = digits; d < 6; ++d) frac_us *= 10;
+    if (round_up) ++frac_us;
+  }
+  if (!any_digit) return std::nullopt;
+  return whole * 1000000 + frac_us;
+}
+
+std::string IndexSummary::text() const {
+  std::ostringstream s;
+  s << source;
+  if (!column_order.empty()) s << " (" << column_order << ")";
+  s << ": " << listed << " entries";
+  if (source != "associations.txt") s << " in rgb.txt, " << listed_depth << " in depth.txt";
+  s << "; dropped " << missing_rgb_files << " missing colour and " << missing_depth_files
+    << " missing depth files";
+  if (!first_missing.empty()) s << " (first: " << first_missing << ")";
+  if (unassociated_rgb > 0) s << "; " << unassociated_rgb << " colour images without depth";
+  if (malformed_lines > 0) s << "; " << malformed_lines << " malformed lines ignored";
+  if (unlisted_rgb_files > 0) s << "; " << unlisted_rgb_files << " files in rgb/ not listed";
+  if (index_stamps) s << "; stamps are frame indices at " << index_frame_rate_hz << " Hz";
+  return s.str();
+}
+
+DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw DatasetError("dataset folder does not exist or is not a folder: " + dir);
+  }
+  if (!(options.max_association_dt_s > 0)) {
+    throw DatasetError("max_association_dt_s must be positive");
+  }
+  if (options.index_frame_rate_hz < 0) {
+    throw DatasetError("index_frame_rate_hz must be >= 0");
+  }
+  DatasetIndex index;
+  IndexSummary& sum = index.summary;
+  std::set<std::string> mentioned;  // normalised paths of listed colour files
+  auto noteMissing = [&](const std::string& path) {
+    if (sum.first_missing.empty()) sum.first_missing = path;
+  };
+  std::vector<double> listed_stamps;
+
+  const std::string assoc_path = joinPath(dir, "associations.txt");
+  const std::string rgb_path = joinPath(dir, "rgb.txt");
+  const std::string depth_path = joinPath(dir, "depth.txt");
+  if (fileExists(assoc_path)) {
+    sum.source = "associations.txt";
+    std::ifstream in(assoc_path);
+    if (!in) throw DatasetError("cannot read " + assoc_path);
+    int n_rgb_first = 0, n_depth_first = 0, n_assumed = 0;
+    std::string line;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      const auto first = line.find_first_not_of(" \t");
+      if (first == std::string::npos || line[first] == '#') continue;
+      std::istringstream ss(line);
+      std::string t1, p1, t2, p2;
+      double s1 = 0, s2 = 0;
+      if (!(ss >> t1 >> p1 >> t2 >> p2) || !parseDouble(t1, s1) || !parseDouble(t2, s2)) {
+        ++sum.malformed_lines;
+        continue;
+      }
+      ++sum.listed;
+      const bool depth_first = (underDir(p1, "depth") && !underDir(p2, "depth")) ||
+                               (underDir(p2, "rgb") && !underDir(p1, "rgb"));
+      const bool rgb_first = (underDir(p1, "rgb") && !underDir(p1, "depth")) ||
+                             (underDir(p2, "depth") && !underDir(p2, "rgb"));
+      if (depth_first && !rgb_first) {
+        ++n_depth_first;
+        std::swap(t1, t2);
+        std::swap(p1, p2);
+        std::swap(s1, s2);
+      } else if (rgb_first) {
+        ++n_rgb_first;
+      } else {
+        ++n_assumed;  // neither path says which it is: TUM's order (rgb first)
+      }
+      DatasetEntry e;
+      e.stamp_text = t1;
+      e.stamp = s1;
+      e.depth_stamp_text = t2;
+      e.rgb_path = joinPath(dir, p1);
+      e.depth_path = joinPath(dir, p2);
+      listed_stamps.push_back(s1);
+      mentioned.insert(e.rgb_path);
+      const bool rgb_ok = fileExists(e.rgb_path);
+      const bool depth_ok = fileExists(e.depth_path);
+      if (!rgb_ok) {
+        ++sum.missing_rgb_files;
+        noteMissing(e.rgb_path);
+      }
+      if (!depth_ok) {
+        ++sum.missing_depth_files;
+        noteMissing(e.depth_path);
+      }
+      if (rgb_ok && depth_ok) index.entries.push_back(std::move(e));
+    }
+    const int kinds = (n_rgb_first > 0) + (n_depth_first > 0) + (n_assumed > 0);
+    if (kinds > 1) {
+      sum.column_order = "mixed (" + std::to_string(n_rgb_first) + " rgb-first, " +
+                         std::to_string(n_depth_first) + " depth-first, " +
+                         std::to_string(n_assumed) + " assumed rgb-first)";
+    } else if (n_depth_first > 0) {
+      sum.column_order = "depth-first";
+    } else if (n_assumed > 0) {
+      sum.column_order = "rgb-first (assumed)";
+    } else {
+      sum.column_order = "rgb-first";
+    }
+  } else if (fileExists(rgb_path) && fileExists(depth_path)) {
+    sum.source = "rgb.txt+depth.txt";
+    std::ifstream rin(rgb_path), din(depth_path);
+    if (!rin) throw DatasetError("cannot read " + rgb_path);
+    if (!din) throw DatasetError("cannot read " + depth_path);
+    const IndexFile rgb = parseIndexFile(rin);
+    const IndexFile depth = parseIndexFile(din);
+    sum.listed = static_cast<int>(rgb.entries.size());
+    sum.listed_depth = static_cast<int>(depth.entries.size());
+    sum.malformed_lines = rgb.malformed_lines + depth.malformed_lines;
+    // Drop entries whose files are absent before associating (TUM's depth.txt lists more
+    // depth maps than an excerpt holds; a missing one must not take a colour image's pair).
+    std::vector<IndexEntry> rgb_ok, depth_ok;
+    for (const auto& e : rgb.entries) {
+      listed_stamps.push_back(e.stamp);
+      const std::string p = joinPath(dir, e.path);
+      mentioned.insert(p);
+      if (fileExists(p)) {
+        rgb_ok.push_back(e);
+      } else {
+        ++sum.missing_rgb_files;
+        noteMissing(p);
+      }
+    }
+    for (const auto& e : depth.entries) {
+      const std::string p = joinPath(dir, e.path);
+      if (fileExists(p)) {
+        depth_ok.push_back(e);
+      } else {
+        ++sum.missing_depth_files;
+        noteMissing(p);
+      }
+    }
+    std::vector<double> ta, tb;
+    for (const auto& e : rgb_ok) ta.push_back(e.stamp);
+    for (const auto& e : depth_ok) tb.push_back(e.stamp);
+    const auto pairs = associateStamps(ta, tb, options.max_association_dt_s);
+    sum.unassociated_rgb = static_cast<int>(rgb_ok.size() - pairs.size());
+    for (const auto& [i, j] : pairs) {
+      DatasetEntry e;
+      e.stamp_text = rgb_ok[i].stamp_text;
+      e.stamp = rgb_ok[i].stamp;
+      e.depth_stamp_text = depth_ok[j].stamp_text;
+      e.rgb_path = joinPath(dir, rgb_ok[i].path);
+      e.depth_path = joinPath(dir, depth_ok[j].path);
+      index.entries.push_back(std::move(e));
+    }
+  } else {
+    throw DatasetError("no associations.txt and no rgb.txt + depth.txt in dataset folder " + dir);
+  }
+
+  // Colour files that no index line mentions (e.g. the last image of the TUM excerpt).
+  const fs::path rgb_dir = fs::path(dir) / "rgb";
+  if (fs::is_directory(rgb_dir, ec)) {
+    for (const auto& f : fs::directory_iterator(rgb_dir, ec)) {
+      if (f.is_regular_file(ec) && !mentioned.count(f.path().lexically_normal().string())) {
+        ++sum.unlisted_rgb_files;
+      }
+    }
+  }
+
+  sum.index_stamps = looksLikeFrameIndices(listed_stamps);
+  sum.index_frame_rate_hz =
+      sum.index_stamps ? (options.index_frame_rate_hz > 0 ? options.index_frame_rate_hz : 30.0)
+                       : 0.0;
+  for (auto& e : index.entries) {
+    if (sum.index_stamps) {
+      e.utime = static_cast<int64_t>(std::llround(e.stamp * 1e6 / sum.index_frame_rate_hz));
+    } else {
+      const auto us = stampTextToUtime(e.stamp_text);
+      e.utime = us ? *us : static_cast<int64_t>(std::llround(e.stamp * 1e6));
+    }
+  }
+  return index;
+}
+
+}  // namespace pplvo::dataset

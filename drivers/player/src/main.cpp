@@ -1,0 +1,49 @@
+// pplvo-player: publishes a TUM-layout RGB-D folder on LCM. See docs/player.md.
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "pplvo/msgs/node_runtime.h"
+#include "pplvo/player/player_node.h"
+
+int main(int argc, char** argv) {
+  using namespace pplvo;
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  player::ParseResult parsed = player::parsePlayerArgs(args);
+  if (parsed.help) {
+    std::fputs(player::playerUsage().c_str(), stdout);
+    return 0;
+  }
+  if (!parsed.errors.empty()) {
+    for (const auto& e : parsed.errors) std::fprintf(stderr, "pplvo-player: %s\n", e.c_str());
+    std::fprintf(stderr, "pplvo-player: see --help\n");
+    return 2;
+  }
+  player::PlayerOptions& opt = parsed.options;
+  if (std::find(args.begin(), args.end(), "--progress") == args.end() &&
+      std::find(args.begin(), args.end(), "--no-progress") == args.end()) {
+    opt.progress = ::isatty(STDERR_FILENO) == 1;
+  }
+  msgs::installShutdownHandlers();
+  try {
+    auto lcm = msgs::openLcm(opt.lcm_url);
+    player::PlayerNode node(opt, *lcm);
+    const auto& ds = node.dataset();
+    const auto& cam = ds.camera();
+    std::fprintf(stderr, "pplvo-player: %s: %zu frames; %s\n", ds.dir().c_str(), ds.size(),
+                 ds.index().summary.text().c_str());
+    std::fprintf(stderr,
+                 "pplvo-player: camera %dx%d fx %.3f fy %.3f cx %.3f cy %.3f depth_scale %g "
+                 "(from %s); publishing on %s\n",
+                 cam.camera.width, cam.camera.height, cam.camera.fx, cam.camera.fy, cam.camera.cx,
+                 cam.camera.cy, cam.depth_scale, cam.source.c_str(), opt.channel.c_str());
+    const player::PlayerResult r = node.run();
+    std::fprintf(stderr, "pplvo-player: %s\n%s", r.summaryLine().c_str(),
+                 node.timings().table().c_str());
+    return r.exitCode();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pplvo-player: error: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,482 @@
+#include "pplvo/player/player_node.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <future>
+#include <map>
+#include <pplvo_msgs/rgbd_frame_t.hpp>
+#include <pplvo_msgs/stream_event_t.hpp>
+#include <sstream>
+
+#include "pplvo/msgs/node_runtime.h"
+
+namespace pplvo::player {
+namespace {
+
+using Img = pplvo_msgs::image_t;
+
+bool parseDouble(const std::string& s, double& out) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  out = std::strtod(s.c_str(), &end);
+  return end == s.c_str() + s.size() && std::isfinite(out);
+}
+
+bool parseInt(const std::string& s, int64_t& out) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  out = std::strtoll(s.c_str(), &end, 10);
+  return end == s.c_str() + s.size();
+}
+
+dataset::DatasetOptions datasetOptions(const PlayerOptions& o) {
+  dataset::DatasetOptions d;
+  d.camera_file = o.camera_file;
+  d.index_frame_rate_hz = o.fps;
+  return d;
+}
+
+}  // namespace
+
+std::string playerUsage() {
+  return R"(Usage: pplvo-player --dataset DIR [options]
+Publishes a TUM-layout RGB-D folder (rgb/, depth/, associations.txt or rgb.txt+depth.txt,
+calib_params.xml) as pplvo_msgs.rgbd_frame_t.
+
+  --dataset DIR            dataset folder (required)
+  --camera FILE.yaml       camera file (keys: width height fx fy cx cy distortion depth_scale);
+                           default: DIR/calib_params.xml
+  --lcm-url URL            LCM URL (default: $LCM_DEFAULT_URL, else LCM's default)
+  --channel NAME           frame channel (default PPLVO_RGBD)
+  --pose-channel NAME      pose channel for --lockstep (default PPLVO_POSE)
+  --stream-channel NAME    START/END events (default PPLVO_STREAM)
+  --status-channel NAME    node_status_t (default PPLVO_STATUS)
+  --rate R                 1 = real time from the stamps, 2 = twice as fast,
+                           0 = as fast as possible (default 1)
+  --fps F                  fixed publish rate in Hz instead of the stamps (scaled by --rate);
+                           also the frame rate of frame-index stamps (ICL-NUIM, default 30)
+  --lockstep               publish the next frame only after a pose_t with the last frame's
+                           seq arrived on the pose channel
+  --lockstep-timeout S     seconds to wait for that pose before warning and going on (default 5)
+  --start N                first associated frame to publish (default 0)
+  --max-frames N           publish at most N frames (default 0 = all)
+  --max-depth-m M          depth beyond M metres is published as missing (default: no limit)
+  --skip-bad               skip (and count) frames whose images are missing or corrupt;
+                           without it such a frame is a fatal error
+  --rgb-encoding E         raw | jpeg | png (default raw)
+  --jpeg-quality Q         JPEG quality 1..100 (default 90)
+  --depth-encoding E       raw | zlib | png (default raw)
+  --loop                   start over at the end (seq keeps counting; utime keeps increasing)
+  --progress / --no-progress   progress line on stderr (default: when stderr is a terminal)
+  -h, --help               this text
+
+Exit status: 0 done (or stopped by Ctrl-C), 1 fatal error, 2 bad command line.
+)";
+}
+
+ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
+  ParseResult r;
+  PlayerOptions& o = r.options;
+  const std::map<std::string, int> flags = {
+      {"--lockstep", 0}, {"--skip-bad", 1}, {"--loop", 2}, {"--progress", 3}, {"--no-progress", 4}};
+  for (size_t i = 0; i < args.size(); ++i) {
+    std::string key = args[i];
+    std::string value;
+    bool has_value = false;
+    if (key == "-h" || key == "--help") {
+      r.help = true;
+      continue;
+    }
+    const auto eq = key.find('=');
+    if (key.rfind("--", 0) == 0 && eq != std::string::npos) {
+      value = key.substr(eq + 1);
+      key = key.substr(0, eq);
+      has_value = true;
+    }
+    if (auto f = flags.find(key); f != flags.end()) {
+      if (has_value) r.errors.push_back(key + " takes no value");
+      switch (f->second) {
+        case 0:
+          o.lockstep = true;
+          break;
+        case 1:
+          o.skip_bad = true;
+          break;
+        case 2:
+          o.loop = true;
+          break;
+        case 3:
+          o.progress = true;
+          break;
+        case 4:
+          o.progress = false;
+          break;
+      }
+      continue;
+    }
+    static const char* kValued[] = {
+        "--dataset",      "--camera",           "--lcm-url",        "--channel",
+        "--pose-channel", "--stream-channel",   "--status-channel", "--rate",
+        "--fps",          "--lockstep-timeout", "--start",          "--max-frames",
+        "--max-depth-m",  "--rgb-encoding",     "--depth-encoding", "--jpeg-quality"};
+    bool known = false;
+    for (const char* k : kValued) known = known || key == k;
+    if (!known) {
+      r.errors.push_back("unknown option '" + args[i] + "'");
+      continue;
+    }
+    if (!has_value) {
+      if (i + 1 >= args.size()) {
+        r.errors.push_back(key + " needs a value");
+        continue;
+      }
+      value = args[++i];
+    }
+    auto number = [&](double& out, double min_value) {
+      double v = 0;
+      if (!parseDouble(value, v) || v < min_value) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%g", min_value);
+        r.errors.push_back(key + ": expected a number >= " + buf + ", got '" + value + "'");
+      } else {
+        out = v;
+      }
+    };
+    auto integer = [&](int64_t& out) {
+      int64_t v = 0;
+      if (!parseInt(value, v) || v < 0) {
+        r.errors.push_back(key + ": expected an integer >= 0, got '" + value + "'");
+      } else {
+        out = v;
+      }
+    };
+    if (key == "--dataset")
+      o.dataset_dir = value;
+    else if (key == "--camera")
+      o.camera_file = value;
+    else if (key == "--lcm-url")
+      o.lcm_url = value;
+    else if (key == "--channel")
+      o.channel = value;
+    else if (key == "--pose-channel")
+      o.pose_channel = value;
+    else if (key == "--stream-channel")
+      o.stream_channel = value;
+    else if (key == "--status-channel")
+      o.status_channel = value;
+    else if (key == "--rate")
+      number(o.rate, 0.0);
+    else if (key == "--fps")
+      number(o.fps, 0.0);
+    else if (key == "--lockstep-timeout")
+      number(o.lockstep_timeout_s, 0.0);
+    else if (key == "--max-depth-m")
+      number(o.max_depth_m, 0.0);
+    else if (key == "--start")
+      integer(o.start);
+    else if (key == "--max-frames")
+      integer(o.max_frames);
+    else if (key == "--jpeg-quality") {
+      int64_t q = 0;
+      integer(q);
+      if (q < 1 || q > 100) r.errors.push_back("--jpeg-quality must be 1..100");
+      o.jpeg_quality = static_cast<int>(q);
+    } else if (key == "--rgb-encoding") {
+      if (value == "raw")
+        o.rgb_encoding = Img::ENCODING_RAW_BGR8;
+      else if (value == "jpeg")
+        o.rgb_encoding = Img::ENCODING_JPEG;
+      else if (value == "png")
+        o.rgb_encoding = Img::ENCODING_PNG;
+      else
+        r.errors.push_back("--rgb-encoding must be raw, jpeg or png, got '" + value + "'");
+    } else if (key == "--depth-encoding") {
+      if (value == "raw")
+        o.depth_encoding = Img::ENCODING_RAW_U16;
+      else if (value == "zlib")
+        o.depth_encoding = Img::ENCODING_ZLIB_U16;
+      else if (value == "png")
+        o.depth_encoding = Img::ENCODING_PNG_U16;
+      else
+        r.errors.push_back("--depth-encoding must be raw, zlib or png, got '" + value + "'");
+    }
+  }
+  if (!r.help && o.dataset_dir.empty()) r.errors.push_back("--dataset DIR is required");
+  if (o.channel.empty()) r.errors.push_back("--channel must not be empty");
+  return r;
+}
+
+std::string PlayerResult::summaryLine() const {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "published %lld frames, skipped %lld, %.2f s, %.1f frames/s",
+                static_cast<long long>(published), static_cast<long long>(skipped), elapsed_s,
+                elapsed_s > 0 ? published / elapsed_s : 0.0);
+  std::string s = buf;
+  if (lockstep_timeouts > 0) s += ", " + std::to_string(lockstep_timeouts) + " lockstep timeouts";
+  if (loops > 0) s += ", " + std::to_string(loops) + " loops";
+  if (interrupted) s += " (interrupted)";
+  if (failed) s += " (FAILED: " + error + ")";
+  return s;
+}
+
+PlayerNode::PlayerNode(const PlayerOptions& options, lcm::LCM& lcm)
+    : options_(options),
+      lcm_(lcm),
+      dataset_(dataset::Dataset::open(options.dataset_dir, datasetOptions(options))) {
+  if (options_.lockstep) {
+    pose_sub_ = lcm_.subscribe(options_.pose_channel, &PlayerNode::onPose, this);
+  }
+}
+
+PlayerNode::~PlayerNode() {
+  if (pose_sub_) lcm_.unsubscribe(pose_sub_);
+}
+
+double PlayerNode::nowS() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+void PlayerNode::onPose(const lcm::ReceiveBuffer*, const std::string&,
+                        const pplvo_msgs::pose_t* msg) {
+  msgs::guarded(counters_, options_.node_name.c_str(), [&] {
+    if (msg->seq > last_pose_seq_) last_pose_seq_ = msg->seq;
+  });
+}
+
+void PlayerNode::publishStream(int8_t event, const PlayerResult& result) {
+  pplvo_msgs::stream_event_t ev;
+  ev.utime = hostUtime();
+  ev.source = dataset_.dir();
+  ev.event = event;
+  ev.frames_published = result.published;
+  ev.frames_skipped = result.skipped;
+  lcm_.publish(options_.stream_channel, &ev);
+}
+
+void PlayerNode::periodic(bool force) {
+  const double now = nowS();
+  if (force || now - last_status_s_ >= options_.status_period_s) {
+    last_status_s_ = now;
+    const auto msg = msgs::toStatusMsg(options_.node_name, counters_, timings_, hostUtime());
+    lcm_.publish(options_.status_channel, &msg);
+  }
+  if (options_.progress && (force || now - last_progress_s_ >= 0.25)) {
+    last_progress_s_ = now;
+    const double el = now - start_s_;
+    std::fprintf(stderr, "\r[%s] %lld/%zu frames, %.1f frames/s, skipped %lld   ",
+                 options_.node_name.c_str(), static_cast<long long>(published_), dataset_.size(),
+                 el > 0 ? published_ / el : 0.0, static_cast<long long>(counters_.frames_skipped));
+    std::fflush(stderr);
+  }
+}
+
+void PlayerNode::drain() {
+  // memq queues until handled: dispatch what is pending so subscribers on this instance run
+  // and the queue does not grow (bounded in case a handler keeps republishing).
+  for (int i = 0; i < 100000; ++i) {
+    const int rc = lcm_.handleTimeout(0);
+    if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
+    if (rc <= 0) break;
+  }
+}
+
+void PlayerNode::waitUntil(double target_s) {
+  while (!msgs::shutdownRequested()) {
+    const double remaining = target_s - nowS();
+    if (remaining <= 0) break;
+    const int ms = static_cast<int>(std::min(100.0, std::ceil(remaining * 1000.0)));
+    // EINTR from Ctrl-C ends the wait; the loop then sees the shutdown request.
+    if (lcm_.handleTimeout(ms) < 0 && !msgs::shutdownRequested()) {
+      throw std::runtime_error("LCM handle failed");
+    }
+    periodic(false);
+  }
+}
+
+bool PlayerNode::waitForPose(int64_t seq) {
+  const double deadline = nowS() + options_.lockstep_timeout_s;
+  msgs::spin(
+      lcm_, [&] { return last_pose_seq_ >= seq || nowS() >= deadline; }, [&] { periodic(false); },
+      0.05);
+  return last_pose_seq_ >= seq;
+}
+
+PlayerResult PlayerNode::run() {
+  PlayerResult result;
+  start_s_ = nowS();
+  try {
+    publishStream(pplvo_msgs::stream_event_t::EVENT_START, result);
+    runLoop(result);
+  } catch (const std::exception& e) {
+    result.failed = true;
+    result.error = e.what();
+  }
+  result.published = published_;
+  result.skipped = counters_.frames_skipped;
+  result.interrupted = msgs::shutdownRequested();
+  result.elapsed_s = nowS() - start_s_;
+  if (result.failed) counters_.last_warning = result.error;
+  try {
+    publishStream(result.failed ? pplvo_msgs::stream_event_t::EVENT_ERROR
+                                : pplvo_msgs::stream_event_t::EVENT_END,
+                  result);
+    periodic(true);
+    drain();
+  } catch (const std::exception& e) {
+    if (!result.failed) {
+      result.failed = true;
+      result.error = e.what();
+    }
+  }
+  if (options_.progress) std::fputc('\n', stderr);
+  return result;
+}
+
+void PlayerNode::runLoop(PlayerResult& result) {
+  dataset::FrameLoadOptions load;
+  load.max_depth_m = options_.max_depth_m;
+  const size_t start = static_cast<size_t>(options_.start);
+  if (start >= dataset_.size()) {
+    throw std::runtime_error("--start " + std::to_string(options_.start) + " is beyond the " +
+                             std::to_string(dataset_.size()) + " frames of the dataset");
+  }
+  dataset::DatasetReader reader(dataset_, options_.skip_bad, load, start);
+  const pplvo_msgs::camera_info_t camera_msg = msgs::toMsg(dataset_.camera().camera);
+  // Duration of one pass plus one frame period: keeps utime increasing across --loop passes.
+  const auto& entries = dataset_.index().entries;
+  const int64_t pass_us =
+      (entries.back().utime - entries[start].utime) +
+      (entries.size() - start > 1 ? (entries.back().utime - entries[start].utime) /
+                                        static_cast<int64_t>(entries.size() - start - 1)
+                                  : 33333);
+  int64_t loop_offset_us = 0;
+  int64_t published_this_pass = 0;
+  int64_t skipped_before = 0;
+  // Pacing anchor: wall time and stream time (or frame count for --fps) of a reference frame.
+  bool anchored = false;
+  double anchor_wall_s = 0.0;
+  int64_t anchor_utime = 0;
+  int64_t anchor_count = 0;
+
+  // The next frame is decoded on a worker thread while the current one waits for its slot and
+  // is published (PNG decoding is the slowest step). Only one task touches the reader at a
+  // time: seek() and the next fetch happen after get().
+  struct Fetched {
+    std::optional<dataset::DatasetReader::Item> item;
+    dataset::ReadStats stats;
+    std::exception_ptr error;
+    double load_ms = 0.0;
+  };
+  auto fetch = [&reader]() {
+    Fetched f;
+    Stopwatch watch;
+    try {
+      f.item = reader.next();  // throws FrameLoadError without --skip-bad
+    } catch (...) {
+      f.error = std::current_exception();
+    }
+    f.stats = reader.stats();
+    f.load_ms = watch.elapsedMs();
+    return f;
+  };
+  std::future<Fetched> pending = std::async(std::launch::async, fetch);
+
+  while (!msgs::shutdownRequested()) {
+    if (options_.max_frames > 0 && published_ >= options_.max_frames) break;
+    Fetched fetched;
+    {
+      ScopedStageTimer t(timings_, "load_wait");
+      fetched = pending.get();
+    }
+    timings_.add("load", fetched.load_ms);
+    if (fetched.error) std::rethrow_exception(fetched.error);
+    const int64_t newly_skipped = fetched.stats.frames_skipped - skipped_before;
+    skipped_before = fetched.stats.frames_skipped;
+    if (newly_skipped > 0) {
+      counters_.frames_skipped += newly_skipped;
+      counters_.last_warning = "skipped bad frame: " + fetched.stats.last_error;
+      if (counters_.frames_skipped <= 5 || counters_.frames_skipped % 100 == 0) {
+        std::fprintf(stderr, "[%s] %s\n", options_.node_name.c_str(),
+                     counters_.last_warning.c_str());
+      }
+    }
+    if (!fetched.item) {
+      if (!options_.loop || published_this_pass == 0) break;
+      reader.seek(start);
+      pending = std::async(std::launch::async, fetch);
+      loop_offset_us += pass_us;
+      published_this_pass = 0;
+      ++result.loops;
+      continue;
+    }
+    pending = std::async(std::launch::async, fetch);
+    std::optional<dataset::DatasetReader::Item> item = std::move(fetched.item);
+    ++counters_.frames_in;
+    const dataset::DatasetEntry& entry = dataset_.entry(item->index);
+    const int64_t utime = entry.utime + loop_offset_us;
+
+    if (options_.rate > 0) {
+      const double now = nowS();
+      double target = now;
+      if (anchored) {
+        target = options_.fps > 0
+                     ? anchor_wall_s + (published_ - anchor_count) / (options_.fps * options_.rate)
+                     : anchor_wall_s + (utime - anchor_utime) * 1e-6 / options_.rate;
+      }
+      if (!anchored || now - target > options_.max_lag_s || target - now > 60.0) {
+        anchored = true;  // first frame, fell behind, or stamps jumped: restart the clock
+        anchor_wall_s = now;
+        anchor_utime = utime;
+        anchor_count = published_;
+        target = now;
+      }
+      waitUntil(target);
+      if (msgs::shutdownRequested()) break;
+    }
+
+    pplvo_msgs::rgbd_frame_t msg;
+    const bool encoded = msgs::guarded(counters_, options_.node_name.c_str(), [&] {
+      ScopedStageTimer t(timings_, "encode");
+      msg.utime = utime;
+      msg.seq = published_;
+      msg.stamp = entry.stamp_text;
+      msg.source = dataset_.dir();
+      msg.camera = camera_msg;
+      msg.depth_scale = dataset_.camera().depth_scale;
+      msg.rgb = msgs::encodeImage(item->frame.bgr, options_.rgb_encoding, options_.jpeg_quality);
+      msg.depth = msgs::encodeImage(item->frame.depth_units, options_.depth_encoding);
+    });
+    if (!encoded) continue;  // counted by guarded()
+    {
+      ScopedStageTimer t(timings_, "publish");
+      if (lcm_.publish(options_.channel, &msg) != 0) {
+        throw std::runtime_error("LCM publish failed on " + options_.channel);
+      }
+    }
+    counters_.last_seq = msg.seq;
+    ++counters_.frames_out;
+    ++published_;
+    ++published_this_pass;
+    drain();
+    if (options_.lockstep) {
+      ScopedStageTimer t(timings_, "lockstep_wait");
+      if (!waitForPose(msg.seq) && !msgs::shutdownRequested()) {
+        ++result.lockstep_timeouts;
+        ++counters_.errors;
+        counters_.last_warning = "lockstep: no pose for seq " + std::to_string(msg.seq) +
+                                 " within " + std::to_string(options_.lockstep_timeout_s) + " s";
+        if (result.lockstep_timeouts <= 5 || result.lockstep_timeouts % 100 == 0) {
+          std::fprintf(stderr, "[%s] %s; continuing (%lld so far)\n", options_.node_name.c_str(),
+                       counters_.last_warning.c_str(),
+                       static_cast<long long>(result.lockstep_timeouts));
+        }
+        anchored = false;  // do not rush the following frames to catch up
+      }
+    }
+    periodic(false);
+  }
+}
+
+}  // namespace pplvo::player

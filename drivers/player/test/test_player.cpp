@@ -1,0 +1,364 @@
+// Player end to end, in-process on one memq:// instance (no host network).
+#include <gtest/gtest.h>
+#include <lcm/eventlog.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <pplvo_msgs/node_status_t.hpp>
+#include <pplvo_msgs/pose_t.hpp>
+#include <pplvo_msgs/rgbd_frame_t.hpp>
+#include <pplvo_msgs/stream_event_t.hpp>
+
+#include "pplvo/msgs/convert.h"
+#include "pplvo/player/player_node.h"
+
+namespace fs = std::filesystem;
+using namespace pplvo;
+using player::PlayerNode;
+using player::PlayerOptions;
+
+namespace {
+
+std::string iclDir() {
+  const char* env = std::getenv("PPLVO_SHARED_DATA");
+  return std::string(env ? env : "../shared/data") + "/icl_living_room_kt0_short";
+}
+
+/// Records everything the player publishes on the same LCM instance.
+struct Recorder {
+  std::vector<pplvo_msgs::rgbd_frame_t> frames;
+  std::vector<pplvo_msgs::stream_event_t> events;
+  std::vector<pplvo_msgs::node_status_t> statuses;
+  bool keep_images = false;
+  explicit Recorder(lcm::LCM& lcm) {
+    lcm.subscribe("PPLVO_RGBD", &Recorder::onFrame, this);
+    lcm.subscribe("PPLVO_STREAM", &Recorder::onEvent, this);
+    lcm.subscribe("PPLVO_STATUS", &Recorder::onStatus, this);
+  }
+  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::rgbd_frame_t* m) {
+    frames.push_back(*m);
+    if (!keep_images && frames.size() > 3) {  // keep memory small: first 3 frames in full
+      frames.back().rgb.data.clear();
+      frames.back().depth.data.clear();
+    }
+  }
+  void onEvent(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::stream_event_t* m) {
+    events.push_back(*m);
+  }
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::node_status_t* m) {
+    statuses.push_back(*m);
+  }
+};
+
+/// A fake odometry: answers every frame with a pose of the same seq, and records whether the
+/// player waited (frame k must arrive only after the pose of k - 1 was sent).
+struct Responder {
+  lcm::LCM& lcm;
+  int64_t last_pose_sent = -1;
+  int out_of_step = 0;
+  int frames = 0;
+  explicit Responder(lcm::LCM& l) : lcm(l) {
+    lcm.subscribe("PPLVO_RGBD", &Responder::onFrame, this);
+  }
+  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::rgbd_frame_t* m) {
+    ++frames;
+    if (m->seq != last_pose_sent + 1) ++out_of_step;
+    pplvo_msgs::pose_t p{};
+    p.utime = m->utime;
+    p.seq = m->seq;
+    p.stamp = m->stamp;
+    p.orientation[0] = 1.0;
+    p.n_window = 0;
+    lcm.publish("PPLVO_POSE", &p);
+    last_pose_sent = m->seq;
+  }
+};
+
+PlayerOptions baseOptions() {
+  PlayerOptions o;
+  o.dataset_dir = iclDir();
+  o.rate = 0.0;
+  return o;
+}
+
+}  // namespace
+
+TEST(PlayerArgs, ParsesAndCollectsErrors) {
+  auto r = player::parsePlayerArgs({"--dataset", "/x", "--rate=2", "--lockstep",
+                                    "--lockstep-timeout", "0.5", "--rgb-encoding", "jpeg",
+                                    "--depth-encoding", "zlib", "--max-frames", "7", "--loop"});
+  EXPECT_TRUE(r.errors.empty());
+  EXPECT_EQ(r.options.dataset_dir, "/x");
+  EXPECT_DOUBLE_EQ(r.options.rate, 2.0);
+  EXPECT_TRUE(r.options.lockstep);
+  EXPECT_DOUBLE_EQ(r.options.lockstep_timeout_s, 0.5);
+  EXPECT_EQ(r.options.rgb_encoding, pplvo_msgs::image_t::ENCODING_JPEG);
+  EXPECT_EQ(r.options.depth_encoding, pplvo_msgs::image_t::ENCODING_ZLIB_U16);
+  EXPECT_EQ(r.options.max_frames, 7);
+  EXPECT_TRUE(r.options.loop);
+  r = player::parsePlayerArgs({"--rate", "-1", "--bogus", "--rgb-encoding", "bmp", "--start"});
+  EXPECT_EQ(r.errors.size(), 5u);  // rate, bogus, encoding, start needs value, no --dataset
+}
+
+TEST(Player, MissingDatasetIsAClearError) {
+  lcm::LCM lcm("memq://");
+  PlayerOptions o = baseOptions();
+  o.dataset_dir = "/nonexistent/pplvo_player_dataset";
+  try {
+    PlayerNode node(o, lcm);
+    FAIL();
+  } catch (const dataset::DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/pplvo_player_dataset"), std::string::npos);
+  }
+}
+
+TEST(Player, PublishesAllIclFramesAsFastAsPossible) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  Recorder rec(lcm);
+  PlayerNode node(baseOptions(), lcm);
+  const player::PlayerResult r = node.run();
+  EXPECT_FALSE(r.failed) << r.error;
+  EXPECT_EQ(r.published, 251);
+  EXPECT_EQ(r.skipped, 0);
+  ASSERT_EQ(rec.frames.size(), 251u);
+  for (size_t i = 0; i < rec.frames.size(); ++i) {
+    const auto& f = rec.frames[i];
+    EXPECT_EQ(f.seq, static_cast<int64_t>(i));
+    EXPECT_EQ(f.stamp, std::to_string(i));  // verbatim ICL frame index
+    EXPECT_EQ(f.utime, static_cast<int64_t>(std::llround(i * 1e6 / 30.0)));  // 30 Hz
+  }
+  // Frame content: camera with the signed fy, raw depth equal to the PNG.
+  const auto& f0 = rec.frames[2];
+  EXPECT_DOUBLE_EQ(f0.camera.fy, -480.0);
+  EXPECT_EQ(f0.camera.width, 640);
+  EXPECT_DOUBLE_EQ(f0.depth_scale, 5000.0);
+  const cv::Mat depth = msgs::decodeImage(f0.depth);
+  const cv::Mat png = cv::imread(iclDir() + "/depth/2.png", cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(depth.type(), CV_16UC1);
+  EXPECT_EQ(cv::norm(depth, png, cv::NORM_INF), 0.0);
+  const cv::Mat bgr = msgs::decodeImage(f0.rgb);
+  EXPECT_EQ(cv::norm(bgr, cv::imread(iclDir() + "/rgb/2.png"), cv::NORM_INF), 0.0);
+  // START then END with counts; at least the final status.
+  ASSERT_EQ(rec.events.size(), 2u);
+  EXPECT_EQ(rec.events[0].event, pplvo_msgs::stream_event_t::EVENT_START);
+  EXPECT_EQ(rec.events[1].event, pplvo_msgs::stream_event_t::EVENT_END);
+  EXPECT_EQ(rec.events[1].frames_published, 251);
+  ASSERT_FALSE(rec.statuses.empty());
+  EXPECT_EQ(rec.statuses.back().node, "pplvo-player");
+  EXPECT_EQ(rec.statuses.back().frames_out, 251);
+  EXPECT_EQ(rec.statuses.back().last_seq, 250);
+  EXPECT_GT(rec.statuses.back().n_stages, 0);
+  std::printf("251 ICL frames published in %.2f s (%.1f frames/s, raw encodings)\n", r.elapsed_s,
+              r.published / r.elapsed_s);
+}
+
+TEST(Player, LosslessEncodingsRoundTripAndStartMaxFrames) {
+  lcm::LCM lcm("memq://");
+  Recorder rec(lcm);
+  rec.keep_images = true;
+  PlayerOptions o = baseOptions();
+  o.start = 100;
+  o.max_frames = 3;
+  o.rgb_encoding = pplvo_msgs::image_t::ENCODING_PNG;
+  o.depth_encoding = pplvo_msgs::image_t::ENCODING_ZLIB_U16;
+  PlayerNode node(o, lcm);
+  const auto r = node.run();
+  ASSERT_EQ(r.published, 3);
+  ASSERT_EQ(rec.frames.size(), 3u);
+  EXPECT_EQ(rec.frames[0].seq, 0);        // seq counts published frames from 0
+  EXPECT_EQ(rec.frames[0].stamp, "100");  // stamp of dataset frame 100
+  const cv::Mat depth = msgs::decodeImage(rec.frames[1].depth);
+  EXPECT_EQ(
+      cv::norm(depth, cv::imread(iclDir() + "/depth/101.png", cv::IMREAD_UNCHANGED), cv::NORM_INF),
+      0.0);
+  const cv::Mat bgr = msgs::decodeImage(rec.frames[1].rgb);
+  EXPECT_EQ(cv::norm(bgr, cv::imread(iclDir() + "/rgb/101.png"), cv::NORM_INF), 0.0);
+}
+
+TEST(Player, LockstepWaitsForEachPose) {
+  lcm::LCM lcm("memq://");
+  Recorder rec(lcm);
+  Responder responder(lcm);
+  PlayerOptions o = baseOptions();
+  o.lockstep = true;
+  o.lockstep_timeout_s = 5.0;
+  o.max_frames = 30;
+  PlayerNode node(o, lcm);
+  const auto r = node.run();
+  EXPECT_FALSE(r.failed) << r.error;
+  EXPECT_EQ(r.published, 30);
+  EXPECT_EQ(r.lockstep_timeouts, 0);
+  EXPECT_EQ(responder.frames, 30);
+  EXPECT_EQ(responder.out_of_step, 0);
+  EXPECT_LT(r.elapsed_s, 10.0);  // far from 30 timeouts of 5 s
+}
+
+TEST(Player, LockstepTimeoutWarnsCountsAndContinues) {
+  lcm::LCM lcm("memq://");
+  Recorder rec(lcm);
+  PlayerOptions o = baseOptions();
+  o.lockstep = true;
+  o.lockstep_timeout_s = 0.1;
+  o.max_frames = 3;
+  PlayerNode node(o, lcm);
+  const auto r = node.run();
+  EXPECT_FALSE(r.failed);
+  EXPECT_EQ(r.published, 3);
+  EXPECT_EQ(r.lockstep_timeouts, 3);
+  EXPECT_GE(r.elapsed_s, 0.3);
+  EXPECT_NE(node.counters().last_warning.find("lockstep"), std::string::npos);
+  ASSERT_FALSE(rec.statuses.empty());
+  EXPECT_EQ(rec.statuses.back().errors, 3);
+}
+
+TEST(Player, RealTimePacingFollowsStampsAndFps) {
+  {
+    lcm::LCM lcm("memq://");
+    PlayerOptions o = baseOptions();
+    o.rate = 1.0;
+    o.max_frames = 10;  // 9 intervals of 1/30 s
+    PlayerNode node(o, lcm);
+    const auto r = node.run();
+    EXPECT_EQ(r.published, 10);
+    EXPECT_GE(r.elapsed_s, 9.0 / 30.0 - 0.01);
+  }
+  {
+    lcm::LCM lcm("memq://");
+    PlayerOptions o = baseOptions();
+    o.rate = 2.0;
+    o.fps = 20.0;  // 40 frames/s
+    o.max_frames = 9;
+    PlayerNode node(o, lcm);
+    const auto r = node.run();
+    EXPECT_EQ(r.published, 9);
+    EXPECT_GE(r.elapsed_s, 8.0 / 40.0 - 0.01);
+  }
+}
+
+TEST(Player, LoopKeepsSeqAndUtimeIncreasing) {
+  lcm::LCM lcm("memq://");
+  Recorder rec(lcm);
+  PlayerOptions o = baseOptions();
+  o.start = 248;  // 3 frames per pass
+  o.loop = true;
+  o.max_frames = 7;
+  PlayerNode node(o, lcm);
+  const auto r = node.run();
+  ASSERT_EQ(rec.frames.size(), 7u);
+  EXPECT_EQ(r.loops, 2);
+  for (size_t i = 1; i < rec.frames.size(); ++i) {
+    EXPECT_EQ(rec.frames[i].seq, rec.frames[i - 1].seq + 1);
+    EXPECT_GT(rec.frames[i].utime, rec.frames[i - 1].utime);
+  }
+  EXPECT_EQ(rec.frames[3].stamp, "248");
+}
+
+TEST(Player, CorruptFrameIsFatalUnlessSkipBad) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("pplvo_test_player_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "rgb");
+  fs::create_directories(dir / "depth");
+  std::ofstream assoc(dir / "associations.txt");
+  for (int i = 0; i < 5; ++i) {
+    const std::string n = std::to_string(i) + ".png";
+    fs::copy_file(iclDir() + "/rgb/" + n, dir / "rgb" / n);
+    fs::copy_file(iclDir() + "/depth/" + n, dir / "depth" / n);
+    assoc << i << " depth/" << n << " " << i << " rgb/" << n << "\n";
+  }
+  assoc.close();
+  fs::copy_file(iclDir() + "/calib_params.xml", dir / "calib_params.xml");
+  std::ofstream(dir / "rgb" / "3.png") << "garbage, not a PNG";
+  {
+    lcm::LCM lcm("memq://");
+    Recorder rec(lcm);
+    PlayerOptions o = baseOptions();
+    o.dataset_dir = dir.string();
+    PlayerNode node(o, lcm);
+    const auto r = node.run();
+    EXPECT_TRUE(r.failed);
+    EXPECT_EQ(r.exitCode(), 1);
+    EXPECT_NE(r.error.find("rgb/3.png"), std::string::npos) << r.error;
+    EXPECT_EQ(r.published, 3);
+    ASSERT_FALSE(rec.events.empty());
+    EXPECT_EQ(rec.events.back().event, pplvo_msgs::stream_event_t::EVENT_ERROR);
+  }
+  {
+    lcm::LCM lcm("memq://");
+    Recorder rec(lcm);
+    PlayerOptions o = baseOptions();
+    o.dataset_dir = dir.string();
+    o.skip_bad = true;
+    PlayerNode node(o, lcm);
+    const auto r = node.run();
+    EXPECT_FALSE(r.failed);
+    EXPECT_EQ(r.published, 4);
+    EXPECT_EQ(r.skipped, 1);
+    ASSERT_EQ(rec.frames.size(), 4u);
+    EXPECT_EQ(rec.frames[3].seq, 3);      // seq stays consecutive
+    EXPECT_EQ(rec.frames[3].stamp, "4");  // the stamp of the frame after the bad one
+    EXPECT_EQ(rec.events.back().event, pplvo_msgs::stream_event_t::EVENT_END);
+    EXPECT_EQ(rec.events.back().frames_skipped, 1);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Player, WritesAFileLogThroughTheFileProvider) {
+  const std::string path =
+      (fs::temp_directory_path() / ("pplvo_test_player_" + std::to_string(getpid()) + ".lcmlog"))
+          .string();
+  {
+    lcm::LCM lcm("file://" + path + "?mode=w");
+    ASSERT_TRUE(lcm.good());
+    PlayerOptions o = baseOptions();
+    o.max_frames = 5;
+    PlayerNode node(o, lcm);
+    const auto r = node.run();
+    EXPECT_FALSE(r.failed) << r.error;
+  }
+  lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "r");
+  ASSERT_NE(log, nullptr);
+  std::map<std::string, int> per_channel;
+  int64_t expected_seq = 0;
+  while (lcm_eventlog_event_t* ev = lcm_eventlog_read_next_event(log)) {
+    per_channel[ev->channel]++;
+    if (std::string(ev->channel) == "PPLVO_RGBD") {
+      pplvo_msgs::rgbd_frame_t m;
+      ASSERT_GT(m.decode(ev->data, 0, ev->datalen), 0);
+      EXPECT_EQ(m.seq, expected_seq++);
+    }
+    lcm_eventlog_free_event(ev);
+  }
+  lcm_eventlog_destroy(log);
+  EXPECT_EQ(per_channel["PPLVO_RGBD"], 5);
+  EXPECT_EQ(per_channel["PPLVO_STREAM"], 2);
+  EXPECT_GE(per_channel["PPLVO_STATUS"], 1);
+  fs::remove(path);
+}
+
+TEST(PlayerProcess, ExitCodesAndCtrlC) {
+  const char* b = std::getenv("PPLVO_BINARY_DIR");
+  const std::string exe = std::string(b ? b : "build") + "/bin/pplvo-player";
+  ASSERT_TRUE(fs::exists(exe)) << exe;
+  auto run = [](const std::string& cmd) {
+    const int rc = std::system(cmd.c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  };
+  EXPECT_EQ(run(exe + " --rate x 2>/dev/null"), 2);
+  EXPECT_EQ(run(exe + " --lcm-url memq:// --dataset /nonexistent 2>/dev/null"), 1);
+  // Unreadable calibration: a camera file that does not parse.
+  EXPECT_EQ(run(exe + " --lcm-url memq:// --dataset " + iclDir() +
+                " --camera /nonexistent/cam.yaml 2>/dev/null"),
+            1);
+  // Real-time playback of 251 frames takes 8 s; SIGINT after 3 s stops it cleanly (handlers are installed first thing in main).
+  EXPECT_EQ(run("timeout --preserve-status -s INT 3 " + exe + " --lcm-url memq:// --dataset " +
+                iclDir() + " 2>/dev/null"),
+            0);
+}
