@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
+#include <thread>
 
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -322,7 +323,7 @@ void ViewerNode::writeOutputs(const cv::Mat& canvas) {
     }
     if (options_.show_window) {
       if (!window_open_) {
-        cv::namedWindow(kWindowName, cv::WINDOW_AUTOSIZE);
+        cv::namedWindow(kWindowName, cv::WINDOW_AUTOSIZE | cv::WINDOW_GUI_NORMAL);
         window_open_ = true;
       }
       cv::imshow(kWindowName, canvas);
@@ -353,9 +354,11 @@ int ViewerNode::spinOnce(double wait_s) {
     if (secondsSince(start) > period_s) break;
     rc = lcm_.handleTimeout(0);
   }
-  if (rc < 0) {
-    ++counters_.errors;
-    counters_.last_warning = "lcm handle failed";
+  if (rc < 0 && !input_ended_) {
+    // A file:// log at its end (or a broken provider): nothing more will arrive.
+    input_ended_ = true;
+    counters_.last_warning = "LCM input ended (end of log or provider failure)";
+    std::fprintf(stderr, "[%s] %s\n", options_.node_name.c_str(), counters_.last_warning.c_str());
   }
   if (new_data_ && secondsSince(last_draw_) >= period_s) draw();
   if (window_open_) cv::waitKey(1);
@@ -368,7 +371,15 @@ int ViewerNode::run() {
   std::optional<Clock::time_point> end_seen;
   while (!msgs::shutdownRequested()) {
     const double until_draw = 1.0 / options_.max_fps - secondsSince(last_draw_);
-    spinOnce(std::clamp(new_data_ ? until_draw : 0.05, 0.0, 0.05));
+    if (input_ended_) {
+      // Nothing more can arrive: stop, or keep the window up until --timeout.
+      if (options_.timeout_s <= 0) break;
+      drawIfNew();
+      if (window_open_) cv::waitKey(50);
+      else std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    } else {
+      spinOnce(std::clamp(new_data_ ? until_draw : 0.05, 0.0, 0.05));
+    }
     if (options_.timeout_s > 0 && secondsSince(start) >= options_.timeout_s) break;
     if (options_.exit_after_end && stream_ended_) {
       // Let the last frame's downstream messages (pose, fused depth) arrive.

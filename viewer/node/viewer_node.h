@@ -77,6 +77,8 @@ class ViewerNode {
   bool drawIfNew();
 
   bool streamEnded() const { return stream_ended_; }
+  /// LCM handle failed: the end of a file:// log (or a broken provider).
+  bool inputEnded() const { return input_ended_; }
   const msgs::NodeCounters& counters() const { return counters_; }
   int64_t canvasesDrawn() const { return canvases_drawn_; }
   int64_t snapshotsWritten() const { return snapshots_written_; }
@@ -125,7 +127,7 @@ class ViewerNode {
   StampedPoses est_poses_;
   std::optional<eval::TumFile> groundtruth_;
   std::map<std::string, NodeStatusView> node_status_;
-  bool stream_started_ = false, stream_ended_ = false;
+  bool stream_started_ = false, stream_ended_ = false, input_ended_ = false;
 
   // Outputs.
   int64_t canvases_drawn_ = 0, snapshots_written_ = 0;
