@@ -2,11 +2,10 @@
 // [--size WxH]: trajectories against ground truth, aligned with pplvo_eval's ATE alignment.
 #include <cstdio>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "pplvo/eval/tum_file.h"
 #include "pplvo/viewer/plot.h"
@@ -37,25 +36,31 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--output" || a == "-o") output = next();
+    if (a == "--output" || a == "-o")
+      output = next();
     else if (a == "--labels") {
       std::stringstream ss(next());
       std::string l;
       while (std::getline(ss, l, ',')) labels.push_back(l);
-    } else if (a == "--fps") fps = std::atof(next().c_str());
-    else if (a == "--title") title = next();
+    } else if (a == "--fps")
+      fps = std::atof(next().c_str());
+    else if (a == "--title")
+      title = next();
     else if (a == "--size") {
       if (std::sscanf(next().c_str(), "%dx%d", &size.width, &size.height) != 2 ||
           size.width < 400 || size.height < 300) {
         std::fprintf(stderr, "pplvo-plot: --size WxH, at least 400x300\n");
         return 2;
       }
-    } else if (a == "-h" || a == "--help") { usage(); return 0; }
-    else if (a.size() > 1 && a[0] == '-') {
+    } else if (a == "-h" || a == "--help") {
+      usage();
+      return 0;
+    } else if (a.size() > 1 && a[0] == '-') {
       std::fprintf(stderr, "pplvo-plot: unknown option %s\n", a.c_str());
       usage();
       return 2;
-    } else files.push_back(a);
+    } else
+      files.push_back(a);
   }
   if (files.size() < 2 || output.empty()) {
     usage();

@@ -50,24 +50,42 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--lcm-url") url = next();
-    else if (a == "--replay") replay = next();
-    else if (a == "--replay-speed") replay_speed = std::atof(next());
-    else if (a == "--headless") o.show_window = false;
-    else if (a == "--snapshot-dir") o.snapshot_dir = next();
-    else if (a == "--every") o.every = std::atoi(next());
-    else if (a == "--video") o.video_path = next();
-    else if (a == "--save-window") o.window_save_path = next();
-    else if (a == "--max-fps") o.max_fps = std::atof(next());
-    else if (a == "--exit-after-end") o.exit_after_end = true;
-    else if (a == "--timeout") o.timeout_s = std::atof(next());
-    else if (a == "--groundtruth") o.groundtruth_path = next();
-    else if (a == "--gt-fps") o.groundtruth_fps = std::atof(next());
+    if (a == "--lcm-url")
+      url = next();
+    else if (a == "--replay")
+      replay = next();
+    else if (a == "--replay-speed")
+      replay_speed = std::atof(next());
+    else if (a == "--headless")
+      o.show_window = false;
+    else if (a == "--snapshot-dir")
+      o.snapshot_dir = next();
+    else if (a == "--every")
+      o.every = std::atoi(next());
+    else if (a == "--video")
+      o.video_path = next();
+    else if (a == "--save-window")
+      o.window_save_path = next();
+    else if (a == "--max-fps")
+      o.max_fps = std::atof(next());
+    else if (a == "--exit-after-end")
+      o.exit_after_end = true;
+    else if (a == "--timeout")
+      o.timeout_s = std::atof(next());
+    else if (a == "--groundtruth")
+      o.groundtruth_path = next();
+    else if (a == "--gt-fps")
+      o.groundtruth_fps = std::atof(next());
     else if (a == "--align") {
       const std::string m = next();
-      if (m == "first") o.alignment = pplvo::viewer::GtAlignment::kFirstPose;
-      else if (m == "ate") o.alignment = pplvo::viewer::GtAlignment::kAte;
-      else { std::fprintf(stderr, "pplvo-viewer: --align first|ate\n"); return 2; }
+      if (m == "first")
+        o.alignment = pplvo::viewer::GtAlignment::kFirstPose;
+      else if (m == "ate")
+        o.alignment = pplvo::viewer::GtAlignment::kAte;
+      else {
+        std::fprintf(stderr, "pplvo-viewer: --align first|ate\n");
+        return 2;
+      }
     } else if (a == "--depth-range") {
       if (!parseRange(next(), o.canvas.depth.min_value_m, o.canvas.depth.max_value_m)) {
         std::fprintf(stderr, "pplvo-viewer: --depth-range MIN,MAX with MIN < MAX\n");
@@ -81,18 +99,31 @@ int main(int argc, char** argv) {
     } else if (a == "--colormap") {
       const std::string m = next();
       int cm = m == "turbo" ? 20 : (m == "jet" ? 2 : -1);
-      if (cm < 0) { std::fprintf(stderr, "pplvo-viewer: --colormap turbo|jet\n"); return 2; }
+      if (cm < 0) {
+        std::fprintf(stderr, "pplvo-viewer: --colormap turbo|jet\n");
+        return 2;
+      }
       o.canvas.depth.colormap = o.canvas.sigma.colormap = cm;
-    } else if (a == "--no-status") o.publish_status = false;
-    else if (a == "-h" || a == "--help") { usage(); return 0; }
-    else { std::fprintf(stderr, "pplvo-viewer: unknown option %s\n", a.c_str()); usage(); return 2; }
+    } else if (a == "--no-status")
+      o.publish_status = false;
+    else if (a == "-h" || a == "--help") {
+      usage();
+      return 0;
+    } else {
+      std::fprintf(stderr, "pplvo-viewer: unknown option %s\n", a.c_str());
+      usage();
+      return 2;
+    }
   }
   if (!(o.max_fps > 0) || o.every < 1) {
     std::fprintf(stderr, "pplvo-viewer: --max-fps must be > 0 and --every >= 1\n");
     return 2;
   }
   if (!replay.empty()) {
-    if (!url.empty()) { std::fprintf(stderr, "pplvo-viewer: --replay or --lcm-url, not both\n"); return 2; }
+    if (!url.empty()) {
+      std::fprintf(stderr, "pplvo-viewer: --replay or --lcm-url, not both\n");
+      return 2;
+    }
     char speed[32];
     std::snprintf(speed, sizeof speed, "%g", replay_speed);
     url = "file://" + replay + "?mode=r&speed=" + speed;

@@ -3,11 +3,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <stdexcept>
-#include <thread>
-
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <thread>
 
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/convert_pose.h"
@@ -23,8 +22,7 @@ double secondsSince(std::chrono::steady_clock::time_point t) {
 }
 }  // namespace
 
-ViewerNode::ViewerNode(const ViewerOptions& options, lcm::LCM& lcm)
-    : options_(options), lcm_(lcm) {
+ViewerNode::ViewerNode(const ViewerOptions& options, lcm::LCM& lcm) : options_(options), lcm_(lcm) {
   if (!(options_.max_fps > 0)) throw std::invalid_argument("max_fps must be > 0");
   if (options_.every < 1) throw std::invalid_argument("every must be >= 1");
   if (options_.frame_ring < 1) options_.frame_ring = 1;
@@ -271,7 +269,8 @@ void ViewerNode::draw() {
   s.nodes.clear();
   for (const auto& kv : node_status_) s.nodes.push_back(kv.second);
   if (groundtruth_ && !est_poses_.empty()) {
-    data_.ground_truth = alignGroundTruth(*groundtruth_, est_poses_, options_.alignment).gt_in_world_m;
+    data_.ground_truth =
+        alignGroundTruth(*groundtruth_, est_poses_, options_.alignment).gt_in_world_m;
   }
   cv::Mat canvas;
   msgs::guarded(counters_, options_.node_name.c_str(), [&] {
@@ -375,8 +374,10 @@ int ViewerNode::run() {
       // Nothing more can arrive: stop, or keep the window up until --timeout.
       if (options_.timeout_s <= 0) break;
       drawIfNew();
-      if (window_open_) cv::waitKey(50);
-      else std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      if (window_open_)
+        cv::waitKey(50);
+      else
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
     } else {
       spinOnce(std::clamp(new_data_ ? until_draw : 0.05, 0.0, 0.05));
     }

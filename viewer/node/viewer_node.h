@@ -5,20 +5,19 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
-#include <optional>
-#include <string>
-#include <vector>
-
-#include <lcm/lcm-cpp.hpp>
 #include <opencv2/videoio.hpp>
+#include <optional>
 #include <pplvo_msgs/depth_map_t.hpp>
 #include <pplvo_msgs/features_t.hpp>
 #include <pplvo_msgs/node_status_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
+#include <string>
+#include <vector>
 
 #include "pplvo/eval/tum_file.h"
 #include "pplvo/msgs/channels.h"
@@ -39,9 +38,9 @@ struct ViewerOptions {
   std::string pose_channel = channels::kPose;
   std::string status_channel = channels::kStatus;
   std::string stream_channel = channels::kStream;
-  double max_fps = 15.0;         ///< at most this many canvases per second
-  bool show_window = true;       ///< false: --headless
-  std::string snapshot_dir;      ///< write canvas_<n>.png every `every` drawn canvases
+  double max_fps = 15.0;     ///< at most this many canvases per second
+  bool show_window = true;   ///< false: --headless
+  std::string snapshot_dir;  ///< write canvas_<n>.png every `every` drawn canvases
   int every = 1;
   std::string video_path;        ///< MJPG AVI of every drawn canvas
   bool exit_after_end = false;   ///< stop after stream_event_t END (and a last draw)
@@ -53,7 +52,7 @@ struct ViewerOptions {
   GtAlignment alignment = GtAlignment::kFirstPose;
   std::string window_save_path;  ///< also save each displayed canvas here (overwritten)
   CanvasOptions canvas;
-  int frame_ring = 8;            ///< recent raw frames kept to show features on their frame
+  int frame_ring = 8;  ///< recent raw frames kept to show features on their frame
 };
 
 class ViewerNode {
@@ -91,13 +90,10 @@ class ViewerNode {
   void onDepthFused(const lcm::ReceiveBuffer*, const std::string&,
                     const pplvo_msgs::depth_map_t* m);
   void onFeatures(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::features_t* m);
-  void onFeatures3d(const lcm::ReceiveBuffer*, const std::string&,
-                    const pplvo_msgs::features_t* m);
+  void onFeatures3d(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::features_t* m);
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::pose_t* m);
-  void onStatus(const lcm::ReceiveBuffer*, const std::string&,
-                const pplvo_msgs::node_status_t* m);
-  void onStream(const lcm::ReceiveBuffer*, const std::string&,
-                const pplvo_msgs::stream_event_t* m);
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::node_status_t* m);
+  void onStream(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::stream_event_t* m);
 
  private:
   using Clock = std::chrono::steady_clock;

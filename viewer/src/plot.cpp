@@ -1,12 +1,12 @@
 #include "pplvo/viewer/plot.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <sstream>
-#include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "pplvo/eval/rpe.h"
 #include "pplvo/viewer/ticks.h"
@@ -79,7 +79,8 @@ class MatPainter : public Painter {
     const double scale = size_px / 22.0;
     int base = 0;
     const cv::Size ts = cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &base);
-    const double shift = a == Anchor::kStart ? 0 : (a == Anchor::kMiddle ? ts.width / 2.0 : ts.width);
+    const double shift =
+        a == Anchor::kStart ? 0 : (a == Anchor::kMiddle ? ts.width / 2.0 : ts.width);
     if (!vertical) {
       cv::putText(img_, s, cv::Point(cvRound(p.x - shift), cvRound(p.y)), cv::FONT_HERSHEY_SIMPLEX,
                   scale, bgr(c), 1, cv::LINE_AA);
@@ -107,11 +108,21 @@ std::string xmlEscape(const std::string& s) {
   std::string o;
   for (char ch : s) {
     switch (ch) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      case '\'': o += "&apos;"; break;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      case '\'':
+        o += "&apos;";
+        break;
       default:
         // Control characters are not allowed in XML 1.0.
         if (static_cast<unsigned char>(ch) >= 0x20 || ch == '\t') o += ch;
@@ -134,9 +145,8 @@ class SvgPainter : public Painter {
     return o.str();
   }
   void line(cv::Point2d a, cv::Point2d b, Rgb c, double w) override {
-    body_ << "<line x1=\"" << n(a.x) << "\" y1=\"" << n(a.y) << "\" x2=\"" << n(b.x)
-          << "\" y2=\"" << n(b.y) << "\" stroke=\"" << col(c) << "\" stroke-width=\"" << n(w)
-          << "\"/>\n";
+    body_ << "<line x1=\"" << n(a.x) << "\" y1=\"" << n(a.y) << "\" x2=\"" << n(b.x) << "\" y2=\""
+          << n(b.y) << "\" stroke=\"" << col(c) << "\" stroke-width=\"" << n(w) << "\"/>\n";
   }
   void polyline(const std::vector<cv::Point2d>& pts, Rgb c, double w) override {
     body_ << "<polyline fill=\"none\" stroke=\"" << col(c) << "\" stroke-width=\"" << n(w)
@@ -155,8 +165,8 @@ class SvgPainter : public Painter {
             bool vertical) override {
     const char* anchor = a == Anchor::kStart ? "start" : (a == Anchor::kMiddle ? "middle" : "end");
     body_ << "<text x=\"" << n(p.x) << "\" y=\"" << n(p.y) << "\" font-family=\"sans-serif\" "
-          << "font-size=\"" << n(size_px) << "\" fill=\"" << col(c) << "\" text-anchor=\""
-          << anchor << "\"";
+          << "font-size=\"" << n(size_px) << "\" fill=\"" << col(c) << "\" text-anchor=\"" << anchor
+          << "\"";
     if (vertical) body_ << " transform=\"rotate(-90 " << n(p.x) << ' ' << n(p.y) << ")\"";
     body_ << '>' << xmlEscape(s) << "</text>\n";
   }
@@ -182,7 +192,7 @@ const Rgb kGtColour{0, 0, 0};
 const Rgb kAxisColour{60, 60, 60};
 const Rgb kGridColour{225, 225, 225};
 /// Matplotlib's tab10 without black-ish entries.
-const Rgb kRunColours[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44},  {214, 39, 40},
+const Rgb kRunColours[] = {{31, 119, 180},  {255, 127, 14}, {44, 160, 44},   {214, 39, 40},
                            {148, 103, 189}, {140, 86, 75},  {227, 119, 194}, {127, 127, 127},
                            {188, 189, 34},  {23, 190, 207}};
 Rgb runColour(size_t i) { return kRunColours[i % (sizeof kRunColours / sizeof kRunColours[0])]; }
@@ -238,7 +248,9 @@ void drawAxes(Painter& p, cv::Rect2d box, const std::vector<Series>& series, Ran
     }
   }
   auto X = [&](double v) { return box.x + (v - xr.lo) / (xr.hi - xr.lo) * box.width; };
-  auto Y = [&](double v) { return box.y + box.height - (v - yr.lo) / (yr.hi - yr.lo) * box.height; };
+  auto Y = [&](double v) {
+    return box.y + box.height - (v - yr.lo) / (yr.hi - yr.lo) * box.height;
+  };
   const std::vector<double> tx = niceTicks(xr.lo, xr.hi, equal_scale ? 7 : 8);
   const std::vector<double> ty = niceTicks(yr.lo, yr.hi, equal_scale ? 7 : 4);
   const int dx = tickDecimals(tx), dy = tickDecimals(ty);
@@ -422,8 +434,8 @@ std::string renderPlotSvg(const PlotData& data, cv::Size size, const std::string
   return p.document();
 }
 
-GroundTruthView alignGroundTruth(const eval::TumFile& gt, const StampedPoses& est,
-                                 GtAlignment mode, const eval::AssociationOptions& assoc) {
+GroundTruthView alignGroundTruth(const eval::TumFile& gt, const StampedPoses& est, GtAlignment mode,
+                                 const eval::AssociationOptions& assoc) {
   GroundTruthView v;
   const std::vector<eval::TumRow> gt_rows = cleanRows(gt);
   if (gt_rows.empty() || est.empty()) return v;

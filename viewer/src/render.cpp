@@ -89,8 +89,8 @@ ValueRange chooseRange(const cv::Mat& value_m, const ScalarPanelOptions& options
   }
   if (valid.empty()) return r;
   auto at = [&](double q) {
-    const size_t k = std::min(valid.size() - 1,
-                              static_cast<size_t>(std::max(0.0, q) * (valid.size() - 1)));
+    const size_t k =
+        std::min(valid.size() - 1, static_cast<size_t>(std::max(0.0, q) * (valid.size() - 1)));
     std::nth_element(valid.begin(), valid.begin() + static_cast<long>(k), valid.end());
     return static_cast<double>(valid[k]);
   };
@@ -171,7 +171,8 @@ cv::Mat renderScalarPanel(const cv::Mat& value_m, const std::string& title, cv::
   if (bar_h > 2) {
     cv::Mat ramp(bar_h, 1, CV_8UC1);
     for (int i = 0; i < bar_h; ++i) {
-      ramp.at<uint8_t>(i) = static_cast<uint8_t>(std::lround(255.0 * (bar_h - 1 - i) / (bar_h - 1)));
+      ramp.at<uint8_t>(i) =
+          static_cast<uint8_t>(std::lround(255.0 * (bar_h - 1 - i) / (bar_h - 1)));
     }
     cv::Mat ramp_colour;
     cv::applyColorMap(ramp, ramp_colour, options.colormap);
@@ -187,9 +188,9 @@ cv::Mat renderScalarPanel(const cv::Mat& value_m, const std::string& title, cv::
       cv::line(panel, cv::Point(bar_x + bar_w, y), cv::Point(bar_x + bar_w + 4, y), kTextColour);
       putLabel(panel, formatTick(t, decimals), cv::Point(bar_x + bar_w + 6, y + 4), 0.38);
     }
-    putLabel(panel, "[" + unit + "]", cv::Point(bar_x - 2, bar_top + bar_h + 4 < size.height - 2
-                                                             ? bar_top + bar_h + 14
-                                                             : size.height - 4),
+    putLabel(panel, "[" + unit + "]",
+             cv::Point(bar_x - 2, bar_top + bar_h + 4 < size.height - 2 ? bar_top + bar_h + 14
+                                                                        : size.height - 4),
              0.38, kDimText);
   }
   putLabel(panel, fmt("valid %.0f%%", 100.0 * range.n_valid / double(value_m.total())),
@@ -198,8 +199,8 @@ cv::Mat renderScalarPanel(const cv::Mat& value_m, const std::string& title, cv::
 }
 
 cv::Rect featureImageRect(cv::Size image_size, cv::Size panel_size) {
-  return fitRect(image_size,
-                 cv::Rect(0, kTitleHeight, panel_size.width, panel_size.height - kTitleHeight - 40));
+  return fitRect(image_size, cv::Rect(0, kTitleHeight, panel_size.width,
+                                      panel_size.height - kTitleHeight - 40));
 }
 
 cv::Vec3b planeColour(int label) {
@@ -246,13 +247,14 @@ cv::Mat renderFeaturePanel(const cv::Mat& bgr_in, const FrameFeatures* features,
         const cv::Point c(static_cast<int>(m.m10 / m.m00), static_cast<int>(m.m01 / m.m00));
         const cv::Vec3b pc = planeColour(pl.label);
         putLabel(img, "P" + std::to_string(pl.label), c, 0.5, cv::Scalar(0, 0, 0), 3);
-        putLabel(img, "P" + std::to_string(pl.label), c, 0.5, cv::Scalar(pc[0], pc[1], pc[2]),
-                 1);
+        putLabel(img, "P" + std::to_string(pl.label), c, 0.5, cv::Scalar(pc[0], pc[1], pc[2]), 1);
       }
     }
     for (const LineFeature& l : features->lines) {
-      const cv::Point p1(static_cast<int>(std::lround(l.px1.x())), static_cast<int>(std::lround(l.px1.y())));
-      const cv::Point p2(static_cast<int>(std::lround(l.px2.x())), static_cast<int>(std::lround(l.px2.y())));
+      const cv::Point p1(static_cast<int>(std::lround(l.px1.x())),
+                         static_cast<int>(std::lround(l.px1.y())));
+      const cv::Point p2(static_cast<int>(std::lround(l.px2.x())),
+                         static_cast<int>(std::lround(l.px2.y())));
       if (l.has_3d) {
         cv::line(img, p1, p2, cv::Scalar(255, 255, 0), options.line_thickness_px + 1, cv::LINE_AA);
       } else {
@@ -260,7 +262,8 @@ cv::Mat renderFeaturePanel(const cv::Mat& bgr_in, const FrameFeatures* features,
       }
     }
     for (const PointFeature& p : features->points) {
-      const cv::Point c(static_cast<int>(std::lround(p.px.x())), static_cast<int>(std::lround(p.px.y())));
+      const cv::Point c(static_cast<int>(std::lround(p.px.x())),
+                        static_cast<int>(std::lround(p.px.y())));
       if (p.has_3d) {
         cv::circle(img, c, options.point_radius_px, cv::Scalar(0, 255, 0), cv::FILLED, cv::LINE_AA);
         cv::circle(img, c, options.point_radius_px, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
@@ -292,8 +295,8 @@ cv::Mat renderFeaturePanel(const cv::Mat& bgr_in, const FrameFeatures* features,
   if (pose != nullptr) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "matched (seq %lld): pts %d  lines %d  planes %d",
-                  static_cast<long long>(pose->seq), pose->n_point_matches,
-                  pose->n_line_matches, pose->n_plane_matches);
+                  static_cast<long long>(pose->seq), pose->n_point_matches, pose->n_line_matches,
+                  pose->n_plane_matches);
     putLabel(panel, buf, cv::Point(6, y0 + 18), 0.42, cv::Scalar(120, 255, 120));
   }
   return panel;
@@ -342,7 +345,8 @@ cv::Mat renderTrajectoryPanel(const Positions& est, const Positions& gt, const V
     noData(panel, "no finite poses");
     return panel;
   }
-  const cv::Rect plot(52, kTitleHeight + 10, size.width - 52 - 14, size.height - kTitleHeight - 10 - 44);
+  const cv::Rect plot(52, kTitleHeight + 10, size.width - 52 - 14,
+                      size.height - kTitleHeight - 10 - 44);
   // Equal scale: grow the smaller extent around its centre; at least 0.2 m shown.
   Eigen::Vector2d centre = 0.5 * (lo + hi);
   double span_h = std::max(hi.x() - lo.x(), 0.2) * 1.1;
@@ -365,7 +369,8 @@ cv::Mat renderTrajectoryPanel(const Positions& est, const Positions& gt, const V
   for (double t : th) {
     const int x = static_cast<int>(std::lround(toPx({t, v0}).x));
     cv::line(panel, cv::Point(x, plot.y), cv::Point(x, plot.y + plot.height), grid);
-    putLabel(panel, formatTick(t, dh), cv::Point(x - 12, plot.y + plot.height + 15), 0.38, kDimText);
+    putLabel(panel, formatTick(t, dh), cv::Point(x - 12, plot.y + plot.height + 15), 0.38,
+             kDimText);
   }
   for (double t : tv) {
     const int y = static_cast<int>(std::lround(toPx({h0, t}).y));
@@ -375,8 +380,9 @@ cv::Mat renderTrajectoryPanel(const Positions& est, const Positions& gt, const V
   cv::rectangle(panel, plot, cv::Scalar(110, 110, 110), 1);
   putLabel(panel, axes.horizontal_name, cv::Point(plot.x + plot.width / 2 - 15, size.height - 12),
            0.42, kDimText);
-  putLabel(panel, axes.vertical_name, cv::Point(4, plot.y - 2 > kTitleHeight + 8 ? plot.y - 2 : kTitleHeight + 10),
-           0.38, kDimText);
+  putLabel(panel, axes.vertical_name,
+           cv::Point(4, plot.y - 2 > kTitleHeight + 8 ? plot.y - 2 : kTitleHeight + 10), 0.38,
+           kDimText);
   auto drawPath = [&](const Positions& list, cv::Scalar colour, int thickness) {
     std::vector<cv::Point> pts;
     pts.reserve(list.size());
@@ -468,7 +474,8 @@ cv::Mat renderStatusPanel(const StatusPanelData& d, cv::Size size) {
       stages += buf;
     }
     if (!stages.empty()) line("  " + stages);
-    if (!n.last_warning.empty()) line("  ! " + n.last_warning.substr(0, 90), cv::Scalar(80, 80, 255));
+    if (!n.last_warning.empty())
+      line("  ! " + n.last_warning.substr(0, 90), cv::Scalar(80, 80, 255));
   }
   if (!d.nodes.empty()) line("(stage timings: last/mean/max ms)", kDimText);
   return panel;
@@ -491,8 +498,8 @@ cv::Mat composeGrid(const std::vector<cv::Mat>& panels, int cols, cv::Size cell)
 
 std::vector<cv::Rect> canvasLayout(const CanvasOptions& o) {
   const int w = o.cell.width, h = o.cell.height;
-  return {cv::Rect(0, 0, w, h),     cv::Rect(w, 0, w, h),     cv::Rect(2 * w, 0, w, h),
-          cv::Rect(3 * w, 0, w, h), cv::Rect(0, h, w, h),     cv::Rect(w, h, w, h),
+  return {cv::Rect(0, 0, w, h),        cv::Rect(w, 0, w, h), cv::Rect(2 * w, 0, w, h),
+          cv::Rect(3 * w, 0, w, h),    cv::Rect(0, h, w, h), cv::Rect(w, h, w, h),
           cv::Rect(2 * w, h, 2 * w, h)};
 }
 
@@ -504,7 +511,8 @@ cv::Mat renderCanvas(const ViewerFrameData& d, const CanvasOptions& o) {
     cv::rectangle(canvas, cells[static_cast<size_t>(i)], cv::Scalar(20, 20, 20), 1);
   };
   // Colour with features: the frame the features belong to when known, else the newest.
-  const RgbdFrame* colour_frame = d.feature_frame ? &*d.feature_frame : (d.frame ? &*d.frame : nullptr);
+  const RgbdFrame* colour_frame =
+      d.feature_frame ? &*d.feature_frame : (d.frame ? &*d.frame : nullptr);
   const FrameFeatures* feats = (d.features && d.feature_frame) ? &*d.features : nullptr;
   const FramePose* pose = d.status.pose ? &*d.status.pose : nullptr;
   std::string title = "colour + features";
@@ -516,7 +524,8 @@ cv::Mat renderCanvas(const ViewerFrameData& d, const CanvasOptions& o) {
   if (d.frame) raw_title += " (seq " + std::to_string(d.frame->seq) + ")";
   put(renderScalarPanel(d.frame ? d.frame->depth_m : cv::Mat(), raw_title, o.cell, o.depth), 1);
   std::string fused_title = d.fused_title;
-  if (d.fused_depth) fused_title += " (window " + std::to_string(d.fused_depth->window_length) + ")";
+  if (d.fused_depth)
+    fused_title += " (window " + std::to_string(d.fused_depth->window_length) + ")";
   put(renderScalarPanel(d.fused_depth ? d.fused_depth->depth_m : cv::Mat(), fused_title, o.cell,
                         o.depth),
       2);

@@ -1,12 +1,13 @@
 #pragma once
 // Small analytic test data for the viewer tests (no LCM): a textured image, a tilted-plane
 // depth map, a few features with two plane segments, and a moving camera.
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdint>
-#include <string>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <Eigen/Geometry>
+#include <string>
+
 #include "pplvo/core/features.h"
 #include "pplvo/core/frame_pose.h"
 #include "pplvo/core/rgbd_frame.h"
@@ -40,9 +41,9 @@ inline RgbdFrame frame(int64_t seq) {
   f.depth_m = cv::Mat(kHeight, kWidth, CV_32FC1);
   for (int v = 0; v < kHeight; ++v) {
     for (int u = 0; u < kWidth; ++u) {
-      f.bgr.at<cv::Vec3b>(v, u) = cv::Vec3b(static_cast<uint8_t>(60 + u / 4),
-                                            static_cast<uint8_t>(80 + v / 4),
-                                            static_cast<uint8_t>(100 + ((u + seq) % 40)));
+      f.bgr.at<cv::Vec3b>(v, u) =
+          cv::Vec3b(static_cast<uint8_t>(60 + u / 4), static_cast<uint8_t>(80 + v / 4),
+                    static_cast<uint8_t>(100 + ((u + seq) % 40)));
       f.depth_m.at<float>(v, u) = u < 10 ? 0.f : static_cast<float>(1.5 + 0.004 * u + 0.002 * v);
     }
   }
@@ -57,8 +58,8 @@ inline FrameFeatures features(int64_t seq, bool lifted) {
   ff.utime = 1000000 + seq * 33333;
   ff.stamp = std::to_string(1341845688.0 + seq / 30.0);
   ff.camera = camera();
-  for (const auto& px : {Eigen::Vector2d(80, 60), Eigen::Vector2d(240, 60),
-                         Eigen::Vector2d(160, 100)}) {
+  for (const auto& px :
+       {Eigen::Vector2d(80, 60), Eigen::Vector2d(240, 60), Eigen::Vector2d(160, 100)}) {
     PointFeature p;
     p.px = px;
     p.response = 10;
@@ -100,8 +101,9 @@ inline FramePose pose(int64_t seq) {
   p.stamp = std::to_string(1341845688.0 + seq / 30.0);
   p.status = seq == 0 ? TrackingStatus::kFirstFrame : TrackingStatus::kTracking;
   const double a = 0.1 * static_cast<double>(seq);
-  p.T_w_c = makePose(Eigen::Vector3d(0.3 * std::sin(a), -0.02 * a, 0.3 * (1 - std::cos(a)) + 0.05 * a),
-                     Eigen::Quaterniond(Eigen::AngleAxisd(0.05 * a, Eigen::Vector3d::UnitY())));
+  p.T_w_c =
+      makePose(Eigen::Vector3d(0.3 * std::sin(a), -0.02 * a, 0.3 * (1 - std::cos(a)) + 0.05 * a),
+               Eigen::Quaterniond(Eigen::AngleAxisd(0.05 * a, Eigen::Vector3d::UnitY())));
   p.n_point_matches = 120 + static_cast<int>(seq);
   p.n_line_matches = 30;
   p.n_plane_matches = 2;

@@ -1,15 +1,15 @@
 // pplvo-plot and the plot library: ATE-aligned series, PNG size, SVG structure.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <sstream>
 #include <string>
-#include <Eigen/Geometry>
-#include <opencv2/imgcodecs.hpp>
 
 #include "pplvo/viewer/plot.h"
 
@@ -27,8 +27,10 @@ std::vector<Pose7> groundTruth() {
   std::vector<Pose7> out;
   for (int i = 0; i < 120; ++i) {
     const double t = 100.0 + i / 30.0, a = 0.05 * i;
-    out.push_back({t, Eigen::Vector3d(1.0 * std::sin(a), 0.6 * (1 - std::cos(a)), 1.2 + 0.05 * std::sin(3 * a)),
-                   Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()))});
+    out.push_back(
+        {t,
+         Eigen::Vector3d(1.0 * std::sin(a), 0.6 * (1 - std::cos(a)), 1.2 + 0.05 * std::sin(3 * a)),
+         Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()))});
   }
   return out;
 }
@@ -41,7 +43,8 @@ std::vector<Pose7> estimate(double sigma_m, unsigned seed) {
   const Eigen::Vector3d t_e_g(0.4, -1.0, 2.0);
   std::vector<Pose7> out;
   for (const Pose7& g : groundTruth()) {
-    out.push_back({g.t, q_e_g * g.p + t_e_g + Eigen::Vector3d(n(rng), n(rng), n(rng)), q_e_g * g.q});
+    out.push_back(
+        {g.t, q_e_g * g.p + t_e_g + Eigen::Vector3d(n(rng), n(rng), n(rng)), q_e_g * g.q});
   }
   return out;
 }
@@ -71,9 +74,7 @@ std::string tempDir() {
   return d ? d : "/tmp";
 }
 
-void writeFile(const std::string& path, const std::string& text) {
-  std::ofstream(path) << text;
-}
+void writeFile(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 
 TEST(ViewerPlot, PrepareAlignsRunsOntoGroundTruth) {
   const eval::TumFile gt = parse(tumText(groundTruth()), "gt");
@@ -105,8 +106,8 @@ TEST(ViewerPlot, PrepareAlignsRunsOntoGroundTruth) {
 
 TEST(ViewerPlot, ImageSizeAndSvgPolylineCount) {
   const eval::TumFile gt = parse(tumText(groundTruth()), "gt");
-  const PlotPrepareResult r =
-      preparePlot(gt, {parse(tumText(estimate(0.01, 3)), "a"), parse(tumText(estimate(0.03, 4)), "b")}, {});
+  const PlotPrepareResult r = preparePlot(
+      gt, {parse(tumText(estimate(0.01, 3)), "a"), parse(tumText(estimate(0.03, 4)), "b")}, {});
   ASSERT_TRUE(r.ok);
   const cv::Mat img = renderPlotImage(r.data, cv::Size(1200, 800), "t");
   EXPECT_EQ(img.size(), cv::Size(1200, 800));
@@ -143,8 +144,8 @@ TEST(ViewerPlot, ProgramWritesPngAndParsableSvg) {
   writeFile(dir + "/c.txt", tumText(estimate(0.04, 7)));
   int status = 0;
   std::string out = run(std::string(PPLVO_PLOT_BINARY) + " " + dir + "/gt.txt " + dir + "/a.txt " +
-                            dir + "/b.txt " + dir + "/c.txt --labels full,no-lines,no-planes --output " +
-                            dir + "/p.png",
+                            dir + "/b.txt " + dir +
+                            "/c.txt --labels full,no-lines,no-planes --output " + dir + "/p.png",
                         status);
   ASSERT_EQ(status, 0) << out;
   EXPECT_NE(out.find("no-planes: ATE rmse"), std::string::npos) << out;
@@ -162,17 +163,17 @@ TEST(ViewerPlot, ProgramWritesPngAndParsableSvg) {
   ASSERT_EQ(status, 0) << out;
   EXPECT_EQ(out, "1000 700 19\n");  // 4 + 5 x 3 runs
   // Errors: missing file, bad extension, too many labels.
-  out = run(std::string(PPLVO_PLOT_BINARY) + " " + dir + "/gt.txt " + dir + "/missing.txt --output " +
-                dir + "/x.png",
+  out = run(std::string(PPLVO_PLOT_BINARY) + " " + dir + "/gt.txt " + dir +
+                "/missing.txt --output " + dir + "/x.png",
             status);
   EXPECT_NE(status, 0);
   EXPECT_NE(out.find("missing.txt"), std::string::npos) << out;
-  out = run(std::string(PPLVO_PLOT_BINARY) + " " + dir + "/gt.txt " + dir + "/a.txt --output " + dir +
-                "/x.jpg",
+  out = run(std::string(PPLVO_PLOT_BINARY) + " " + dir + "/gt.txt " + dir + "/a.txt --output " +
+                dir + "/x.jpg",
             status);
   EXPECT_NE(status, 0);
-  out = run(std::string(PPLVO_PLOT_BINARY) + " " + dir + "/gt.txt " + dir + "/a.txt --labels a,b --output " +
-                dir + "/x.png",
+  out = run(std::string(PPLVO_PLOT_BINARY) + " " + dir + "/gt.txt " + dir +
+                "/a.txt --labels a,b --output " + dir + "/x.png",
             status);
   EXPECT_NE(status, 0);
   std::system(("rm -rf " + dir).c_str());

@@ -100,8 +100,10 @@ TEST(ViewerRender, FeatureOverlayChangesPixelsAroundKeypointsAndPlanes) {
   cv::absdiff(plain, drawn, diff);
   cv::cvtColor(diff, diff, cv::COLOR_BGR2GRAY);
   for (const PointFeature& p : ff.points) {
-    const cv::Point c(img.x + static_cast<int>(p.px.x() * s), img.y + static_cast<int>(p.px.y() * s));
-    const cv::Rect around = cv::Rect(c.x - 6, c.y - 6, 13, 13) & cv::Rect(0, 0, size.width, size.height);
+    const cv::Point c(img.x + static_cast<int>(p.px.x() * s),
+                      img.y + static_cast<int>(p.px.y() * s));
+    const cv::Rect around =
+        cv::Rect(c.x - 6, c.y - 6, 13, 13) & cv::Rect(0, 0, size.width, size.height);
     EXPECT_GT(cv::countNonZero(diff(around) > 30), 10) << "point at " << p.px.transpose();
   }
   // Planes tinted: most pixels of both labelled regions differ; an unlabelled, feature-free
@@ -113,7 +115,8 @@ TEST(ViewerRender, FeatureOverlayChangesPixelsAroundKeypointsAndPlanes) {
                            static_cast<int>(100 * s), static_cast<int>(50 * s));
   EXPECT_LT(cv::countNonZero(diff(free_area) > 10), free_area.area() / 50);
   // Lifted and 2D-only points are drawn differently.
-  const cv::Vec3b lifted = drawn.at<cv::Vec3b>(img.y + static_cast<int>(60 * s), img.x + static_cast<int>(80 * s));
+  const cv::Vec3b lifted =
+      drawn.at<cv::Vec3b>(img.y + static_cast<int>(60 * s), img.x + static_cast<int>(80 * s));
   EXPECT_GT(lifted[1], 200);  // filled green disc
   EXPECT_NE(planeColour(1), planeColour(2));
 }

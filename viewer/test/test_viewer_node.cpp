@@ -4,11 +4,11 @@
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
-#include <string>
-#include <thread>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <string>
+#include <thread>
 
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/convert_pose.h"
@@ -28,8 +28,9 @@ std::string tempDir() {
 
 void publishFrame(lcm::LCM& lcm, int64_t seq) {
   const RgbdFrame f = testdata::frame(seq);
-  const pplvo_msgs::rgbd_frame_t m = msgs::toMsg(f, 5000.0, pplvo_msgs::image_t::ENCODING_PNG,
-                                                 pplvo_msgs::image_t::ENCODING_PNG_U16, "synthetic");
+  const pplvo_msgs::rgbd_frame_t m =
+      msgs::toMsg(f, 5000.0, pplvo_msgs::image_t::ENCODING_PNG,
+                  pplvo_msgs::image_t::ENCODING_PNG_U16, "synthetic");
   lcm.publish(channels::kRgbd, &m);
 }
 
@@ -42,8 +43,8 @@ void publishAll(lcm::LCM& lcm, int64_t seq) {
   lcm.publish(channels::kPose, &p);
   const DepthWithVariance d = testdata::fused(seq);
   const RgbdFrame f = testdata::frame(seq);
-  const pplvo_msgs::depth_map_t dm = msgs::toMsg(d, f.camera, f.utime, seq, f.stamp,
-                                                 pplvo_msgs::depth_map_t::STAGE_OGM, true);
+  const pplvo_msgs::depth_map_t dm =
+      msgs::toMsg(d, f.camera, f.utime, seq, f.stamp, pplvo_msgs::depth_map_t::STAGE_OGM, true);
   lcm.publish(channels::kDepthFused, &dm);
   const FrameFeatures f3 = testdata::features(seq, true);
   const pplvo_msgs::features_t m3 = msgs::toMsg(f3, pplvo_msgs::features_t::STAGE_3D);
@@ -105,7 +106,8 @@ TEST(ViewerNode, HeadlessSnapshotsShowEveryPanelAndTheOverlay) {
   const cv::Rect img = featureImageRect(f.bgr.size(), co.cell);
   const double s = static_cast<double>(img.width) / f.bgr.cols;
   for (const PointFeature& p : testdata::features(4, true).points) {
-    const cv::Point c(img.x + static_cast<int>(p.px.x() * s), img.y + static_cast<int>(p.px.y() * s));
+    const cv::Point c(img.x + static_cast<int>(p.px.x() * s),
+                      img.y + static_cast<int>(p.px.y() * s));
     EXPECT_GT(cv::countNonZero(diff(cv::Rect(c.x - 6, c.y - 6, 13, 13)) > 30), 10);
   }
   if (std::getenv("PPLVO_VIEWER_TEST_KEEP")) {  // for looking at the canvas by eye
@@ -159,7 +161,7 @@ TEST(ViewerNode, DropsFramesItCannotDrawAndReportsIt) {
     }
   } catcher;
   lcm.subscribe(channels::kStatus, &Catcher::on, &catcher);
-  node.spinOnce(0.0);  // publishes
+  node.spinOnce(0.0);   // publishes
   node.spinOnce(0.01);  // delivers
   EXPECT_EQ(catcher.dropped, node.counters().frames_dropped);
 }
@@ -168,9 +170,9 @@ TEST(ViewerNode, BadMessagesAreCountedNotFatal) {
   const std::string dir = tempDir();
   lcm::LCM lcm("memq://");
   ViewerNode node(headless(dir), lcm);
-  pplvo_msgs::rgbd_frame_t m = msgs::toMsg(testdata::frame(0), 5000.0,
-                                           pplvo_msgs::image_t::ENCODING_PNG,
-                                           pplvo_msgs::image_t::ENCODING_PNG_U16);
+  pplvo_msgs::rgbd_frame_t m =
+      msgs::toMsg(testdata::frame(0), 5000.0, pplvo_msgs::image_t::ENCODING_PNG,
+                  pplvo_msgs::image_t::ENCODING_PNG_U16);
   m.depth.data.resize(m.depth.data.size() / 2);  // truncated PNG, size field disagrees
   m.depth.size = static_cast<int32_t>(m.depth.data.size());
   lcm.publish(channels::kRgbd, &m);
@@ -221,8 +223,9 @@ TEST(ViewerNode, GroundTruthIsShownInTheTrajectoryViews) {
   {
     FILE* f = std::fopen(gt_path.c_str(), "w");
     ASSERT_NE(f, nullptr);
-    const Pose3 T_g_w = makePose(Eigen::Vector3d(1, 2, 0.5),
-                                 Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitX())));
+    const Pose3 T_g_w =
+        makePose(Eigen::Vector3d(1, 2, 0.5),
+                 Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitX())));
     for (int i = 0; i < 20; ++i) {
       const FramePose p = testdata::pose(i);
       const Pose3 T = T_g_w * p.T_w_c;
@@ -250,6 +253,42 @@ TEST(ViewerNode, GroundTruthIsShownInTheTrajectoryViews) {
   o.groundtruth_path = dir + "/missing.txt";
   lcm::LCM lcm2("memq://");
   EXPECT_THROW(ViewerNode(o, lcm2), std::runtime_error);
+  std::system(("rm -rf " + dir).c_str());
+}
+
+TEST(ViewerNode, ProgramReplaysAFileLogHeadless) {
+  const std::string dir = tempDir();
+  {
+    lcm::LCM log("file://" + dir + "/run.lcmlog?mode=w");
+    ASSERT_TRUE(log.good());
+    for (int64_t seq = 0; seq < 5; ++seq) publishAll(log, seq);
+    pplvo_msgs::stream_event_t end{};
+    end.event = pplvo_msgs::stream_event_t::EVENT_END;
+    log.publish(channels::kStream, &end);
+  }
+  // No DISPLAY: --headless must not touch the GUI.
+  const std::string cmd =
+      "env -u DISPLAY " + std::string(PPLVO_VIEWER_BINARY) + " --replay " + dir +
+      "/run.lcmlog --replay-speed 0 --headless --max-fps 1000 --snapshot-dir " + dir + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[512];
+  while (fgets(buf, sizeof buf, p)) out += buf;
+  EXPECT_EQ(pclose(p), 0) << out;
+  EXPECT_NE(out.find("frames 5 "), std::string::npos) << out;
+  const cv::Mat first = cv::imread(dir + "/canvas_000000.png");
+  ASSERT_FALSE(first.empty()) << out;
+  EXPECT_EQ(first.size(), cv::Size(1600, 900));
+  // A log that does not exist is a clear failure.
+  p = popen(("env -u DISPLAY " + std::string(PPLVO_VIEWER_BINARY) + " --replay " + dir +
+             "/missing.lcmlog --headless 2>&1")
+                .c_str(),
+            "r");
+  ASSERT_NE(p, nullptr);
+  out.clear();
+  while (fgets(buf, sizeof buf, p)) out += buf;
+  EXPECT_NE(pclose(p), 0) << out;
   std::system(("rm -rf " + dir).c_str());
 }
 

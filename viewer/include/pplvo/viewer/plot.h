@@ -1,11 +1,12 @@
 #pragma once
 /// Trajectory plots for finished runs (pplvo-plot) and the ground-truth alignment of the live
 /// trajectory views. No LCM, no file I/O: callers read the TUM files and write the outputs.
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
+
 #include "pplvo/core/geometry.h"
 #include "pplvo/eval/ate.h"
 #include "pplvo/eval/tum_file.h"
@@ -17,16 +18,16 @@ namespace viewer {
 /// One estimated run, aligned onto the ground truth with the ATE alignment (pplvo_eval).
 struct PlotRun {
   std::string label;
-  std::vector<double> t_s;     ///< every estimated pose, seconds from PlotData::t0_s
-  Positions p_aligned_m;       ///< R_gt_est * p_est + t_gt_est, ground-truth frame
-  std::vector<double> err_t_s; ///< stamps of the associated pairs, seconds from t0_s
-  std::vector<double> err_m;   ///< translational error of each associated pair
+  std::vector<double> t_s;      ///< every estimated pose, seconds from PlotData::t0_s
+  Positions p_aligned_m;        ///< R_gt_est * p_est + t_gt_est, ground-truth frame
+  std::vector<double> err_t_s;  ///< stamps of the associated pairs, seconds from t0_s
+  std::vector<double> err_m;    ///< translational error of each associated pair
   double ate_rmse_m = 0.0;
   int n_pairs = 0;
 };
 
 struct PlotData {
-  double t0_s = 0.0;       ///< first ground-truth stamp (the time axis origin)
+  double t0_s = 0.0;  ///< first ground-truth stamp (the time axis origin)
   std::vector<double> gt_t_s;
   Positions gt_m;
   std::vector<PlotRun> runs;
@@ -75,8 +76,8 @@ struct GroundTruthView {
 
 /// Expresses the ground truth in the estimate's world frame (the first camera frame), so that
 /// the camera-convention views (topDownAxes, sideAxes) apply to both.
-GroundTruthView alignGroundTruth(const eval::TumFile& gt, const StampedPoses& est,
-                                 GtAlignment mode, const eval::AssociationOptions& assoc = {});
+GroundTruthView alignGroundTruth(const eval::TumFile& gt, const StampedPoses& est, GtAlignment mode,
+                                 const eval::AssociationOptions& assoc = {});
 
 }  // namespace viewer
 }  // namespace pplvo

@@ -2,12 +2,13 @@
 /// Rendering of the viewer's panels (no LCM): every function takes library types and returns
 /// a cv::Mat (CV_8UC3 BGR) so that it can be tested without a display or a bus.
 /// See docs/viewer.md.
+#include <Eigen/Core>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
+
 #include "pplvo/core/features.h"
 #include "pplvo/core/frame_pose.h"
 #include "pplvo/core/rgbd_frame.h"
@@ -17,7 +18,7 @@ namespace viewer {
 
 /// A colour-mapped scalar image (depth or its standard deviation) with a labelled scale bar.
 struct ScalarPanelOptions {
-  int colormap = 20;        ///< cv::COLORMAP_TURBO (20); cv::COLORMAP_JET is 2
+  int colormap = 20;  ///< cv::COLORMAP_TURBO (20); cv::COLORMAP_JET is 2
   /// Value range of the colour bar, metres. min >= max: automatic, from the 2nd and 98th
   /// percentiles of the valid (> 0, finite) values.
   double min_value_m = 0.0;
@@ -61,8 +62,8 @@ struct FeatureOverlayOptions {
 /// features lifted to 3D (`has_3d`) are drawn differently: points as filled green discs,
 /// lines thick cyan. The pose's match counts and the feature counts are written on top.
 /// `features` may be null (plain image). Its coordinates are in the image's pixel frame.
-cv::Mat renderFeaturePanel(const cv::Mat& bgr, const FrameFeatures* features,
-                           const FramePose* pose, const std::string& title, cv::Size size,
+cv::Mat renderFeaturePanel(const cv::Mat& bgr, const FrameFeatures* features, const FramePose* pose,
+                           const std::string& title, cv::Size size,
                            const FeatureOverlayOptions& options = {});
 
 /// Where renderFeaturePanel places an image of `image_size` inside a panel of `panel_size`
@@ -104,8 +105,8 @@ struct StageTimingView {
 /// The last status of one node.
 struct NodeStatusView {
   std::string node;
-  int64_t last_seq = -1, frames_in = 0, frames_out = 0, frames_dropped = 0,
-          frames_skipped = 0, errors = 0;
+  int64_t last_seq = -1, frames_in = 0, frames_out = 0, frames_dropped = 0, frames_skipped = 0,
+          errors = 0;
   std::vector<StageTimingView> stages;
   std::string last_warning;
 };
@@ -133,13 +134,13 @@ struct ViewerFrameData {
   std::optional<FrameFeatures> features;         ///< to overlay on feature_frame
   std::optional<DepthWithVariance> fused_depth;  ///< PPLVO_DEPTH_FUSED (or C-GM as fallback)
   std::string fused_title = "fused depth";
-  Positions trajectory;                          ///< in the world frame shown
-  Positions ground_truth;                        ///< same frame, empty if unknown
+  Positions trajectory;    ///< in the world frame shown
+  Positions ground_truth;  ///< same frame, empty if unknown
   StatusPanelData status;
 };
 
 struct CanvasOptions {
-  cv::Size cell{400, 450};  ///< 4 x 2 cells: a 1600 x 900 canvas
+  cv::Size cell{400, 450};   ///< 4 x 2 cells: a 1600 x 900 canvas
   ScalarPanelOptions depth;  ///< raw and fused depth
   ScalarPanelOptions sigma;  ///< depth standard deviation
   FeatureOverlayOptions overlay;
