@@ -228,14 +228,16 @@ cv::Mat renderFeaturePanel(const cv::Mat& bgr_in, const FrameFeatures* features,
     const cv::Mat& labels = features->plane_labels;
     if (!labels.empty() && labels.type() == CV_8UC1 && labels.size() == img.size()) {
       const double a = std::clamp(options.plane_alpha, 0.0, 1.0);
+      cv::Vec3b lut[256];
+      for (int k = 0; k < 256; ++k) lut[k] = planeColour(k);
       for (int y = 0; y < img.rows; ++y) {
         const uint8_t* l = labels.ptr<uint8_t>(y);
         cv::Vec3b* p = img.ptr<cv::Vec3b>(y);
         for (int x = 0; x < img.cols; ++x) {
           if (l[x] == 0) continue;
-          const cv::Vec3b c = planeColour(l[x]);
+          const cv::Vec3b& c = lut[l[x]];
           for (int k = 0; k < 3; ++k) {
-            p[x][k] = static_cast<uint8_t>(std::lround((1 - a) * p[x][k] + a * c[k]));
+            p[x][k] = static_cast<uint8_t>((1 - a) * p[x][k] + a * c[k] + 0.5);
           }
         }
       }
