@@ -346,11 +346,12 @@ int ViewerNode::spinOnce(double wait_s) {
   const int wait_ms = std::max(0, static_cast<int>(std::lround(wait_s * 1000.0)));
   int rc = lcm_.handleTimeout(wait_ms);
   const double period_s = 1.0 / options_.max_fps;
+  const double drain_budget_s = std::max(period_s, 0.05);
   const auto start = Clock::now();
-  // Drain what is queued, but never for longer than one draw period.
+  // Drain what is queued, but not for so long that drawing starves.
   while (rc > 0) {
     ++handled;
-    if (secondsSince(start) > period_s) break;
+    if (secondsSince(start) > drain_budget_s) break;
     rc = lcm_.handleTimeout(0);
   }
   if (rc < 0 && !input_ended_) {
