@@ -55,6 +55,8 @@ class Painter {
   /// `size_px`: text height in pixels; `vertical`: rotated 90 degrees counter-clockwise.
   virtual void text(cv::Point2d p, const std::string& s, Rgb c, double size_px, Anchor a,
                     bool vertical = false) = 0;
+  /// Approximate width of `s` in pixels at `size_px`.
+  virtual double textWidth(const std::string& s, double size_px) const = 0;
 };
 
 class MatPainter : public Painter {
@@ -73,6 +75,10 @@ class MatPainter : public Painter {
   void rect(cv::Rect2d r, Rgb c, double w) override {
     cv::rectangle(img_, cv::Rect(cvRound(r.x), cvRound(r.y), cvRound(r.width), cvRound(r.height)),
                   bgr(c), thick(w));
+  }
+  double textWidth(const std::string& s, double size_px) const override {
+    int base = 0;
+    return cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, size_px / 22.0, 1, &base).width;
   }
   void text(cv::Point2d p, const std::string& s, Rgb c, double size_px, Anchor a,
             bool vertical) override {
@@ -160,6 +166,9 @@ class SvgPainter : public Painter {
     body_ << "<rect x=\"" << n(r.x) << "\" y=\"" << n(r.y) << "\" width=\"" << n(r.width)
           << "\" height=\"" << n(r.height) << "\" fill=\"none\" stroke=\"" << col(c)
           << "\" stroke-width=\"" << n(w) << "\"/>\n";
+  }
+  double textWidth(const std::string& s, double size_px) const override {
+    return 0.6 * size_px * static_cast<double>(s.size());  // sans-serif average, generous
   }
   void text(cv::Point2d p, const std::string& s, Rgb c, double size_px, Anchor a,
             bool vertical) override {
@@ -287,14 +296,17 @@ const char* kAxisNames[] = {"x", "y", "z"};
 void drawFigure(Painter& p, const PlotData& d, cv::Size size, const std::string& title) {
   const double W = size.width, H = size.height;
   const double top = 86, bottom = 50;
-  p.text({W / 2, 24}, title.empty() ? "trajectories against ground truth (ATE-aligned)" : title,
-         kAxisColour, 18, Anchor::kMiddle);
+  const std::string heading =
+      title.empty() ? "trajectories against ground truth (ATE-aligned)" : title;
+  double heading_px = 18;
+  while (heading_px > 9 && p.textWidth(heading, heading_px) > W - 20) heading_px -= 1;
+  p.text({W / 2, 24}, heading, kAxisColour, heading_px, Anchor::kMiddle);
   // Legend row.
   double lx = 70;
   auto legend = [&](const std::string& label, Rgb c) {
     p.line({lx, 50}, {lx + 28, 50}, c, 3);
     p.text({lx + 34, 55}, label, kAxisColour, 13, Anchor::kStart);
-    lx += 34 + 9.5 * static_cast<double>(label.size()) + 30;
+    lx += 34 + p.textWidth(label, 13) + 24;
   };
   legend("ground truth", kGtColour);
   for (size_t i = 0; i < d.runs.size(); ++i) {
@@ -375,7 +387,7 @@ void drawFigure(Painter& p, const PlotData& d, cv::Size size, const std::string&
 
 PlotPrepareResult preparePlot(const eval::TumFile& gt, const std::vector<eval::TumFile>& est,
                               const std::vector<std::string>& labels,
-                              const eval::AteOptions& options) {
+                              const eval::AteOptions& options, double gt_margin_s) {
   PlotPrepareResult res;
   const std::vector<eval::TumRow> gt_rows = cleanRows(gt);
   if (gt_rows.size() < 2) {
@@ -383,9 +395,25 @@ PlotPrepareResult preparePlot(const eval::TumFile& gt, const std::vector<eval::T
     return res;
   }
   PlotData& d = res.data;
-  d.t0_s = gt_rows.front().stamp_s;
-  Eigen::Vector3d lo = position(gt_rows.front()), hi = lo;
+  // Only the part of the ground truth the estimates cover (plus a margin) is plotted.
+  double est_lo = 1e300, est_hi = -1e300;
+  for (const eval::TumFile& e : est) {
+    for (const eval::TumRow& r : cleanRows(e)) {
+      est_lo = std::min(est_lo, r.stamp_s);
+      est_hi = std::max(est_hi, r.stamp_s);
+    }
+  }
+  std::vector<eval::TumRow> shown;
   for (const eval::TumRow& r : gt_rows) {
+    if (gt_margin_s < 0 || est_lo > est_hi ||
+        (r.stamp_s >= est_lo - gt_margin_s && r.stamp_s <= est_hi + gt_margin_s)) {
+      shown.push_back(r);
+    }
+  }
+  if (shown.size() < 2) shown = gt_rows;  // no overlap: ATE below reports it
+  d.t0_s = shown.front().stamp_s;
+  Eigen::Vector3d lo = position(shown.front()), hi = lo;
+  for (const eval::TumRow& r : shown) {
     d.gt_t_s.push_back(r.stamp_s - d.t0_s);
     d.gt_m.push_back(position(r));
     lo = lo.cwiseMin(position(r));

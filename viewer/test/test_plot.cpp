@@ -97,6 +97,13 @@ TEST(ViewerPlot, PrepareAlignsRunsOntoGroundTruth) {
   // The ground truth spreads least along z: top view is x-y.
   EXPECT_EQ(r.data.top_h, 0);
   EXPECT_EQ(r.data.top_v, 1);
+  // A shorter run: the ground truth is cropped to its span +- 1 s (30 Hz: 60 + 30 rows).
+  std::vector<Pose7> part = estimate(0.0, 1);
+  part.resize(60);
+  const PlotPrepareResult cropped = preparePlot(gt, {parse(tumText(part), "part")}, {});
+  ASSERT_TRUE(cropped.ok);
+  EXPECT_EQ(cropped.data.gt_m.size(), 90u);
+  EXPECT_EQ(preparePlot(gt, {parse(tumText(part), "part")}, {}, {}, -1.0).data.gt_m.size(), 120u);
   // A run that cannot be associated is an error naming it.
   eval::TumFile far = parse("1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 1\n", "far");
   const PlotPrepareResult bad = preparePlot(gt, {far}, {});

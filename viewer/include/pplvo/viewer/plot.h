@@ -44,9 +44,11 @@ struct PlotPrepareResult {
 
 /// Aligns every estimate onto `gt` with evaluateAte (TUM association + Horn alignment) and
 /// collects the series to plot. `labels` may be shorter than `est` (file names are used).
+/// Only the ground truth within [first, last] estimated stamp +- gt_margin_s is kept for the
+/// plot (the alignment uses the whole file); a negative margin keeps all of it.
 PlotPrepareResult preparePlot(const eval::TumFile& gt, const std::vector<eval::TumFile>& est,
                               const std::vector<std::string>& labels,
-                              const eval::AteOptions& options = {});
+                              const eval::AteOptions& options = {}, double gt_margin_s = 1.0);
 
 /// Plot layout: top view on the left; x(t), y(t), z(t) and the translational error over time
 /// stacked on the right; title and legend on top. White background.
