@@ -133,6 +133,17 @@ int main(int argc, char** argv) {
     pplvo::msgs::installShutdownHandlers();
     auto lcm = pplvo::msgs::openLcm(url);
     pplvo::viewer::ViewerNode node(o, *lcm);
+    std::fprintf(
+        stderr, "[pplvo-viewer] %s, max %.1f fps%s%s%s%s, ground truth %s (align %s)\n",
+        o.show_window ? "window" : "headless", o.max_fps,
+        o.snapshot_dir.empty()
+            ? ""
+            : (", snapshots every " + std::to_string(o.every) + " in " + o.snapshot_dir).c_str(),
+        o.video_path.empty() ? "" : (", video " + o.video_path).c_str(),
+        o.exit_after_end ? ", exit after END" : "",
+        o.timeout_s > 0 ? (", timeout " + std::to_string(o.timeout_s) + " s").c_str() : "",
+        o.groundtruth_path.empty() ? "none" : o.groundtruth_path.c_str(),
+        o.alignment == pplvo::viewer::GtAlignment::kAte ? "ate" : "first");
     const int rc = node.run();
     std::fprintf(stderr,
                  "[pplvo-viewer] frames %lld drawn %lld dropped %lld canvases %lld snapshots %lld "

@@ -226,6 +226,11 @@ void ViewerNode::convertPending() {
   depth_cgm_pending_ = false;
 }
 
+void ViewerNode::pollKeys(int wait_ms) {
+  const int key = cv::waitKey(wait_ms);
+  if (key == 27 || key == 'q' || key == 'Q') msgs::requestShutdown();  // Esc or q closes
+}
+
 bool ViewerNode::drawIfNew() {
   if (!new_data_) return false;
   draw();
@@ -326,7 +331,7 @@ void ViewerNode::writeOutputs(const cv::Mat& canvas) {
         window_open_ = true;
       }
       cv::imshow(kWindowName, canvas);
-      cv::waitKey(1);
+      pollKeys(1);
     }
   });
 }
@@ -361,7 +366,7 @@ int ViewerNode::spinOnce(double wait_s) {
     std::fprintf(stderr, "[%s] %s\n", options_.node_name.c_str(), counters_.last_warning.c_str());
   }
   if (new_data_ && secondsSince(last_draw_) >= period_s) draw();
-  if (window_open_) cv::waitKey(1);
+  if (window_open_) pollKeys(1);
   if (secondsSince(last_status_) >= options_.status_period_s) publishStatus();
   return handled;
 }
@@ -376,7 +381,7 @@ int ViewerNode::run() {
       if (options_.timeout_s <= 0) break;
       drawIfNew();
       if (window_open_)
-        cv::waitKey(50);
+        pollKeys(50);
       else
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
     } else {

@@ -101,6 +101,8 @@ class ViewerNode {
   void convertPending();
   void writeOutputs(const cv::Mat& canvas);
   void publishStatus();
+  /// GUI events of the window; Esc or q requests shutdown.
+  void pollKeys(int wait_ms);
   double stampSeconds(const std::string& stamp, int64_t utime) const;
 
   ViewerOptions options_;
