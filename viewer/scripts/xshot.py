@@ -2,7 +2,10 @@
 """Screenshot of the whole X display ($DISPLAY) as PNG, with libX11 through ctypes.
 
 Neither ImageMagick's `import` nor `xwd` is installed here; this reads the root window with
-XGetImage (what those tools do) and writes an RGB PNG with zlib. Usage: xshot.py OUT.png
+XGetImage (what those tools do) and writes an RGB PNG with zlib.
+Usage: xshot.py OUT.png [--compare CANVAS.ppm]
+--compare: report which share of the canvas the viewer saved itself (binary PPM, BGR written by
+OpenCV as RGB) is found unchanged at the top-left of the screen, i.e. in its window.
 """
 import ctypes
 import ctypes.util
@@ -42,9 +45,27 @@ def png_bytes(rgb):
             chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
 
 
+def read_ppm(path):
+    with open(path, "rb") as f:
+        data = f.read()
+    fields, pos = [], 0
+    while len(fields) < 4:  # P6 width height maxval, whitespace separated
+        while data[pos:pos + 1].isspace():
+            pos += 1
+        end = pos
+        while not data[end:end + 1].isspace():
+            end += 1
+        fields.append(data[pos:end])
+        pos = end
+    if fields[0] != b"P6" or fields[3] != b"255":
+        sys.exit("xshot.py: %s is not an 8-bit binary PPM" % path)
+    w, h = int(fields[1]), int(fields[2])
+    return np.frombuffer(data[pos + 1:pos + 1 + w * h * 3], dtype=np.uint8).reshape(h, w, 3)
+
+
 def main():
-    if len(sys.argv) != 2:
-        sys.exit("usage: xshot.py OUT.png")
+    if len(sys.argv) not in (2, 4) or (len(sys.argv) == 4 and sys.argv[2] != "--compare"):
+        sys.exit("usage: xshot.py OUT.png [--compare CANVAS.ppm]")
     x11 = ctypes.cdll.LoadLibrary(ctypes.util.find_library("X11") or "libX11.so.6")
     x11.XOpenDisplay.restype = ctypes.c_void_p
     x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
@@ -83,6 +104,16 @@ def main():
         f.write(png_bytes(np.ascontiguousarray(rgb)))
     print("xshot.py: %dx%d display -> %s" % (img.width, img.height, sys.argv[1]))
     x11.XCloseDisplay(display)
+    if len(sys.argv) == 4:
+        canvas = read_ppm(sys.argv[3])
+        h, w, _ = canvas.shape
+        if h > rgb.shape[0] or w > rgb.shape[1]:
+            sys.exit("xshot.py: canvas %dx%d larger than the display" % (w, h))
+        same = np.all(rgb[:h, :w] == canvas, axis=2).mean()
+        print("xshot.py: %.2f%% of the %dx%d canvas the viewer drew is on screen unchanged"
+              % (100.0 * same, w, h))
+        if same < 0.99:
+            sys.exit("xshot.py: the window does not show the viewer's canvas")
 
 
 if __name__ == "__main__":
