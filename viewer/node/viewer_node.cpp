@@ -174,16 +174,12 @@ void ViewerNode::convertPending() {
   }
   // Features: the newest of 2D and 3D (3D wins on the same seq), shown on their own frame.
   if (raw_features_) {
-    msgs::guarded(counters_, name, [&] {
-      features_2d_ = msgs::fromMsg(*raw_features_);
-      raw_features_.reset();
-    });
+    msgs::guarded(counters_, name, [&] { features_2d_ = msgs::fromMsg(*raw_features_); });
+    raw_features_.reset();  // a bad message is counted once, not at every draw
   }
   if (raw_features_3d_) {
-    msgs::guarded(counters_, name, [&] {
-      features_3d_ = msgs::fromMsg(*raw_features_3d_);
-      raw_features_3d_.reset();
-    });
+    msgs::guarded(counters_, name, [&] { features_3d_ = msgs::fromMsg(*raw_features_3d_); });
+    raw_features_3d_.reset();
   }
   const FrameFeatures* newest = nullptr;
   if (features_3d_) newest = &*features_3d_;
@@ -197,10 +193,8 @@ void ViewerNode::convertPending() {
       data_.feature_frame.reset();
       for (const auto& m : frame_ring_) {
         if (m.seq != newest->seq) continue;
-        msgs::guarded(counters_, name, [&] {
-          data_.feature_frame = msgs::fromMsg(m);
-          shown_feature_frame_seq_ = newest->seq;
-        });
+        shown_feature_frame_seq_ = newest->seq;  // tried once, even if it fails to decode
+        msgs::guarded(counters_, name, [&] { data_.feature_frame = msgs::fromMsg(m); });
         break;
       }
     }

@@ -187,10 +187,24 @@ TEST(ViewerNode, BadMessagesAreCountedNotFatal) {
   node.spinOnce(0.0);
   EXPECT_EQ(node.counters().frames_skipped, 2);
   EXPECT_EQ(node.canvasesDrawn(), 1);  // still draws (panels say "no data")
-  publishAll(lcm, 1);
+  // A features message with a corrupt label image is counted once, not at every later draw.
+  pplvo_msgs::features_t f =
+      msgs::toMsg(testdata::features(0, false), pplvo_msgs::features_t::STAGE_2D);
+  ASSERT_GT(f.plane_labels.data.size(), 16u);
+  f.plane_labels.data.resize(f.plane_labels.data.size() / 2);
+  f.plane_labels.size = static_cast<int32_t>(f.plane_labels.data.size());
+  lcm.publish(channels::kFeatures, &f);
   node.spinOnce(0.0);
-  EXPECT_EQ(node.canvasesDrawn(), 2);
-  EXPECT_EQ(node.counters().frames_skipped, 2);
+  publishFrame(lcm, 1);
+  std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  node.spinOnce(0.0);
+  EXPECT_EQ(node.counters().frames_skipped, 3);
+  EXPECT_EQ(node.canvasesDrawn(), 3);
+  publishAll(lcm, 2);
+  std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  node.spinOnce(0.0);
+  EXPECT_EQ(node.canvasesDrawn(), 4);
+  EXPECT_EQ(node.counters().frames_skipped, 3);
   std::system(("rm -rf " + dir).c_str());
 }
 
