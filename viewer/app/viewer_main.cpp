@@ -119,6 +119,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pplvo-viewer: --max-fps must be > 0 and --every >= 1\n");
     return 2;
   }
+  if (o.show_window && !std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY")) {
+    // Qt's highgui aborts the process when it cannot reach a display: fail clearly instead.
+    std::fprintf(stderr,
+                 "pplvo-viewer: no DISPLAY for the window; use --headless (with "
+                 "--snapshot-dir / --video) or run under xvfb-run\n");
+    return 2;
+  }
   if (!replay.empty()) {
     if (!url.empty()) {
       std::fprintf(stderr, "pplvo-viewer: --replay or --lcm-url, not both\n");
@@ -133,6 +140,9 @@ int main(int argc, char** argv) {
     pplvo::msgs::installShutdownHandlers();
     auto lcm = pplvo::msgs::openLcm(url);
     pplvo::viewer::ViewerNode node(o, *lcm);
+    char timeout_buf[48];
+    std::snprintf(timeout_buf, sizeof timeout_buf, ", timeout %g s", o.timeout_s);
+    const std::string timeout_text = timeout_buf;
     std::fprintf(
         stderr, "[pplvo-viewer] %s, max %.1f fps%s%s%s%s, ground truth %s (align %s)\n",
         o.show_window ? "window" : "headless", o.max_fps,
@@ -140,8 +150,7 @@ int main(int argc, char** argv) {
             ? ""
             : (", snapshots every " + std::to_string(o.every) + " in " + o.snapshot_dir).c_str(),
         o.video_path.empty() ? "" : (", video " + o.video_path).c_str(),
-        o.exit_after_end ? ", exit after END" : "",
-        o.timeout_s > 0 ? (", timeout " + std::to_string(o.timeout_s) + " s").c_str() : "",
+        o.exit_after_end ? ", exit after END" : "", o.timeout_s > 0 ? timeout_text.c_str() : "",
         o.groundtruth_path.empty() ? "none" : o.groundtruth_path.c_str(),
         o.alignment == pplvo::viewer::GtAlignment::kAte ? "ate" : "first");
     const int rc = node.run();
