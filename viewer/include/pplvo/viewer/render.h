@@ -42,7 +42,7 @@ cv::Mat colorizeScalar(const cv::Mat& value_m, const ValueRange& range,
                        const ScalarPanelOptions& options);
 
 /// A panel of `size`: title, the colour-mapped image fitted to the left and a vertical colour
-/// bar on the right with ticks labelled in metres ("unit" is printed after the numbers).
+/// bar on the right with ticks labelled in metres (`unit` is printed under the bar, "[m]").
 /// An empty `value_m` gives a grey panel saying "no data".
 cv::Mat renderScalarPanel(const cv::Mat& value_m, const std::string& title, cv::Size size,
                           const ScalarPanelOptions& options = {}, const std::string& unit = "m");
