@@ -43,7 +43,7 @@ bool isPsd(const Eigen::Matrix<double, N, N>& C) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Terms of the joint cost (eq. 21). Each keeps its data plus the weighting state that is fixed
+// Terms of the joint cost E. Each keeps its data plus the weighting state that is fixed
 // during one Ceres solve (IRLS).
 
 struct PointTerm {
