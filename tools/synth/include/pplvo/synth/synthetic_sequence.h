@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -25,6 +26,8 @@ struct DepthNoiseOptions {
   bool edge_dropout = true;               ///< drop pixels at depth discontinuities
   double edge_jump_m = 0.1;               ///< neighbour depth jump that counts as a discontinuity
   double rgb_noise_sigma = 2.0;           ///< additive Gaussian noise on colour, grey levels
+  double baseline_m = 0.075;              ///< projector-camera baseline b for disparity f*b/z
+  double disparity_step_px = 0.125;       ///< disparity quantisation step (Kinect: 1/8 px)
 };
 
 struct SynthOptions {
@@ -50,6 +53,27 @@ struct SynthFrame {
   Pose3 T_w_c = Pose3::Identity();
 };
 
+/// A surface seen in a rendered frame (plane-extraction ground truth).
+struct VisibleSurface {
+  int surface_id = -1;
+  int pixels = 0;             ///< pixels of the frame showing this surface
+  int pixels_with_depth = 0;  ///< of those, pixels with (noisy) sensor depth
+  bool dynamic = false;       ///< part of the moving object
+  Eigen::Vector4d plane_w = Eigen::Vector4d::Zero();  ///< [n; d] world, at this frame's time
+  Eigen::Vector4d plane_c = Eigen::Vector4d::Zero();  ///< [n; d] camera frame, d > 0
+  std::string name;
+};
+
+/// A straight edge of the scene geometry (box edge, poster/door border, room corner), world
+/// frame, at one frame's time. Visibility is not checked: project it and compare with
+/// depth_true_m / surface_id if needed.
+struct SceneEdge {
+  Eigen::Vector3d a_w = Eigen::Vector3d::Zero();  ///< end points, metres
+  Eigen::Vector3d b_w = Eigen::Vector3d::Zero();
+  int surface_a = -1;  ///< the (up to) two surfaces meeting at the edge; -1 if none
+  int surface_b = -1;
+};
+
 /// A procedural indoor scene and a smooth hand-held trajectory through it.
 class SyntheticSequence {
  public:
@@ -67,10 +91,31 @@ class SyntheticSequence {
   std::string stamp(int i) const;
   /// Renders frame i (independent of the order frames are rendered in).
   SynthFrame render(int i) const;
-  /// Plane [n; d] (n.p + d = 0, world frame) of a surface id, if that surface is planar.
+  /// Plane [n; d] (n.p + d = 0, world frame) of a surface id, if that surface is planar and
+  /// static. n (unit) is the outward normal, pointing into the free space the surface is seen
+  /// from, so the plane transformed into any camera frame that sees it has d > 0.
   bool surfacePlane(int surface_id, Eigen::Vector4d* plane_w) const;
   /// The ground-truth trajectory (stamps as stamp(i)).
   Trajectory groundTruth() const;
+
+  /// Plane of a surface id at frame i: like surfacePlane() but also valid for the surfaces of
+  /// the moving object (whose planes change with time). Throws std::out_of_range for a bad i.
+  bool surfacePlaneAt(int surface_id, int i, Eigen::Vector4d* plane_w) const;
+  /// Number of surface ids (ids are 0 .. surfaceCount() - 1).
+  int surfaceCount() const;
+  /// True for the surfaces of the moving object (surfacePlane() returns false for them).
+  bool isDynamicSurface(int surface_id) const;
+  /// Surfaces seen in a rendered frame of this sequence with at least `min_pixels` pixels,
+  /// most pixels first, with their planes in the world and the camera frame.
+  std::vector<VisibleSurface> visibleSurfaces(const SynthFrame& frame, int min_pixels = 1) const;
+  /// Every straight edge of the scene at frame i (static ones do not move).
+  std::vector<SceneEdge> sceneEdges(int i) const;
+  /// The smallest surface id lying on exactly the same plane as `surface_id` (e.g. a poster
+  /// and its wall, or coplanar faces of different boxes); the id itself for the moving object;
+  /// -1 for an unknown id.
+  int planeGroup(int surface_id) const;
+  /// Human-readable name of a surface, e.g. "room+z" (floor) or "cabinet-x"; "" if unknown.
+  std::string surfaceName(int surface_id) const;
 
  private:
   struct Impl;
