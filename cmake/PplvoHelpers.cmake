@@ -3,7 +3,8 @@
 # Warnings for the project's own code (generated LCM code is left alone).
 function(pplvo_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wshadow -Wnon-virtual-dtor
-                         -Wno-unused-parameter)
+                         -Wno-unused-parameter
+                         -Wno-maybe-uninitialized)  # false positives in lcm-gen decode()
 endfunction()
 
 # pplvo_test(NAME SOURCES... LIBS libs... [LABELS labels...] [TIMEOUT s])

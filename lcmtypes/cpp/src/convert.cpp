@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <zlib.h>
 
 namespace pplvo::msgs {
@@ -183,8 +184,8 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
   }
   int flags = 0;
   switch (msg.encoding) {
-    case Img::ENCODING_JPEG:
-    case Img::ENCODING_PNG: flags = cv::IMREAD_COLOR; break;
+    case Img::ENCODING_JPEG: flags = cv::IMREAD_COLOR; break;
+    case Img::ENCODING_PNG: flags = cv::IMREAD_UNCHANGED; break;  // grey stays grey
     case Img::ENCODING_PNG_U16: flags = cv::IMREAD_ANYDEPTH; break;
     default: throw MessageError("unknown image encoding " + encodingName(msg.encoding));
   }
@@ -202,6 +203,11 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
   }
   if (msg.encoding == Img::ENCODING_PNG_U16 && out.type() != CV_16UC1) {
     throw MessageError("png_u16 payload is not a 16-bit grey image");
+  }
+  if (msg.encoding == Img::ENCODING_PNG) {
+    if (out.depth() != CV_8U) throw MessageError("png payload is not 8-bit");
+    if (out.channels() == 4) cv::cvtColor(out, out, cv::COLOR_BGRA2BGR);
+    if (out.channels() == 2) throw MessageError("png payload has an alpha-grey layout");
   }
   return out;
 }

@@ -33,8 +33,9 @@ PinholeCamera fromMsg(const pplvo_msgs::camera_info_t& msg);
 /// jpeg_quality applies to JPEG, zlib_level (1..9) to the zlib encodings.
 pplvo_msgs::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality = 90,
                                 int zlib_level = 1);
-/// Decodes an image_t into a cv::Mat of the natural type of its encoding (colour JPEG/PNG
-/// decode to CV_8UC3). Throws MessageError when size, dimensions or payload disagree.
+/// Decodes an image_t into a cv::Mat of the natural type of its encoding (JPEG decodes to
+/// CV_8UC3; an 8-bit PNG keeps one or three channels). Throws MessageError when the size
+/// field, dimensions or payload disagree.
 cv::Mat decodeImage(const pplvo_msgs::image_t& msg);
 std::string encodingName(int8_t encoding);
 
