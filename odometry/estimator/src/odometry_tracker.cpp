@@ -7,17 +7,6 @@
 
 namespace pplvo {
 
-const char* toString(TrackingStatus s) {
-  switch (s) {
-    case TrackingStatus::kFirstFrame: return "first_frame";
-    case TrackingStatus::kTracking: return "tracking";
-    case TrackingStatus::kVelocityModel: return "velocity_model";
-    case TrackingStatus::kLost: return "lost";
-    case TrackingStatus::kReinitialised: return "reinitialised";
-  }
-  return "unknown";
-}
-
 namespace {
 
 /// Motion as [t; angle-axis]; scaling this vector scales the motion (translation and rotation
@@ -141,6 +130,26 @@ void OdometryTracker::propagateWindow(int64_t seq, const Pose3& T_curr_prev, con
   while (static_cast<int>(window_.size()) > std::max(1, options_.window_length)) {
     window_.pop_front();
   }
+}
+
+FramePose toFramePose(const TrackerOutput& out) {
+  FramePose p;
+  p.seq = out.seq;
+  p.status = out.status;
+  p.T_w_c = out.T_w_c;
+  p.T_prev_curr = out.T_prev_curr;
+  p.rel_covariance = out.covariance_prev_curr;
+  p.max_translation_variance_m2 = maxTranslationVariance(out.covariance_prev_curr);
+  p.n_point_matches = out.estimate.n_points_used;
+  p.n_line_matches = out.estimate.n_lines_used;
+  p.n_plane_matches = out.estimate.n_planes_used;
+  p.iterations = out.estimate.lm_iterations;
+  p.final_cost = out.estimate.final_cost;
+  for (const WindowEntry& e : out.window) {
+    if (e.seq == out.seq) continue;  // the current frame itself
+    p.window.push_back({e.seq, e.max_translation_variance_m2});
+  }
+  return p;
 }
 
 TrackerOutput OdometryTracker::makeOutput(int64_t seq) const {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "pplvo/core/config_visitor.h"
+#include "pplvo/estimator/estimator_config.h"
 #include "pplvo/estimator/odometry_tracker.h"
 #include "pplvo/estimator/pose_parameterisation.h"
 #include "synthetic_scene.h"
@@ -164,6 +166,43 @@ TEST(OdometryTracker, TrackSyntheticWithDegenerateFrames) {
   }
   // Two velocity-model frames (0.8 and 0.64 of the motion) leave a bounded drift.
   EXPECT_LT((out.T_w_c.translation() - T_w_true.translation()).norm(), 0.03);
+}
+
+TEST(OdometryTracker, FramePoseForPublishing) {
+  OdometryTracker tracker;
+  tracker.initialise(10);
+  const Pose3 M = testing::typicalMotion();
+  tracker.update(11, goodEstimate(M));
+  const TrackerOutput out = tracker.update(12, goodEstimate(M));
+  const FramePose p = toFramePose(out);
+  EXPECT_EQ(p.seq, 12);
+  EXPECT_EQ(p.status, TrackingStatus::kTracking);
+  expectPoseNear(p.T_prev_curr, M.inverse(), 1e-12);
+  ASSERT_EQ(p.window.size(), 2u);  // frames 10 and 11, oldest first; not the current one
+  EXPECT_EQ(p.window[0].seq, 10);
+  EXPECT_EQ(p.window[1].seq, 11);
+  EXPECT_GT(p.window[0].max_translation_variance_m2, p.window[1].max_translation_variance_m2);
+}
+
+TEST(OdometryTracker, OptionsRoundTripThroughYaml) {
+  OdometryTrackerOptions o;
+  o.velocity_decay = 0.5;
+  o.estimator.use_lines = false;
+  o.estimator.max_translation_variance_m2 = 3e-4;
+  YamlDumper dumper;
+  dumper.section("tracker", [&] { visit(dumper, o); });
+  OdometryTrackerOptions back;
+  YamlLoader loader(YAML::Load(dumper.str()));
+  loader.section("tracker", [&] { visit(loader, back); });
+  loader.finish();
+  EXPECT_EQ(back.velocity_decay, 0.5);
+  EXPECT_FALSE(back.estimator.use_lines);
+  EXPECT_EQ(back.estimator.max_translation_variance_m2, 3e-4);
+
+  YamlLoader bad(YAML::Load("tracker: {velocity_decay: x, no_such_key: 1}"));
+  OdometryTrackerOptions ignored;
+  bad.section("tracker", [&] { visit(bad, ignored); });
+  EXPECT_THROW(bad.finish(), ConfigError);
 }
 
 }  // namespace

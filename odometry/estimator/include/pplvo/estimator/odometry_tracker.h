@@ -7,20 +7,13 @@
 #include <deque>
 #include <vector>
 
+#include "pplvo/core/frame_pose.h"
 #include "pplvo/core/geometry.h"
 #include "pplvo/estimator/pose_estimator.h"
 
 namespace pplvo {
 
-/// Values equal the pose_t STATUS_* constants.
-enum class TrackingStatus : int8_t {
-  kFirstFrame = 0,
-  kTracking = 1,
-  kVelocityModel = 2,   ///< estimate rejected; decaying velocity model used
-  kLost = 3,            ///< velocity model exhausted; pose held
-  kReinitialised = 4,   ///< first good estimate after kLost (one frame)
-};
-const char* toString(TrackingStatus s);
+// TrackingStatus (values equal the pose_t STATUS_* constants) and FramePose: core/frame_pose.h
 
 struct OdometryTrackerOptions {
   PoseEstimatorOptions estimator;
@@ -63,6 +56,11 @@ struct TrackerOutput {
   std::vector<WindowEntry> window;
   PoseEstimate estimate;  ///< the estimator's result for this frame (if one was run)
 };
+
+/// The published form (pose_t via FramePose): T_prev_curr and the covariance of its xi,
+/// counts and iterations of the estimate, and the window entries older than the current frame
+/// (oldest first). utime and stamp are left to the caller.
+FramePose toFramePose(const TrackerOutput& out);
 
 class OdometryTracker {
  public:
