@@ -6,22 +6,22 @@
 //    harness exists only for the benchmark. Accuracy against the ground truth is reported in
 //    the counters (median translation / rotation error of the accepted frames).
 // Only PoseEstimator::estimate() is timed.
+#include <benchmark/benchmark.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <benchmark/benchmark.h>
-#include <opencv2/features2d.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
+#include "../test/synthetic_scene.h"
 #include "pplvo/core/trajectory.h"
 #include "pplvo/estimator/pose_estimator.h"
-#include "../test/synthetic_scene.h"
 
 namespace pplvo {
 namespace {

@@ -69,8 +69,8 @@ TrackerOutput OdometryTracker::track(const FrameFeatures& prev, const FrameFeatu
 
 TrackerOutput OdometryTracker::update(int64_t seq, const PoseEstimate& est) {
   if (!initialised_) return initialise(seq);
-  const bool good = est.accepted() && isValidPose(est.T_curr_prev, 1e-6) &&
-                    est.covariance.allFinite();
+  const bool good =
+      est.accepted() && isValidPose(est.T_curr_prev, 1e-6) && est.covariance.allFinite();
   Pose3 T_curr_prev = Pose3::Identity();
   Matrix6d Q = Matrix6d::Zero();
   if (good) {
@@ -84,8 +84,8 @@ TrackerOutput OdometryTracker::update(int64_t seq, const PoseEstimate& est) {
     ++consecutive_rejections_;
     if (consecutive_rejections_ <= options_.max_velocity_model_frames) {
       status_ = TrackingStatus::kVelocityModel;
-      T_curr_prev = vectorToMotion(std::pow(options_.velocity_decay, consecutive_rejections_) *
-                                   velocity_);
+      T_curr_prev =
+          vectorToMotion(std::pow(options_.velocity_decay, consecutive_rejections_) * velocity_);
       Q.topLeftCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_t_m *
                                                      options_.velocity_model_sigma_t_m);
       Q.bottomRightCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_q *

@@ -1,12 +1,12 @@
 #include "pplvo/estimator/pose_estimator.h"
 
+#include <ceres/ceres.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <ceres/ceres.h>
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include "pplvo/estimator/pose_parameterisation.h"
 
@@ -14,12 +14,18 @@ namespace pplvo {
 
 const char* toString(EstimateStatus s) {
   switch (s) {
-    case EstimateStatus::kOk: return "ok";
-    case EstimateStatus::kNoConstraints: return "no_constraints";
-    case EstimateStatus::kTooFewConstraints: return "too_few_constraints";
-    case EstimateStatus::kDegenerate: return "degenerate";
-    case EstimateStatus::kUncertain: return "uncertain";
-    case EstimateStatus::kSolverFailure: return "solver_failure";
+    case EstimateStatus::kOk:
+      return "ok";
+    case EstimateStatus::kNoConstraints:
+      return "no_constraints";
+    case EstimateStatus::kTooFewConstraints:
+      return "too_few_constraints";
+    case EstimateStatus::kDegenerate:
+      return "degenerate";
+    case EstimateStatus::kUncertain:
+      return "uncertain";
+    case EstimateStatus::kSolverFailure:
+      return "solver_failure";
   }
   return "unknown";
 }
@@ -136,8 +142,8 @@ bool pointResidual(const PointTerm& T, const PoseEval& pose, const Projector& ca
 }
 
 /// Residual (eq. 19): signed distances of the projected endpoints to l_curr.
-bool lineResidual(const LineTerm& T, const PoseEval& pose, const Projector& cam,
-                  Eigen::Vector2d& r, Matrix26* J, Eigen::Vector2d* var_r) {
+bool lineResidual(const LineTerm& T, const PoseEval& pose, const Projector& cam, Eigen::Vector2d& r,
+                  Matrix26* J, Eigen::Vector2d* var_r) {
   for (int i = 0; i < 2; ++i) {
     const Eigen::Vector3d X = pose.R * T.P[i] + pose.t;
     Eigen::Vector2d px;
@@ -248,8 +254,8 @@ class JointProblem {
     for (size_t i = 0; i < lines.size(); ++i) {
       LineTerm& T = lines[i];
       Eigen::Vector2d r, var;
-      T.active = lineResidual(T, pose, cam_, r, nullptr, &var) && var.allFinite() &&
-                 var(0) > 0 && var(1) > 0;
+      T.active = lineResidual(T, pose, cam_, r, nullptr, &var) && var.allFinite() && var(0) > 0 &&
+                 var(1) > 0;
       if (!T.active) continue;
       T.s[0] = 1.0 / std::sqrt(var(0));
       T.s[1] = 1.0 / std::sqrt(var(1));
@@ -403,8 +409,7 @@ bool poseChangeSmall(const Vector6d& a, const Vector6d& b, const PoseEstimatorOp
 // ---------------------------------------------------------------------------------------------
 
 Correspondences buildCorrespondences(const FrameFeatures& prev, const FrameFeatures& curr,
-                                     const FeatureMatches& matches,
-                                     const PoseEstimatorOptions& o) {
+                                     const FeatureMatches& matches, const PoseEstimatorOptions& o) {
   Correspondences out;
   auto inRange = [](int i, size_t n) { return i >= 0 && static_cast<size_t>(i) < n; };
   out.points.reserve(matches.points.size());
@@ -470,8 +475,8 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
   const Pose3 guess = isValidPose(T_curr_prev_guess, 1e-4) ? T_curr_prev_guess : Pose3::Identity();
   est.T_curr_prev = xiToPose(poseToXi(guess));
   const bool camera_ok = std::isfinite(camera.fx) && std::isfinite(camera.fy) &&
-                         std::isfinite(camera.cx) && std::isfinite(camera.cy) &&
-                         camera.fx != 0 && camera.fy != 0;
+                         std::isfinite(camera.cx) && std::isfinite(camera.cy) && camera.fx != 0 &&
+                         camera.fy != 0;
 
   // --- validation -----------------------------------------------------------------------
   JointProblem problem(o, camera);
@@ -499,8 +504,8 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
   if (o.use_lines && camera_ok) {
     for (const LineMatch3D2D& m : in.lines) {
       const Line3WithCov& L = m.L_prev;
-      if (!L.p1.allFinite() || !L.p2.allFinite() || !L.cov1.allFinite() ||
-          !L.cov2.allFinite() || !m.l_curr.allFinite() || !std::isfinite(m.sigma_px)) {
+      if (!L.p1.allFinite() || !L.p2.allFinite() || !L.cov1.allFinite() || !L.cov2.allFinite() ||
+          !m.l_curr.allFinite() || !std::isfinite(m.sigma_px)) {
         ++sk.non_finite;
         continue;
       }
@@ -525,8 +530,8 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
   }
   if (o.use_planes && o.plane_scale_alpha > 0) {
     for (const PlaneMatch3D3D& m : in.planes) {
-      if (!m.prev.hessian.allFinite() || !m.curr.hessian.allFinite() ||
-          !m.prev.cov.allFinite() || !m.curr.cov.allFinite()) {
+      if (!m.prev.hessian.allFinite() || !m.curr.hessian.allFinite() || !m.prev.cov.allFinite() ||
+          !m.curr.cov.allFinite()) {
         ++sk.non_finite;
         continue;
       }
@@ -619,8 +624,7 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
     Eigen::SelfAdjointEigenSolver<Matrix6d> es(Hs);
     const auto& lam = es.eigenvalues();
     const double lmax = lam.maxCoeff();
-    est.min_relative_eigenvalue =
-        diag_ok && lmax > 0 ? std::max(0.0, lam.minCoeff() / lmax) : 0.0;
+    est.min_relative_eigenvalue = diag_ok && lmax > 0 ? std::max(0.0, lam.minCoeff() / lmax) : 0.0;
     Matrix6d Hinv = Matrix6d::Zero(), null_part = Matrix6d::Zero();
     for (int k = 0; k < 6; ++k) {
       const Vector6d y = dinv_sqrt.asDiagonal() * es.eigenvectors().col(k);
@@ -630,8 +634,7 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
         null_part.noalias() += kLargeVariance * y.normalized() * y.normalized().transpose();
       }
     }
-    const Matrix6d cov =
-        (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
+    const Matrix6d cov = (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
     if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
   }
   est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);

@@ -1,9 +1,8 @@
 #include "pplvo/estimator/pose_parameterisation.h"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Eigenvalues>
 
 namespace pplvo {
 
@@ -35,17 +34,15 @@ Vector6d poseToXi(const Pose3& T) {
   return xi;
 }
 
-Pose3 xiToPose(const Vector6d& xi) {
-  return makePose(xi.head<3>(), quatOfXi(xi.tail<3>()));
-}
+Pose3 xiToPose(const Vector6d& xi) { return makePose(xi.head<3>(), quatOfXi(xi.tail<3>())); }
 
 Eigen::Matrix3d rotatedPointJacobian(const Eigen::Vector3d& v, const Eigen::Vector3d& p) {
   // R(q) p = p + 2 w (u x p) + 2 u x (u x p), u = v, w = sqrt(1 - |v|^2).
   const double w = std::sqrt(std::max(1e-300, 1.0 - v.squaredNorm()));
   const Eigen::Vector3d uxp = v.cross(p);
-  Eigen::Matrix3d d_du = -2.0 * w * skew(p) +
-                         2.0 * (v * p.transpose() + v.dot(p) * Eigen::Matrix3d::Identity() -
-                                2.0 * p * v.transpose());
+  Eigen::Matrix3d d_du =
+      -2.0 * w * skew(p) +
+      2.0 * (v * p.transpose() + v.dot(p) * Eigen::Matrix3d::Identity() - 2.0 * p * v.transpose());
   // + d/dw * dw/dv, dw/dv = -v^T / w
   d_du += (2.0 * uxp) * (-v.transpose() / w);
   return d_du;

@@ -1,11 +1,10 @@
 #pragma once
 // Synthetic 3D-to-2D / 3D-to-3D correspondences with known pose and noise drawn from the
 // stated covariances (for tests and the benchmark). Header-only, deterministic given the seed.
-#include <cmath>
-#include <random>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
+#include <random>
 
 #include "pplvo/core/camera.h"
 #include "pplvo/estimator/pose_estimator.h"
@@ -55,8 +54,7 @@ class SceneGenerator {
   /// Backprojection covariance (paper eq. 10) of pixel (u, v) at depth z.
   Eigen::Matrix3d backprojectionCov(double u, double v, double z) const {
     Eigen::Matrix3d J;  // d(X, Y, Z) / d(u, v, z)
-    J << z / cam_.fx, 0, (u - cam_.cx) / cam_.fx, 0, z / cam_.fy, (v - cam_.cy) / cam_.fy, 0, 0,
-        1;
+    J << z / cam_.fx, 0, (u - cam_.cx) / cam_.fx, 0, z / cam_.fy, (v - cam_.cy) / cam_.fy, 0, 0, 1;
     const double sz = cfg_.depth_sigma_coeff * z * z;
     const Eigen::Vector3d var(cfg_.sigma_px * cfg_.sigma_px, cfg_.sigma_px * cfg_.sigma_px,
                               sz * sz);
@@ -97,8 +95,8 @@ class SceneGenerator {
       if (U01(rng_) < cfg_.outlier_fraction) {
         m.px_curr = {U01(rng_) * (cam_.width - 1), U01(rng_) * (cam_.height - 1)};
       } else {
-        m.px_curr = cam_.project(T_curr_prev * P) +
-                    cfg_.sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
+        m.px_curr =
+            cam_.project(T_curr_prev * P) + cfg_.sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
       }
       c.points.push_back(m);
     }
@@ -119,11 +117,12 @@ class SceneGenerator {
       m.L_prev.p2 = sampleWithCov(P2, cov2);
       m.L_prev.cov1 = cov1;
       m.L_prev.cov2 = cov2;
-      const Eigen::Vector2d q1 = cam_.project(T_curr_prev * P1) +
-                                 cfg_.line_sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
-      const Eigen::Vector2d q2 = cam_.project(T_curr_prev * P2) +
-                                 cfg_.line_sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
-      Eigen::Vector3d l = Eigen::Vector3d(q1.x(), q1.y(), 1.0).cross(Eigen::Vector3d(q2.x(), q2.y(), 1.0));
+      const Eigen::Vector2d q1 =
+          cam_.project(T_curr_prev * P1) + cfg_.line_sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
+      const Eigen::Vector2d q2 =
+          cam_.project(T_curr_prev * P2) + cfg_.line_sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
+      Eigen::Vector3d l =
+          Eigen::Vector3d(q1.x(), q1.y(), 1.0).cross(Eigen::Vector3d(q2.x(), q2.y(), 1.0));
       l /= l.head<2>().norm();
       m.l_curr = l;
       m.sigma_px = cfg_.line_sigma_px;
@@ -142,11 +141,11 @@ class SceneGenerator {
       n.normalize();
       return Eigen::Vector4d(n.x(), n.y(), n.z(), d);
     };
-    return {mk({0, -1, 0}, 1.4),        // floor (y down)
-            mk({0, 0, -1}, 3.5),        // back wall
-            mk({1, 0, -0.2}, 2.0),      // left wall
-            mk({-1, 0.1, -0.3}, 2.2),   // right wall
-            mk({0, 1, -0.1}, 1.3)};     // ceiling
+    return {mk({0, -1, 0}, 1.4),       // floor (y down)
+            mk({0, 0, -1}, 3.5),       // back wall
+            mk({1, 0, -0.2}, 2.0),     // left wall
+            mk({-1, 0.1, -0.3}, 2.2),  // right wall
+            mk({0, 1, -0.1}, 1.3)};    // ceiling
   }
 
   PlaneWithCov noisyPlane(const Eigen::Vector4d& h) {
@@ -160,8 +159,7 @@ class SceneGenerator {
         cfg_.plane_sigma_normal_rad * cfg_.plane_sigma_normal_rad * B * B.transpose();
     p.cov(3, 3) = cfg_.plane_sigma_d_m * cfg_.plane_sigma_d_m;
     const Eigen::Vector3d nn =
-        (n + cfg_.plane_sigma_normal_rad * (B * Eigen::Vector2d(n_(rng_), n_(rng_))))
-            .normalized();
+        (n + cfg_.plane_sigma_normal_rad * (B * Eigen::Vector2d(n_(rng_), n_(rng_)))).normalized();
     p.hessian << nn, h(3) + cfg_.plane_sigma_d_m * n_(rng_);
     return p;
   }

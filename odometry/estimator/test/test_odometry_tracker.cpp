@@ -1,6 +1,6 @@
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "pplvo/core/config_visitor.h"
 #include "pplvo/estimator/estimator_config.h"
@@ -160,8 +160,7 @@ TEST(OdometryTracker, TrackSyntheticWithDegenerateFrames) {
       EXPECT_TRUE(w.covariance.allFinite());
       EXPECT_TRUE(std::isfinite(w.max_translation_variance_m2));
     }
-    EXPECT_EQ(out.status,
-              degenerate ? TrackingStatus::kVelocityModel : TrackingStatus::kTracking)
+    EXPECT_EQ(out.status, degenerate ? TrackingStatus::kVelocityModel : TrackingStatus::kTracking)
         << s;
   }
   // Two velocity-model frames (0.8 and 0.64 of the motion) leave a bounded drift.

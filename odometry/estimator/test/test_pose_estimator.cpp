@@ -1,7 +1,7 @@
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
-
-#include <gtest/gtest.h>
 
 #include "pplvo/estimator/pose_estimator.h"
 #include "pplvo/estimator/pose_parameterisation.h"
@@ -129,8 +129,8 @@ TEST(PoseEstimator, PaperCovarianceIsConservativeWithSmallAlpha) {
   EXPECT_LT(rp.mean_nees, 4.5);
   EXPECT_GT(rs.mean_nees, 4.5);
   EXPECT_LT(rs.mean_nees, 7.5);
-  std::printf("4 planes, alpha 0.02: mean NEES paper eq. 21 %.2f, sandwich %.2f\n",
-              rp.mean_nees, rs.mean_nees);
+  std::printf("4 planes, alpha 0.02: mean NEES paper eq. 21 %.2f, sandwich %.2f\n", rp.mean_nees,
+              rs.mean_nees);
 }
 
 struct FamilyCase {
@@ -169,8 +169,8 @@ TEST(PoseEstimator, EachFamilyAloneAndCombinedRecoversPose) {
     EXPECT_EQ(e.n_points_in > 0, fc.points) << fc.name;
     EXPECT_EQ(e.n_lines_in > 0, fc.lines) << fc.name;
     EXPECT_EQ(e.n_planes_in > 0, fc.planes) << fc.name;
-    std::printf("%-6s: %s t err %.2f mm, r err %.3f deg, max t var %.2e m2, %d LM its\n",
-                fc.name, toString(e.status), 1e3 * translationError(e.T_curr_prev, T_true),
+    std::printf("%-6s: %s t err %.2f mm, r err %.3f deg, max t var %.2e m2, %d LM its\n", fc.name,
+                toString(e.status), 1e3 * translationError(e.T_curr_prev, T_true),
                 rotationErrorDeg(e.T_curr_prev, T_true), e.max_translation_variance_m2,
                 e.lm_iterations);
   }
@@ -246,9 +246,9 @@ TEST(PoseEstimator, DegeneratePlaneConfigurationsAreDetected) {
     PoseEstimatorOptions opts;
     if (relax) opts.min_residuals = 0;  // the rank test alone must catch them
     const PoseEstimator est(opts);
-    for (const auto& planes : {std::vector<Eigen::Vector4d>{floor},
-                               std::vector<Eigen::Vector4d>{floor, floor2},
-                               std::vector<Eigen::Vector4d>{floor, floor2, floor3}}) {
+    for (const auto& planes :
+         {std::vector<Eigen::Vector4d>{floor}, std::vector<Eigen::Vector4d>{floor, floor2},
+          std::vector<Eigen::Vector4d>{floor, floor2, floor3}}) {
       const PoseEstimate e = est.estimate(planesOnly(gen, planes, T_true), cam);
       expectFinite(e);
       EXPECT_NE(e.status, EstimateStatus::kOk) << planes.size() << " planes, relax " << relax;
@@ -262,8 +262,8 @@ TEST(PoseEstimator, DegeneratePlaneConfigurationsAreDetected) {
             << toString(e.status);
       }
       std::printf("%zu parallel plane(s), min_residuals %d: %s, min rel eig %.2e, max t var %.2e\n",
-                  planes.size(), opts.min_residuals, toString(e.status),
-                  e.min_relative_eigenvalue, e.max_translation_variance_m2);
+                  planes.size(), opts.min_residuals, toString(e.status), e.min_relative_eigenvalue,
+                  e.max_translation_variance_m2);
       EXPECT_GE(e.max_translation_variance_m2, opts.max_translation_variance_m2);
     }
   }
@@ -289,9 +289,8 @@ TEST(PoseEstimator, CollinearPointsAreDetected) {
   expectFinite(e);
   std::printf("collinear points: %s, min rel eig %.2e, max t var %.2e\n", toString(e.status),
               e.min_relative_eigenvalue, e.max_translation_variance_m2);
-  EXPECT_FALSE(e.accepted()) << toString(e.status) << " max t var "
-                             << e.max_translation_variance_m2 << " min rel eig "
-                             << e.min_relative_eigenvalue;
+  EXPECT_FALSE(e.accepted()) << toString(e.status) << " max t var " << e.max_translation_variance_m2
+                             << " min rel eig " << e.min_relative_eigenvalue;
 }
 
 TEST(PoseEstimator, InvalidInputsAreSkippedAndCounted) {
@@ -302,11 +301,11 @@ TEST(PoseEstimator, InvalidInputsAreSkippedAndCounted) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   c.points[0].P_prev.p.x() = nan;
   c.points[1].px_curr.y() = std::numeric_limits<double>::infinity();
-  c.points[2].P_prev.cov(0, 0) = -1.0;                     // not PSD
-  c.points[3].P_prev.cov(0, 1) = 5.0;                      // not symmetric
+  c.points[2].P_prev.cov(0, 0) = -1.0;  // not PSD
+  c.points[3].P_prev.cov(0, 1) = 5.0;   // not symmetric
   c.lines[0].L_prev.cov2(2, 2) = nan;
-  c.lines[1].l_curr = Eigen::Vector3d(0, 0, 1);            // no line
-  c.planes[0].curr.cov(3, 3) = -1e-3;                      // not PSD
+  c.lines[1].l_curr = Eigen::Vector3d(0, 0, 1);  // no line
+  c.planes[0].curr.cov(3, 3) = -1e-3;            // not PSD
   c.planes[1].prev.hessian(0) = nan;
   const PoseEstimate e = PoseEstimator().estimate(c, cam);
   expectFinite(e);

@@ -1,6 +1,6 @@
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "pplvo/estimator/pose_parameterisation.h"
 
@@ -50,8 +50,8 @@ TEST(PoseParameterisation, RotatedPointJacobianMatchesNumeric) {
 TEST(PoseParameterisation, CompositionJacobiansMatchNumeric) {
   std::mt19937 rng(3);
   for (int i = 0; i < 30; ++i) {
-    const Pose3 T1 = randomPose(rng, 1.0, 1.0);   // T^(k|1)
-    const Pose3 T2 = randomPose(rng, 0.3, 0.1);   // T^(k+1|k)
+    const Pose3 T1 = randomPose(rng, 1.0, 1.0);  // T^(k|1)
+    const Pose3 T2 = randomPose(rng, 0.3, 0.1);  // T^(k+1|k)
     const CompositionJacobians J = compositionJacobians(T1, T2);
     const Vector6d x1 = poseToXi(T1), x2 = poseToXi(T2);
     Matrix6d Fn, Gn;

@@ -3,11 +3,11 @@
 // (no feature matching here): point pixels sampled in the previous frame with their *noisy*
 // sensor depth, lines from the scene's straight edges, planes from the visible surfaces.
 // Checks the trajectory error for each feature family and all together.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "pplvo/estimator/odometry_tracker.h"
 #include "pplvo/synth/synthetic_sequence.h"
@@ -97,7 +97,10 @@ Correspondences makeCorrespondences(const Sequence& s, int i, std::mt19937& rng)
       const Eigen::Vector3d Pp = k < 2 ? P[k] : 0.5 * (P[0] + P[1]);
       const Eigen::Vector3d Pk = 0.95 * Pp + 0.05 * (k < 2 ? P[1 - k] : Pp);  // 5% inside
       const Eigen::Vector3d Xk = T_cp * Pk;
-      if (Pk.z() < 0.4 || Xk.z() < 0.4) { ok = false; break; }
+      if (Pk.z() < 0.4 || Xk.z() < 0.4) {
+        ok = false;
+        break;
+      }
       const Eigen::Vector2d pp = K.project(Pk), pc = K.project(Xk);
       ok = K.inImage(pp, 5) && K.inImage(pc, 5) && depthGap(fp.depth_true_m, pp, Pk.z()) < 0.03 &&
            depthGap(fc.depth_true_m, pc, Xk.z()) < 0.03;
@@ -110,7 +113,8 @@ Correspondences makeCorrespondences(const Sequence& s, int i, std::mt19937& rng)
     for (int k = 0; k < 2; ++k) {
       const Eigen::Vector2d pp = K.project(P[k]);
       const Eigen::Matrix3d cov = backprojectionCov(K, pp.x(), pp.y(), P[k].z());
-      const Eigen::Vector3d noisy = P[k] + cov.llt().matrixL() * Eigen::Vector3d(N01(rng), N01(rng), N01(rng));
+      const Eigen::Vector3d noisy =
+          P[k] + cov.llt().matrixL() * Eigen::Vector3d(N01(rng), N01(rng), N01(rng));
       (k == 0 ? m.L_prev.p1 : m.L_prev.p2) = noisy;
       (k == 0 ? m.L_prev.cov1 : m.L_prev.cov2) = cov;
     }
@@ -164,10 +168,11 @@ TrackRun runTracker(const PoseEstimatorOptions& eo) {
     const TrackerOutput out = tracker.track(i, c, s.seq.camera());
     if (out.status == TrackingStatus::kTracking) ++r.tracking;
     if (std::getenv("PPLVO_DEBUG_SYNTH")) {
-      std::printf("  frame %d: %s (%s) lines in %d used %d, max t var %.2e, rot var %.2e, min eig %.1e\n", i,
-                  toString(out.status), toString(out.estimate.status), out.estimate.n_lines_in,
-                  out.estimate.n_lines_used, out.estimate.max_translation_variance_m2,
-                  out.estimate.max_rotation_variance, out.estimate.min_relative_eigenvalue);
+      std::printf(
+          "  frame %d: %s (%s) lines in %d used %d, max t var %.2e, rot var %.2e, min eig %.1e\n",
+          i, toString(out.status), toString(out.estimate.status), out.estimate.n_lines_in,
+          out.estimate.n_lines_used, out.estimate.max_translation_variance_m2,
+          out.estimate.max_rotation_variance, out.estimate.min_relative_eigenvalue);
     }
     const Pose3 T_true = s.frames[0].T_w_c.inverse() * s.frames[i].T_w_c;
     const Pose3 D = T_true.inverse() * out.T_w_c;
@@ -182,7 +187,13 @@ TrackRun runTracker(const PoseEstimatorOptions& eo) {
 }
 
 TEST(EstimatorSynth, TracksEachFamilyAndAll) {
-  struct Case { const char* name; bool p, l, pl; double alpha; int min_tracking; double max_t, max_r; };
+  struct Case {
+    const char* name;
+    bool p, l, pl;
+    double alpha;
+    int min_tracking;
+    double max_t, max_r;
+  };
   // 20 frames (0.67 s). Bounds: ~3-4x the drift observed, to hold on other machines.
   // Lines alone (~20 room/box edges, few directions) are weak: from frame ~15 the translation
   // std exceeds 1 cm and the gate hands over to the velocity model, which is the intended
@@ -202,10 +213,11 @@ TEST(EstimatorSynth, TracksEachFamilyAndAll) {
     eo.use_planes = k.pl;
     eo.plane_scale_alpha = k.alpha;
     const TrackRun r = runTracker(eo);
-    std::printf("%-16s tracking %d/%d, max drift %.2f mm %.3f deg (mean %.0f pts %.0f lines "
-                "%.1f planes)\n",
-                k.name, r.tracking, kFrames - 1, 1e3 * r.max_t_err_m, r.max_r_err_deg,
-                r.mean_points, r.mean_lines, r.mean_planes);
+    std::printf(
+        "%-16s tracking %d/%d, max drift %.2f mm %.3f deg (mean %.0f pts %.0f lines "
+        "%.1f planes)\n",
+        k.name, r.tracking, kFrames - 1, 1e3 * r.max_t_err_m, r.max_r_err_deg, r.mean_points,
+        r.mean_lines, r.mean_planes);
     EXPECT_GE(r.tracking, k.min_tracking) << k.name;
     EXPECT_LT(r.max_t_err_m, k.max_t) << k.name;
     EXPECT_LT(r.max_r_err_deg, k.max_r) << k.name;

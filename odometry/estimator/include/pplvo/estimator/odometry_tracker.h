@@ -44,8 +44,8 @@ struct WindowEntry {
 struct TrackerOutput {
   int64_t seq = -1;
   TrackingStatus status = TrackingStatus::kFirstFrame;
-  Pose3 T_w_c = Pose3::Identity();        ///< world = first camera frame
-  Pose3 T_curr_prev = Pose3::Identity();  ///< the motion applied this frame
+  Pose3 T_w_c = Pose3::Identity();         ///< world = first camera frame
+  Pose3 T_curr_prev = Pose3::Identity();   ///< the motion applied this frame
   Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_prev) (Q of eq. 22)
   /// The same motion as T_prev_curr (pose_t.rel_*) and the covariance of its xi.
   Pose3 T_prev_curr = Pose3::Identity();

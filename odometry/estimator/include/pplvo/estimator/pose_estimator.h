@@ -8,12 +8,11 @@
 /// Frames: "prev" is the reference frame whose 3D primitives are known, "curr" the frame
 /// whose 2D points/lines and planes are observed. T_curr_prev maps prev-camera points into the
 /// current camera: p_curr = T_curr_prev * p_prev.
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pplvo/core/camera.h"
 #include "pplvo/core/features.h"
@@ -44,11 +43,11 @@ struct PlaneMatch3D3D {
 
 /// Counts of matches dropped before the optimisation.
 struct CorrespondenceStats {
-  int bad_index = 0;        ///< match index outside the feature arrays
-  int no_3d = 0;            ///< previous point/line without a 3D estimate
-  int non_finite = 0;       ///< NaN/inf in a value or covariance
-  int bad_covariance = 0;   ///< covariance not symmetric positive semi-definite
-  int bad_geometry = 0;     ///< degenerate 2D line equation, plane normal not unit, ...
+  int bad_index = 0;       ///< match index outside the feature arrays
+  int no_3d = 0;           ///< previous point/line without a 3D estimate
+  int non_finite = 0;      ///< NaN/inf in a value or covariance
+  int bad_covariance = 0;  ///< covariance not symmetric positive semi-definite
+  int bad_geometry = 0;    ///< degenerate 2D line equation, plane normal not unit, ...
   int total() const { return bad_index + no_3d + non_finite + bad_covariance + bad_geometry; }
 };
 
@@ -117,11 +116,11 @@ struct PoseEstimatorOptions {
 
 enum class EstimateStatus : int8_t {
   kOk = 0,
-  kNoConstraints,       ///< no usable match at all
-  kTooFewConstraints,   ///< fewer inlier residual rows than min_residuals
-  kDegenerate,          ///< J^T W J (numerically) singular: unobservable direction
-  kUncertain,           ///< covariance above the thresholds
-  kSolverFailure,       ///< Ceres failed or produced a non-finite pose
+  kNoConstraints,      ///< no usable match at all
+  kTooFewConstraints,  ///< fewer inlier residual rows than min_residuals
+  kDegenerate,         ///< J^T W J (numerically) singular: unobservable direction
+  kUncertain,          ///< covariance above the thresholds
+  kSolverFailure,      ///< Ceres failed or produced a non-finite pose
 };
 const char* toString(EstimateStatus s);
 

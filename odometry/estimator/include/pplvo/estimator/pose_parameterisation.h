@@ -21,8 +21,8 @@ Pose3 xiToPose(const Vector6d& xi);
 Eigen::Matrix3d rotatedPointJacobian(const Eigen::Vector3d& v, const Eigen::Vector3d& p);
 
 /// Jacobians of the composition f(xi^(k|1), xi^(k+1|k)) = xi^(k+1|1) (the state transition f
-/// of eq. 22, LaTeX label eq:pose_comp): t = R^(k+1|k) t^(k|1) + t^(k+1|k), q = q^(k+1|k) (x) q^(k|1).
-/// T^(b|a) maps points of frame a into frame b (same convention as T_curr_prev).
+/// of eq. 22, LaTeX label eq:pose_comp): t = R^(k+1|k) t^(k|1) + t^(k+1|k), q = q^(k+1|k) (x)
+/// q^(k|1). T^(b|a) maps points of frame a into frame b (same convention as T_curr_prev).
 struct CompositionJacobians {
   Matrix6d F;  ///< d xi^(k+1|1) / d xi^(k|1)
   Matrix6d G;  ///< d xi^(k+1|1) / d xi^(k+1|k)
