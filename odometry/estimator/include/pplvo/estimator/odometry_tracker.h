@@ -1,0 +1,108 @@
+#pragma once
+/// Frame-to-frame tracking state: accumulates T_w_c, falls back to a decaying constant-velocity
+/// model when an estimate is rejected (paper Sec. "Pose Uncertainty"), and propagates the
+/// transform uncertainty from each frame of the depth-filter window to the current one
+/// (EKF step, eq. 22).
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "pplvo/core/frame_pose.h"
+#include "pplvo/core/geometry.h"
+#include "pplvo/estimator/pose_estimator.h"
+
+namespace pplvo {
+
+// TrackingStatus (values equal the pose_t STATUS_* constants) and FramePose: core/frame_pose.h
+
+struct OdometryTrackerOptions {
+  PoseEstimatorOptions estimator;
+  /// Per-frame decay of the constant-velocity model while estimates are rejected: the k-th
+  /// consecutive rejected frame moves by decay^k times the last good motion (on se(3)).
+  double velocity_decay = 0.8;
+  /// Consecutive rejections handled by the velocity model; the next one is kLost.
+  int max_velocity_model_frames = 5;
+  /// Start each estimate from the constant-velocity prediction (else from identity).
+  bool predict_from_velocity = true;
+  /// Frames kept in the uncertainty window, the current one included (paper: 10).
+  int window_length = 10;
+  /// Process noise Q (eq. 22) used for a velocity-model step: isotropic std of the
+  /// translation (m) and of q_xyz (~half-angle, rad). Large, so that the depth filter's
+  /// threshold drops frames linked to the current one through a guessed motion.
+  double velocity_model_sigma_t_m = 0.02;
+  double velocity_model_sigma_q = 0.01;
+};
+
+/// One frame of the window: the transform from that frame to the current one.
+struct WindowEntry {
+  int64_t seq = -1;
+  Pose3 T_curr_frame = Pose3::Identity();
+  Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_frame), eq. 22
+  double max_translation_variance_m2 = 0;
+};
+
+struct TrackerOutput {
+  int64_t seq = -1;
+  TrackingStatus status = TrackingStatus::kFirstFrame;
+  Pose3 T_w_c = Pose3::Identity();         ///< world = first camera frame
+  Pose3 T_curr_prev = Pose3::Identity();   ///< the motion applied this frame
+  Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_prev) (Q of eq. 22)
+  /// The same motion as T_prev_curr (pose_t.rel_*) and the covariance of its xi.
+  Pose3 T_prev_curr = Pose3::Identity();
+  Matrix6d covariance_prev_curr = Matrix6d::Zero();
+  double max_translation_variance_m2 = 0;  ///< of `covariance`
+  int consecutive_rejections = 0;
+  /// Oldest first; the last entry is the current frame (identity, zero covariance).
+  std::vector<WindowEntry> window;
+  PoseEstimate estimate;  ///< the estimator's result for this frame (if one was run)
+};
+
+/// The published form (pose_t via FramePose): T_prev_curr and the covariance of its xi,
+/// counts and iterations of the estimate, and the window entries older than the current frame
+/// (oldest first). utime and stamp are left to the caller.
+FramePose toFramePose(const TrackerOutput& out);
+
+class OdometryTracker {
+ public:
+  explicit OdometryTracker(OdometryTrackerOptions options = {});
+  const OdometryTrackerOptions& options() const { return options_; }
+
+  /// Starts (or restarts) tracking at frame `seq` with T_w_c = T_w_c0.
+  TrackerOutput initialise(int64_t seq, const Pose3& T_w_c0 = Pose3::Identity());
+
+  /// Prediction of T_curr_prev for the next frame (constant velocity).
+  Pose3 predictedMotion() const;
+
+  /// Estimates the motion from the previous frame to `seq` and updates the state. The
+  /// previous frame is the one of the last call (or initialise()). If not initialised yet,
+  /// this initialises at `seq`.
+  TrackerOutput track(int64_t seq, const Correspondences& correspondences,
+                      const PinholeCamera& camera);
+  TrackerOutput track(const FrameFeatures& prev, const FrameFeatures& curr,
+                      const FeatureMatches& matches);
+
+  /// The state machine alone, given an estimate (used by track(); public for tests and for
+  /// callers that run the estimator themselves).
+  TrackerOutput update(int64_t seq, const PoseEstimate& estimate);
+
+  bool initialised() const { return initialised_; }
+  TrackingStatus status() const { return status_; }
+  const Pose3& T_w_c() const { return T_w_c_; }
+
+ private:
+  void propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q);
+  TrackerOutput makeOutput(int64_t seq) const;
+
+  OdometryTrackerOptions options_;
+  PoseEstimator estimator_;
+  bool initialised_ = false;
+  TrackingStatus status_ = TrackingStatus::kFirstFrame;
+  Pose3 T_w_c_ = Pose3::Identity();
+  Vector6d velocity_ = Vector6d::Zero();  ///< last good motion, [t; angle-axis] (tangent)
+  int consecutive_rejections_ = 0;
+  Pose3 last_T_curr_prev_ = Pose3::Identity();
+  Matrix6d last_cov_ = Matrix6d::Zero();
+  std::deque<WindowEntry> window_;
+};
+
+}  // namespace pplvo

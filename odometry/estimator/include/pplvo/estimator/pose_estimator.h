@@ -1,0 +1,183 @@
+#pragma once
+/// Frame-to-frame pose from 3D-to-2D point and line matches and 3D-to-3D plane matches,
+/// weighted by their propagated uncertainty (paper Sec. "Pose Estimation" and "Pose
+/// Uncertainty"; equations numbered as in docs/estimator.md: residuals 18-20 (LaTeX labels
+/// eq:pt_err, eq:line_err, eq:plane_r), joint cost E (eq:objective_fx), covariance 21
+/// (eq:pose_var)). Derivations: docs/estimator.md.
+///
+/// Frames: "prev" is the reference frame whose 3D primitives are known, "curr" the frame
+/// whose 2D points/lines and planes are observed. T_curr_prev maps prev-camera points into the
+/// current camera: p_curr = T_curr_prev * p_prev.
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pplvo/core/camera.h"
+#include "pplvo/core/features.h"
+#include "pplvo/core/geometry.h"
+#include "pplvo/core/primitives.h"
+
+namespace pplvo {
+
+/// 3D point of the previous frame matched to an undistorted pixel of the current frame.
+struct PointMatch3D2D {
+  Point3WithCov P_prev;                               ///< prev camera frame, m / m^2
+  Eigen::Vector2d px_curr = Eigen::Vector2d::Zero();  ///< undistorted pixel
+  double sigma_px = std::sqrt(1.0 / 12.0);            ///< std of each pixel coordinate
+};
+
+/// 3D segment of the previous frame matched to a 2D line a u + b v + c = 0 of the current
+/// frame (a^2 + b^2 = 1; re-normalised if needed).
+struct LineMatch3D2D {
+  Line3WithCov L_prev;
+  Eigen::Vector3d l_curr = Eigen::Vector3d::Zero();
+  double sigma_px = std::sqrt(1.0 / 12.0);  ///< std of the 2D line's distance at an endpoint
+};
+
+/// Plane of the previous frame matched to a plane of the current frame.
+struct PlaneMatch3D3D {
+  PlaneWithCov prev, curr;
+};
+
+/// Counts of matches dropped before the optimisation.
+struct CorrespondenceStats {
+  int bad_index = 0;       ///< match index outside the feature arrays
+  int no_3d = 0;           ///< previous point/line without a 3D estimate
+  int non_finite = 0;      ///< NaN/inf in a value or covariance
+  int bad_covariance = 0;  ///< covariance not symmetric positive semi-definite
+  int bad_geometry = 0;    ///< degenerate 2D line equation, plane normal not unit, ...
+  int total() const { return bad_index + no_3d + non_finite + bad_covariance + bad_geometry; }
+};
+
+struct Correspondences {
+  std::vector<PointMatch3D2D> points;
+  std::vector<LineMatch3D2D> lines;
+  std::vector<PlaneMatch3D3D> planes;
+  CorrespondenceStats skipped;  ///< filled by buildCorrespondences()
+};
+
+/// Options of PoseEstimator. Defaults follow the paper where it gives a value.
+struct PoseEstimatorOptions {
+  /// Feature families (for the paper's ablations: points, points+lines, points+planes, all).
+  bool use_points = true;
+  bool use_lines = true;
+  bool use_planes = true;
+
+  /// Pixel noise of a keypoint: sigma_p^2 = 1/12 px^2 (uniform quantisation, paper Sec.
+  /// "Point Backprojection"). Multiplied by octave_sigma_scale^octave in buildCorrespondences
+  /// (1.0 = same for every octave; e.g. 1.2 for an ORB pyramid).
+  double point_sigma_px = std::sqrt(1.0 / 12.0);
+  double octave_sigma_scale = 1.0;
+  /// Std of the current 2D line's distance at a projected endpoint (px).
+  double line_sigma_px = std::sqrt(1.0 / 12.0);
+  /// alpha of the joint cost E: scale of the plane terms (paper: 0.02, "coarse tuning").
+  double plane_scale_alpha = 0.02;
+  /// Pose covariance. true: sandwich H^-1 M H^-1 with H = J^T W J (alpha in W) and M the same
+  /// with alpha^2: the first-order covariance of the estimate for any alpha (equal to the
+  /// paper's (J^T W J)^-1 when alpha = 1, and independent of alpha for planes alone).
+  /// false: the paper's eq. 21, (J^T W J)^-1 with alpha in W (conservative on planes).
+  bool covariance_sandwich = true;
+  /// false (paper): w(r) = inverse diagonal of Sigma_r. true: full whitening Sigma_r^(-1/2).
+  bool full_whitening = false;
+
+  /// Tukey M-estimator on the whitened point and line residual blocks (paper Sec. "Pose
+  /// Estimation"); c in units of the robust scale (4.685: 95% efficiency).
+  bool use_tukey = true;
+  double tukey_c = 4.685;
+  /// Robust scale of the whitened residuals: max(1, 1.4826 * median |r_w|) (MAD). With 1.0
+  /// the Tukey threshold stays at c (whitened residuals are then assumed unit-variance).
+  bool tukey_mad_scale = true;
+
+  /// IRLS: outer re-weighting iterations around a Ceres Levenberg-Marquardt solve.
+  int max_irls_iterations = 6;
+  int max_lm_iterations = 10;  ///< per Ceres solve
+  /// Stop the IRLS loop when the pose moves less than this between two solves.
+  double irls_tolerance_m = 1e-5;
+  double irls_tolerance_rad = 1e-5;
+  /// Points (and line endpoints) closer than this to the current image plane are dropped.
+  double min_depth_m = 1e-3;
+
+  /// Rejection (status != kOk). Minimum number of inlier residual rows (points and lines count
+  /// 2, planes 3); 6 parameters need at least 6; 9 admits 3 planes alone or 5 points.
+  int min_residuals = 9;
+  /// Smallest / largest eigenvalue of the Jacobi-scaled information J^T W J; below this the
+  /// configuration is degenerate (an unobservable direction).
+  double min_relative_eigenvalue = 1e-9;
+  /// Largest eigenvalue of the translation block of Sigma_xi (m^2), paper Sec. "Pose
+  /// Uncertainty". 1e-4 m^2 = (1 cm)^2; see docs/estimator.md for the values seen on synthetic
+  /// data (well-conditioned frames: ~1e-7..1e-5 m^2).
+  double max_translation_variance_m2 = 1e-4;
+  /// Largest eigenvalue of the q_xyz block (q_xyz ~ half the rotation angle in rad):
+  /// 2.5e-5 = (0.005)^2, i.e. ~0.57 deg std of the rotation angle.
+  double max_rotation_variance = 2.5e-5;
+};
+
+enum class EstimateStatus : int8_t {
+  kOk = 0,
+  kNoConstraints,      ///< no usable match at all
+  kTooFewConstraints,  ///< fewer inlier residual rows than min_residuals
+  kDegenerate,         ///< J^T W J (numerically) singular: unobservable direction
+  kUncertain,          ///< covariance above the thresholds
+  kSolverFailure,      ///< Ceres failed or produced a non-finite pose
+};
+const char* toString(EstimateStatus s);
+
+struct PoseEstimate {
+  EstimateStatus status = EstimateStatus::kNoConstraints;
+  bool accepted() const { return status == EstimateStatus::kOk; }
+
+  /// The optimised pose (the initial guess when the solve could not run). Always finite.
+  Pose3 T_curr_prev = Pose3::Identity();
+  /// Sigma_xi (eq. 21) over xi = [t; q_xyz] of T_curr_prev; finite. When the information is
+  /// singular, the unobservable directions get a large variance (kLargeVariance).
+  Matrix6d covariance = Matrix6d::Identity();
+  double max_translation_variance_m2 = 0;
+  double max_rotation_variance = 0;
+  double min_relative_eigenvalue = 0;  ///< of the Jacobi-scaled J^T W J
+
+  // Diagnostics.
+  int n_points_in = 0, n_lines_in = 0, n_planes_in = 0;        ///< after validation
+  int n_points_used = 0, n_lines_used = 0, n_planes_used = 0;  ///< inliers at the end
+  int n_residuals = 0;                                         ///< inlier residual rows
+  CorrespondenceStats skipped;  ///< input matches dropped by validation
+  int irls_iterations = 0;
+  int lm_iterations = 0;
+  double initial_cost = 0, final_cost = 0;  ///< 0.5 * sum of squared weighted residuals
+  double robust_scale = 1;                  ///< MAD scale of the whitened residuals
+};
+
+/// Variance put on unobservable directions of a singular information matrix.
+constexpr double kLargeVariance = 1e6;
+
+/// Builds 3D-to-2D / 3D-to-3D correspondences from features of two frames and their matches
+/// (prev index, curr index). Points and lines need has_3d in prev; the current point pixel
+/// and line equation are used. Matches with bad indices or without 3D are counted in
+/// `skipped`; values are validated again by PoseEstimator::estimate.
+Correspondences buildCorrespondences(const FrameFeatures& prev, const FrameFeatures& curr,
+                                     const FeatureMatches& matches,
+                                     const PoseEstimatorOptions& options);
+
+/// Single-frame pose estimator (stateless apart from its options).
+class PoseEstimator {
+ public:
+  explicit PoseEstimator(PoseEstimatorOptions options = {});
+  const PoseEstimatorOptions& options() const { return options_; }
+
+  /// Estimates T_curr_prev starting from `T_curr_prev_guess` (e.g. the constant-velocity
+  /// prediction). `camera` is the current frame's camera (signed focal lengths are fine).
+  /// Never throws on bad data: invalid matches are skipped and counted, failure is a status.
+  PoseEstimate estimate(const Correspondences& correspondences, const PinholeCamera& camera,
+                        const Pose3& T_curr_prev_guess = Pose3::Identity()) const;
+
+  /// Convenience: buildCorrespondences() + estimate() with curr.camera.
+  PoseEstimate estimate(const FrameFeatures& prev, const FrameFeatures& curr,
+                        const FeatureMatches& matches,
+                        const Pose3& T_curr_prev_guess = Pose3::Identity()) const;
+
+ private:
+  PoseEstimatorOptions options_;
+};
+
+}  // namespace pplvo

@@ -1,0 +1,44 @@
+#pragma once
+/// The paper's minimal pose parameterisation and its EKF covariance propagation
+/// (Sec. "Pose Uncertainty", eqs. 21-22; derivations in docs/estimator.md).
+///
+/// xi = [t_x t_y t_z q_x q_y q_z] of a rigid transform T = (R(q), t), with the unit quaternion
+/// q = [q_x q_y q_z, q_w], q_w = sqrt(1 - q_x^2 - q_y^2 - q_z^2) >= 0 (the sign of q is chosen
+/// so that q_w >= 0; the parameterisation is valid for rotations below 180 deg, which holds for
+/// frame-to-frame motion and for the transforms across a depth-filter window).
+#include <Eigen/Core>
+
+#include "pplvo/core/geometry.h"
+
+namespace pplvo {
+
+/// xi of a pose (quaternion sign chosen so that q_w >= 0).
+Vector6d poseToXi(const Pose3& T);
+/// Pose of xi; |q_xyz| is clamped to 1 (q_w = 0) if it exceeds it.
+Pose3 xiToPose(const Vector6d& xi);
+
+/// d(R(v) p)/dv (3x3) with R(v) the rotation of q = [v, sqrt(1 - |v|^2)] (q_w > 0 required).
+Eigen::Matrix3d rotatedPointJacobian(const Eigen::Vector3d& v, const Eigen::Vector3d& p);
+
+/// Jacobians of the composition f(xi^(k|1), xi^(k+1|k)) = xi^(k+1|1) (the state transition f
+/// of eq. 22, LaTeX label eq:pose_comp): t = R^(k+1|k) t^(k|1) + t^(k+1|k), q = q^(k+1|k) (x)
+/// q^(k|1). T^(b|a) maps points of frame a into frame b (same convention as T_curr_prev).
+struct CompositionJacobians {
+  Matrix6d F;  ///< d xi^(k+1|1) / d xi^(k|1)
+  Matrix6d G;  ///< d xi^(k+1|1) / d xi^(k+1|k)
+};
+CompositionJacobians compositionJacobians(const Pose3& T_k_1, const Pose3& T_k1_k);
+
+/// Eq. 22: Sigma^(k+1|1) = F Sigma^(k|1) F^T + G Q G^T with Q = Sigma^(k+1|k).
+Matrix6d propagateCompositionCovariance(const Pose3& T_k_1, const Matrix6d& cov_k_1,
+                                        const Pose3& T_k1_k, const Matrix6d& cov_k1_k);
+
+/// Covariance of xi(T^-1) given the covariance of xi(T) (first order).
+Matrix6d invertedPoseCovariance(const Pose3& T, const Matrix6d& cov);
+
+/// Largest eigenvalue of the translation block (m^2); +inf if the block is not finite.
+double maxTranslationVariance(const Matrix6d& cov);
+/// Largest eigenvalue of the rotation (q_xyz) block; +inf if not finite.
+double maxRotationVariance(const Matrix6d& cov);
+
+}  // namespace pplvo

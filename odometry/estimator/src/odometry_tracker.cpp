@@ -1,0 +1,170 @@
+#include "pplvo/estimator/odometry_tracker.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "pplvo/estimator/pose_parameterisation.h"
+
+namespace pplvo {
+
+namespace {
+
+/// Motion as [t; angle-axis]; scaling this vector scales the motion (translation and rotation
+/// angle; we scale t directly rather than through the SE(3) log, which is the same to first
+/// order and keeps the prediction simple).
+Vector6d motionToVector(const Pose3& T) {
+  const Eigen::AngleAxisd aa(T.linear());
+  Vector6d v;
+  v << T.translation(), aa.angle() * aa.axis();
+  return v.allFinite() ? v : Vector6d::Zero();
+}
+
+Pose3 vectorToMotion(const Vector6d& v) {
+  Pose3 T = Pose3::Identity();
+  const double angle = v.tail<3>().norm();
+  if (angle > 1e-15) T.linear() = Eigen::AngleAxisd(angle, v.tail<3>() / angle).toRotationMatrix();
+  T.translation() = v.head<3>();
+  return T;
+}
+
+}  // namespace
+
+OdometryTracker::OdometryTracker(OdometryTrackerOptions options)
+    : options_(std::move(options)), estimator_(options_.estimator) {}
+
+TrackerOutput OdometryTracker::initialise(int64_t seq, const Pose3& T_w_c0) {
+  initialised_ = true;
+  status_ = TrackingStatus::kFirstFrame;
+  T_w_c_ = isValidPose(T_w_c0, 1e-6) ? T_w_c0 : Pose3::Identity();
+  velocity_.setZero();
+  consecutive_rejections_ = 0;
+  last_T_curr_prev_ = Pose3::Identity();
+  last_cov_.setZero();
+  window_.clear();
+  WindowEntry self;
+  self.seq = seq;
+  window_.push_back(self);
+  return makeOutput(seq);
+}
+
+Pose3 OdometryTracker::predictedMotion() const {
+  if (!options_.predict_from_velocity) return Pose3::Identity();
+  // The next frame after k rejections would move by decay^(k+1) * velocity.
+  const double scale = std::pow(options_.velocity_decay, consecutive_rejections_);
+  return vectorToMotion(scale * velocity_);
+}
+
+TrackerOutput OdometryTracker::track(int64_t seq, const Correspondences& correspondences,
+                                     const PinholeCamera& camera) {
+  if (!initialised_) return initialise(seq);
+  const PoseEstimate est = estimator_.estimate(correspondences, camera, predictedMotion());
+  return update(seq, est);
+}
+
+TrackerOutput OdometryTracker::track(const FrameFeatures& prev, const FrameFeatures& curr,
+                                     const FeatureMatches& matches) {
+  return track(curr.seq, buildCorrespondences(prev, curr, matches, options_.estimator),
+               curr.camera);
+}
+
+TrackerOutput OdometryTracker::update(int64_t seq, const PoseEstimate& est) {
+  if (!initialised_) return initialise(seq);
+  const bool good =
+      est.accepted() && isValidPose(est.T_curr_prev, 1e-6) && est.covariance.allFinite();
+  Pose3 T_curr_prev = Pose3::Identity();
+  Matrix6d Q = Matrix6d::Zero();
+  if (good) {
+    status_ = (status_ == TrackingStatus::kLost) ? TrackingStatus::kReinitialised
+                                                 : TrackingStatus::kTracking;
+    consecutive_rejections_ = 0;
+    T_curr_prev = est.T_curr_prev;
+    Q = est.covariance;
+    velocity_ = motionToVector(T_curr_prev);
+  } else {
+    ++consecutive_rejections_;
+    if (consecutive_rejections_ <= options_.max_velocity_model_frames) {
+      status_ = TrackingStatus::kVelocityModel;
+      T_curr_prev =
+          vectorToMotion(std::pow(options_.velocity_decay, consecutive_rejections_) * velocity_);
+      Q.topLeftCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_t_m *
+                                                     options_.velocity_model_sigma_t_m);
+      Q.bottomRightCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_q *
+                                                         options_.velocity_model_sigma_q);
+    } else {
+      status_ = TrackingStatus::kLost;
+      velocity_.setZero();
+      T_curr_prev = Pose3::Identity();
+      Q = kLargeVariance * Matrix6d::Identity();
+    }
+  }
+  // T_w_curr = T_w_prev * T_prev_curr.
+  T_w_c_ = T_w_c_ * T_curr_prev.inverse();
+  T_w_c_.linear() = Eigen::Quaterniond(T_w_c_.linear()).normalized().toRotationMatrix();
+  last_T_curr_prev_ = T_curr_prev;
+  last_cov_ = Q;
+  if (status_ == TrackingStatus::kLost) {
+    window_.clear();  // nothing links older frames to this one
+    WindowEntry self;
+    self.seq = seq;
+    window_.push_back(self);
+  } else {
+    propagateWindow(seq, T_curr_prev, Q);
+  }
+  TrackerOutput out = makeOutput(seq);
+  out.estimate = est;
+  return out;
+}
+
+void OdometryTracker::propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q) {
+  // Every entry held T^(k|j) and Sigma^(k|j); the last one is the previous frame (identity).
+  for (WindowEntry& e : window_) {
+    e.covariance = propagateCompositionCovariance(e.T_curr_frame, e.covariance, T_curr_prev, Q);
+    e.T_curr_frame = T_curr_prev * e.T_curr_frame;
+    e.T_curr_frame.linear() =
+        Eigen::Quaterniond(e.T_curr_frame.linear()).normalized().toRotationMatrix();
+    e.max_translation_variance_m2 = maxTranslationVariance(e.covariance);
+  }
+  WindowEntry self;
+  self.seq = seq;
+  window_.push_back(self);
+  while (static_cast<int>(window_.size()) > std::max(1, options_.window_length)) {
+    window_.pop_front();
+  }
+}
+
+FramePose toFramePose(const TrackerOutput& out) {
+  FramePose p;
+  p.seq = out.seq;
+  p.status = out.status;
+  p.T_w_c = out.T_w_c;
+  p.T_prev_curr = out.T_prev_curr;
+  p.rel_covariance = out.covariance_prev_curr;
+  p.max_translation_variance_m2 = maxTranslationVariance(out.covariance_prev_curr);
+  p.n_point_matches = out.estimate.n_points_used;
+  p.n_line_matches = out.estimate.n_lines_used;
+  p.n_plane_matches = out.estimate.n_planes_used;
+  p.iterations = out.estimate.lm_iterations;
+  p.final_cost = out.estimate.final_cost;
+  for (const WindowEntry& e : out.window) {
+    if (e.seq == out.seq) continue;  // the current frame itself
+    p.window.push_back({e.seq, e.max_translation_variance_m2});
+  }
+  return p;
+}
+
+TrackerOutput OdometryTracker::makeOutput(int64_t seq) const {
+  TrackerOutput out;
+  out.seq = seq;
+  out.status = status_;
+  out.T_w_c = T_w_c_;
+  out.T_curr_prev = last_T_curr_prev_;
+  out.covariance = last_cov_;
+  out.T_prev_curr = last_T_curr_prev_.inverse();
+  out.covariance_prev_curr = invertedPoseCovariance(last_T_curr_prev_, last_cov_);
+  out.max_translation_variance_m2 = maxTranslationVariance(last_cov_);
+  out.consecutive_rejections = consecutive_rejections_;
+  out.window.assign(window_.begin(), window_.end());
+  return out;
+}
+
+}  // namespace pplvo

@@ -1,0 +1,659 @@
+#include "pplvo/estimator/pose_estimator.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pplvo/estimator/pose_parameterisation.h"
+
+namespace pplvo {
+
+const char* toString(EstimateStatus s) {
+  switch (s) {
+    case EstimateStatus::kOk:
+      return "ok";
+    case EstimateStatus::kNoConstraints:
+      return "no_constraints";
+    case EstimateStatus::kTooFewConstraints:
+      return "too_few_constraints";
+    case EstimateStatus::kDegenerate:
+      return "degenerate";
+    case EstimateStatus::kUncertain:
+      return "uncertain";
+    case EstimateStatus::kSolverFailure:
+      return "solver_failure";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Input validation.
+
+template <int N>
+bool isPsd(const Eigen::Matrix<double, N, N>& C) {
+  const double scale = std::max(1e-300, C.cwiseAbs().maxCoeff());
+  if ((C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) return false;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es;
+  if constexpr (N == 3) {
+    es.computeDirect(C, Eigen::EigenvaluesOnly);
+  } else {
+    es.compute(C, Eigen::EigenvaluesOnly);
+  }
+  return es.eigenvalues().minCoeff() >= -1e-10 * scale;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Terms of the joint cost E. Each keeps its data plus the weighting state that is fixed
+// during one Ceres solve (IRLS).
+
+struct PointTerm {
+  Eigen::Vector3d P;
+  Eigen::Matrix3d cov;
+  Eigen::Vector2d px;
+  double var_px2;
+  // weighting state
+  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();  // whitening: r_w = S r
+  double sqrt_tukey = 1.0;
+  bool active = false;
+};
+
+struct LineTerm {
+  Eigen::Vector3d P[2];
+  Eigen::Matrix3d cov[2];
+  Eigen::Vector3d l;
+  double var_px2;
+  double s[2] = {0, 0};  // whitening of each endpoint distance
+  double sqrt_tukey = 1.0;
+  bool active = false;
+};
+
+struct PlaneTerm {
+  Eigen::Vector4d prev, curr;
+  Eigen::Matrix4d cov_prev, cov_curr;
+  Eigen::Matrix3d S = Eigen::Matrix3d::Zero();  // whitening (without alpha)
+  bool active = false;
+};
+
+/// Pose with the derivatives of R(v) w.r.t. each q_xyz component.
+struct PoseEval {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  Eigen::Matrix3d dR[3];  // dR/dv_k
+  bool valid = false;
+
+  explicit PoseEval(const double* xi) {
+    const Eigen::Vector3d v(xi[3], xi[4], xi[5]);
+    t = Eigen::Vector3d(xi[0], xi[1], xi[2]);
+    if (!(v.squaredNorm() < 1.0 - 1e-9) || !t.allFinite() || !v.allFinite()) return;
+    R = xiToPose((Vector6d() << t, v).finished()).linear();
+    Eigen::Matrix3d M[3];
+    for (int j = 0; j < 3; ++j) M[j] = rotatedPointJacobian(v, Eigen::Vector3d::Unit(j));
+    // column k of M[j] is dR/dv_k * e_j, i.e. column j of dR/dv_k.
+    for (int k = 0; k < 3; ++k) {
+      for (int j = 0; j < 3; ++j) dR[k].col(j) = M[j].col(k);
+    }
+    valid = true;
+  }
+  Eigen::Matrix3d dRp(const Eigen::Vector3d& p) const {
+    Eigen::Matrix3d out;
+    for (int k = 0; k < 3; ++k) out.col(k) = dR[k] * p;
+    return out;
+  }
+};
+
+using Matrix26 = Eigen::Matrix<double, 2, 6>;
+using Matrix36 = Eigen::Matrix<double, 3, 6>;
+using Matrix23 = Eigen::Matrix<double, 2, 3>;
+
+struct Projector {
+  double fx, fy, cx, cy, min_depth;
+  bool project(const Eigen::Vector3d& X, Eigen::Vector2d& px, Matrix23& dpi) const {
+    if (!(X.z() > min_depth)) return false;
+    const double iz = 1.0 / X.z();
+    px = {fx * X.x() * iz + cx, fy * X.y() * iz + cy};
+    dpi << fx * iz, 0, -fx * X.x() * iz * iz, 0, fy * iz, -fy * X.y() * iz * iz;
+    return true;
+  }
+};
+
+/// Residual (eq. 18) and its Jacobian w.r.t. xi; Sigma_r if requested.
+bool pointResidual(const PointTerm& T, const PoseEval& pose, const Projector& cam,
+                   Eigen::Vector2d& r, Matrix26* J, Eigen::Matrix2d* Sigma_r) {
+  const Eigen::Vector3d X = pose.R * T.P + pose.t;
+  Eigen::Vector2d px;
+  Matrix23 dpi;
+  if (!cam.project(X, px, dpi)) return false;
+  r = T.px - px;
+  if (J) {
+    J->leftCols<3>() = -dpi;
+    J->rightCols<3>() = -dpi * pose.dRp(T.P);
+  }
+  if (Sigma_r) {
+    const Matrix23 JP = dpi * pose.R;
+    *Sigma_r = JP * T.cov * JP.transpose() + T.var_px2 * Eigen::Matrix2d::Identity();
+  }
+  return true;
+}
+
+/// Residual (eq. 19): signed distances of the projected endpoints to l_curr.
+bool lineResidual(const LineTerm& T, const PoseEval& pose, const Projector& cam, Eigen::Vector2d& r,
+                  Matrix26* J, Eigen::Vector2d* var_r) {
+  for (int i = 0; i < 2; ++i) {
+    const Eigen::Vector3d X = pose.R * T.P[i] + pose.t;
+    Eigen::Vector2d px;
+    Matrix23 dpi;
+    if (!cam.project(X, px, dpi)) return false;
+    r(i) = T.l(0) * px.x() + T.l(1) * px.y() + T.l(2);
+    const Eigen::RowVector3d g = T.l.head<2>().transpose() * dpi;  // d r_i / d X
+    if (J) {
+      J->block<1, 3>(i, 0) = g;
+      J->block<1, 3>(i, 3) = g * pose.dRp(T.P[i]);
+    }
+    if (var_r) {
+      const Eigen::RowVector3d gR = g * pose.R;
+      (*var_r)(i) = gR * T.cov[i] * gR.transpose() + T.var_px2;
+    }
+  }
+  return true;
+}
+
+/// Residual (eq. 20, our form): the previous plane moved into the current frame,
+/// {n_c = R N, d_c = d - n_c . t} (PlaneWithCov::transformed), compared with the current plane
+/// through their plane "points": r = d_c n_c - d' N'.
+void planeResidual(const PlaneTerm& T, const PoseEval& pose, Eigen::Vector3d& r, Matrix36* J,
+                   Eigen::Matrix3d* Sigma_r) {
+  const Eigen::Vector3d N = T.prev.head<3>(), Nc = T.curr.head<3>();
+  const Eigen::Vector3d n = pose.R * N;
+  const double dc = T.prev(3) - n.dot(pose.t);
+  r = dc * n - T.curr(3) * Nc;
+  if (J) {
+    J->leftCols<3>() = -n * n.transpose();
+    J->rightCols<3>() = (dc * Eigen::Matrix3d::Identity() - n * pose.t.transpose()) * pose.dRp(N);
+  }
+  if (Sigma_r) {
+    Eigen::Matrix<double, 3, 4> dr_dpc;  // d r / d [n_c; d_c]
+    dr_dpc << dc * Eigen::Matrix3d::Identity(), n;
+    Eigen::Matrix4d Jt = Eigen::Matrix4d::Zero();  // d [n_c; d_c] / d [N; d]
+    Jt.topLeftCorner<3, 3>() = pose.R;
+    Jt.block<1, 3>(3, 0) = -pose.t.transpose() * pose.R;
+    Jt(3, 3) = 1.0;
+    const Eigen::Matrix<double, 3, 4> A = dr_dpc * Jt;
+    Eigen::Matrix<double, 3, 4> B;
+    B << -T.curr(3) * Eigen::Matrix3d::Identity(), -Nc;
+    *Sigma_r = A * T.cov_prev * A.transpose() + B * T.cov_curr * B.transpose();
+  }
+}
+
+template <int N>
+bool whitening(const Eigen::Matrix<double, N, N>& Sigma, bool full,
+               Eigen::Matrix<double, N, N>& S) {
+  if (!Sigma.allFinite()) return false;
+  if (!full) {
+    S.setZero();
+    for (int i = 0; i < N; ++i) {
+      if (!(Sigma(i, i) > 0)) return false;
+      S(i, i) = 1.0 / std::sqrt(Sigma(i, i));
+    }
+    return true;
+  }
+  Eigen::LLT<Eigen::Matrix<double, N, N>> llt(Sigma);
+  if (llt.info() != Eigen::Success) return false;
+  S = llt.matrixL().solve(Eigen::Matrix<double, N, N>::Identity());
+  return S.allFinite();
+}
+
+double tukeySqrtWeight(double u, double c) {
+  if (!(u < c)) return 0.0;
+  const double a = 1.0 - (u / c) * (u / c);
+  return a;  // sqrt of (1 - (u/c)^2)^2
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class JointProblem {
+ public:
+  JointProblem(const PoseEstimatorOptions& o, const PinholeCamera& camera)
+      : o_(o), cam_{camera.fx, camera.fy, camera.cx, camera.cy, o.min_depth_m} {}
+
+  std::vector<PointTerm> points;
+  std::vector<LineTerm> lines;
+  std::vector<PlaneTerm> planes;
+
+  struct ReweightResult {
+    int rows = 0;  // rows with non-zero weight
+    int n_points = 0, n_lines = 0, n_planes = 0;
+    double scale = 1.0;
+  };
+
+  /// Recomputes Sigma_r, the whitening and the Tukey weights at pose xi (IRLS step).
+  ReweightResult reweight(const double* xi) {
+    ReweightResult out;
+    const PoseEval pose(xi);
+    if (!pose.valid) return out;
+    std::vector<double> abs_w;
+    abs_w.reserve(2 * (points.size() + lines.size()));
+    std::vector<double> norm_p(points.size(), 0.0), norm_l(lines.size(), 0.0);
+    for (size_t i = 0; i < points.size(); ++i) {
+      PointTerm& T = points[i];
+      Eigen::Vector2d r;
+      Eigen::Matrix2d Sig;
+      T.active = pointResidual(T, pose, cam_, r, nullptr, &Sig) &&
+                 whitening<2>(Sig, o_.full_whitening, T.S);
+      if (!T.active) continue;
+      const Eigen::Vector2d rw = T.S * r;
+      abs_w.push_back(std::abs(rw(0)));
+      abs_w.push_back(std::abs(rw(1)));
+      norm_p[i] = rw.norm();
+    }
+    for (size_t i = 0; i < lines.size(); ++i) {
+      LineTerm& T = lines[i];
+      Eigen::Vector2d r, var;
+      T.active = lineResidual(T, pose, cam_, r, nullptr, &var) && var.allFinite() && var(0) > 0 &&
+                 var(1) > 0;
+      if (!T.active) continue;
+      T.s[0] = 1.0 / std::sqrt(var(0));
+      T.s[1] = 1.0 / std::sqrt(var(1));
+      const Eigen::Vector2d rw(T.s[0] * r(0), T.s[1] * r(1));
+      abs_w.push_back(std::abs(rw(0)));
+      abs_w.push_back(std::abs(rw(1)));
+      norm_l[i] = rw.norm();
+    }
+    for (PlaneTerm& T : planes) {
+      Eigen::Vector3d r;
+      Eigen::Matrix3d Sig;
+      planeResidual(T, pose, r, nullptr, &Sig);
+      T.active = whitening<3>(Sig, o_.full_whitening, T.S);
+      if (!T.active) continue;
+      out.rows += 3;
+      ++out.n_planes;
+    }
+    if (o_.tukey_mad_scale && !abs_w.empty()) {
+      auto mid = abs_w.begin() + abs_w.size() / 2;
+      std::nth_element(abs_w.begin(), mid, abs_w.end());
+      out.scale = std::max(1.0, 1.4826 * *mid);
+    }
+    for (size_t i = 0; i < points.size(); ++i) {
+      PointTerm& T = points[i];
+      if (!T.active) continue;
+      T.sqrt_tukey = o_.use_tukey ? tukeySqrtWeight(norm_p[i] / out.scale, o_.tukey_c) : 1.0;
+      if (T.sqrt_tukey > 0) {
+        out.rows += 2;
+        ++out.n_points;
+      }
+    }
+    for (size_t i = 0; i < lines.size(); ++i) {
+      LineTerm& T = lines[i];
+      if (!T.active) continue;
+      T.sqrt_tukey = o_.use_tukey ? tukeySqrtWeight(norm_l[i] / out.scale, o_.tukey_c) : 1.0;
+      if (T.sqrt_tukey > 0) {
+        out.rows += 2;
+        ++out.n_lines;
+      }
+    }
+    return out;
+  }
+
+  /// Weighted residuals (rows of the terms with non-zero weight, fixed order) and their
+  /// row-major Jacobian (rows x 6). Returns false if a term leaves the valid domain.
+  bool evaluate(const double* xi, double* residuals, double* jacobian) const {
+    const PoseEval pose(xi);
+    if (!pose.valid) return false;
+    int row = 0;
+    Eigen::Vector2d r;
+    Matrix26 J2;
+    Matrix26* pJ2 = jacobian ? &J2 : nullptr;
+    using RowJac = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>>;
+    for (const PointTerm& T : points) {
+      if (!T.active || T.sqrt_tukey <= 0) continue;
+      if (!pointResidual(T, pose, cam_, r, pJ2, nullptr)) return false;
+      const Eigen::Matrix2d W = T.sqrt_tukey * T.S;
+      Eigen::Map<Eigen::Vector2d>(residuals + row) = W * r;
+      if (jacobian) RowJac(jacobian + 6 * row, 2, 6) = W * J2;
+      row += 2;
+    }
+    for (const LineTerm& T : lines) {
+      if (!T.active || T.sqrt_tukey <= 0) continue;
+      if (!lineResidual(T, pose, cam_, r, pJ2, nullptr)) return false;
+      const Eigen::Vector2d w(T.sqrt_tukey * T.s[0], T.sqrt_tukey * T.s[1]);
+      Eigen::Map<Eigen::Vector2d>(residuals + row) = w.cwiseProduct(r);
+      if (jacobian) RowJac(jacobian + 6 * row, 2, 6) = w.asDiagonal() * J2;
+      row += 2;
+    }
+    Eigen::Vector3d r3;
+    Matrix36 J3;
+    const double sqrt_alpha = std::sqrt(o_.plane_scale_alpha);
+    for (const PlaneTerm& T : planes) {
+      if (!T.active) continue;
+      planeResidual(T, pose, r3, jacobian ? &J3 : nullptr, nullptr);
+      const Eigen::Matrix3d W = sqrt_alpha * T.S;
+      Eigen::Map<Eigen::Vector3d>(residuals + row) = W * r3;
+      if (jacobian) RowJac(jacobian + 6 * row, 3, 6) = W * J3;
+      row += 3;
+    }
+    return Eigen::Map<const Eigen::VectorXd>(residuals, row).allFinite();
+  }
+
+  /// H = J^T W J at xi over the inlier terms with the inverse-variance weights and alpha on
+  /// the planes (Tukey weights only select the inliers): the information of eq. 21. M is the
+  /// same sum with alpha^2, for the sandwich covariance H^-1 M H^-1.
+  void information(const double* xi, Matrix6d& H, Matrix6d& M) const {
+    const PoseEval pose(xi);
+    H.setZero();
+    M.setZero();
+    if (!pose.valid) return;
+    Eigen::Vector2d r;
+    Matrix26 J2;
+    for (const PointTerm& T : points) {
+      if (!T.active || T.sqrt_tukey <= 0) continue;
+      if (!pointResidual(T, pose, cam_, r, &J2, nullptr)) continue;
+      const Matrix26 A = T.S * J2;
+      const Matrix6d AtA = A.transpose() * A;
+      H += AtA;
+      M += AtA;
+    }
+    for (const LineTerm& T : lines) {
+      if (!T.active || T.sqrt_tukey <= 0) continue;
+      if (!lineResidual(T, pose, cam_, r, &J2, nullptr)) continue;
+      const Matrix26 A = Eigen::Vector2d(T.s[0], T.s[1]).asDiagonal() * J2;
+      const Matrix6d AtA = A.transpose() * A;
+      H += AtA;
+      M += AtA;
+    }
+    Eigen::Vector3d r3;
+    Matrix36 J3;
+    for (const PlaneTerm& T : planes) {
+      if (!T.active) continue;
+      planeResidual(T, pose, r3, &J3, nullptr);
+      const Matrix36 A = T.S * J3;
+      const Matrix6d AtA = A.transpose() * A;
+      H.noalias() += o_.plane_scale_alpha * AtA;
+      M.noalias() += o_.plane_scale_alpha * o_.plane_scale_alpha * AtA;
+    }
+    H = 0.5 * (H + H.transpose());
+    M = 0.5 * (M + M.transpose());
+  }
+
+ private:
+  const PoseEstimatorOptions& o_;
+  Projector cam_;
+};
+
+class JointCost : public ceres::CostFunction {
+ public:
+  JointCost(const JointProblem& problem, int rows) : problem_(problem) {
+    set_num_residuals(rows);
+    mutable_parameter_block_sizes()->push_back(6);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    return problem_.evaluate(parameters[0], residuals, jacobians ? jacobians[0] : nullptr);
+  }
+
+ private:
+  const JointProblem& problem_;
+};
+
+bool poseChangeSmall(const Vector6d& a, const Vector6d& b, const PoseEstimatorOptions& o) {
+  return (a.head<3>() - b.head<3>()).norm() < o.irls_tolerance_m &&
+         2.0 * (a.tail<3>() - b.tail<3>()).norm() < o.irls_tolerance_rad;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+Correspondences buildCorrespondences(const FrameFeatures& prev, const FrameFeatures& curr,
+                                     const FeatureMatches& matches, const PoseEstimatorOptions& o) {
+  Correspondences out;
+  auto inRange = [](int i, size_t n) { return i >= 0 && static_cast<size_t>(i) < n; };
+  out.points.reserve(matches.points.size());
+  for (const auto& [ip, ic] : matches.points) {
+    if (!inRange(ip, prev.points.size()) || !inRange(ic, curr.points.size())) {
+      ++out.skipped.bad_index;
+      continue;
+    }
+    const PointFeature& fp = prev.points[ip];
+    const PointFeature& fc = curr.points[ic];
+    if (!fp.has_3d) {
+      ++out.skipped.no_3d;
+      continue;
+    }
+    PointMatch3D2D m;
+    m.P_prev = fp.point;
+    m.px_curr = fc.px;
+    m.sigma_px = o.point_sigma_px * std::pow(o.octave_sigma_scale, std::max(0, fc.octave));
+    out.points.push_back(m);
+  }
+  for (const auto& [ip, ic] : matches.lines) {
+    if (!inRange(ip, prev.lines.size()) || !inRange(ic, curr.lines.size())) {
+      ++out.skipped.bad_index;
+      continue;
+    }
+    if (!prev.lines[ip].has_3d) {
+      ++out.skipped.no_3d;
+      continue;
+    }
+    LineMatch3D2D m;
+    m.L_prev = prev.lines[ip].line;
+    m.l_curr = curr.lines[ic].eq;
+    m.sigma_px = o.line_sigma_px;
+    out.lines.push_back(m);
+  }
+  for (const auto& [ip, ic] : matches.planes) {
+    if (!inRange(ip, prev.planes.size()) || !inRange(ic, curr.planes.size())) {
+      ++out.skipped.bad_index;
+      continue;
+    }
+    out.planes.push_back({prev.planes[ip].plane, curr.planes[ic].plane});
+  }
+  return out;
+}
+
+PoseEstimator::PoseEstimator(PoseEstimatorOptions options) : options_(std::move(options)) {}
+
+PoseEstimate PoseEstimator::estimate(const FrameFeatures& prev, const FrameFeatures& curr,
+                                     const FeatureMatches& matches,
+                                     const Pose3& T_curr_prev_guess) const {
+  return estimate(buildCorrespondences(prev, curr, matches, options_), curr.camera,
+                  T_curr_prev_guess);
+}
+
+PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCamera& camera,
+                                     const Pose3& T_curr_prev_guess) const {
+  const PoseEstimatorOptions& o = options_;
+  PoseEstimate est;
+  est.skipped = in.skipped;
+  est.covariance = kLargeVariance * Matrix6d::Identity();
+  est.max_translation_variance_m2 = kLargeVariance;
+  est.max_rotation_variance = kLargeVariance;
+  const Pose3 guess = isValidPose(T_curr_prev_guess, 1e-4) ? T_curr_prev_guess : Pose3::Identity();
+  est.T_curr_prev = xiToPose(poseToXi(guess));
+  const bool camera_ok = std::isfinite(camera.fx) && std::isfinite(camera.fy) &&
+                         std::isfinite(camera.cx) && std::isfinite(camera.cy) && camera.fx != 0 &&
+                         camera.fy != 0;
+
+  // --- validation -----------------------------------------------------------------------
+  JointProblem problem(o, camera);
+  CorrespondenceStats& sk = est.skipped;
+  if (o.use_points && camera_ok) {
+    problem.points.reserve(in.points.size());
+    for (const PointMatch3D2D& m : in.points) {
+      if (!m.P_prev.p.allFinite() || !m.P_prev.cov.allFinite() || !m.px_curr.allFinite() ||
+          !std::isfinite(m.sigma_px)) {
+        ++sk.non_finite;
+        continue;
+      }
+      if (!isPsd<3>(m.P_prev.cov) || !(m.sigma_px > 0)) {
+        ++sk.bad_covariance;
+        continue;
+      }
+      PointTerm T;
+      T.P = m.P_prev.p;
+      T.cov = m.P_prev.cov;
+      T.px = m.px_curr;
+      T.var_px2 = m.sigma_px * m.sigma_px;
+      problem.points.push_back(T);
+    }
+  }
+  if (o.use_lines && camera_ok) {
+    for (const LineMatch3D2D& m : in.lines) {
+      const Line3WithCov& L = m.L_prev;
+      if (!L.p1.allFinite() || !L.p2.allFinite() || !L.cov1.allFinite() || !L.cov2.allFinite() ||
+          !m.l_curr.allFinite() || !std::isfinite(m.sigma_px)) {
+        ++sk.non_finite;
+        continue;
+      }
+      if (!isPsd<3>(L.cov1) || !isPsd<3>(L.cov2) || !(m.sigma_px > 0)) {
+        ++sk.bad_covariance;
+        continue;
+      }
+      const double ab = m.l_curr.head<2>().norm();
+      if (!(ab > 1e-12) || (L.p1 - L.p2).norm() < 1e-9) {
+        ++sk.bad_geometry;
+        continue;
+      }
+      LineTerm T;
+      T.P[0] = L.p1;
+      T.P[1] = L.p2;
+      T.cov[0] = L.cov1;
+      T.cov[1] = L.cov2;
+      T.l = m.l_curr / ab;
+      T.var_px2 = m.sigma_px * m.sigma_px;
+      problem.lines.push_back(T);
+    }
+  }
+  if (o.use_planes && o.plane_scale_alpha > 0) {
+    for (const PlaneMatch3D3D& m : in.planes) {
+      if (!m.prev.hessian.allFinite() || !m.curr.hessian.allFinite() || !m.prev.cov.allFinite() ||
+          !m.curr.cov.allFinite()) {
+        ++sk.non_finite;
+        continue;
+      }
+      if (!isPsd<4>(m.prev.cov) || !isPsd<4>(m.curr.cov)) {
+        ++sk.bad_covariance;
+        continue;
+      }
+      const double n0 = m.prev.normal().norm(), n1 = m.curr.normal().norm();
+      if (std::abs(n0 - 1.0) > 1e-3 || std::abs(n1 - 1.0) > 1e-3) {
+        ++sk.bad_geometry;
+        continue;
+      }
+      PlaneTerm T;
+      T.prev = m.prev.hessian;
+      T.prev.head<3>() /= n0;
+      T.curr = m.curr.hessian;
+      T.curr.head<3>() /= n1;
+      T.cov_prev = m.prev.cov;
+      T.cov_curr = m.curr.cov;
+      problem.planes.push_back(T);
+    }
+  }
+  est.n_points_in = static_cast<int>(problem.points.size());
+  est.n_lines_in = static_cast<int>(problem.lines.size());
+  est.n_planes_in = static_cast<int>(problem.planes.size());
+  if (est.n_points_in + est.n_lines_in + est.n_planes_in == 0) {
+    est.status = EstimateStatus::kNoConstraints;
+    return est;
+  }
+
+  // --- IRLS around Ceres LM ------------------------------------------------------------
+  Vector6d xi = poseToXi(est.T_curr_prev);
+  JointProblem::ReweightResult rw = problem.reweight(xi.data());
+  est.robust_scale = rw.scale;
+  bool solver_failed = false;
+  for (int it = 0; it < o.max_irls_iterations; ++it) {
+    if (rw.rows < std::max(6, o.min_residuals)) break;
+    const Vector6d xi_before = xi;
+    JointCost cost(problem, rw.rows);
+    ceres::Problem::Options popts;
+    popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem cp(popts);
+    cp.AddResidualBlock(&cost, nullptr, xi.data());
+    ceres::Solver::Options sopts;
+    sopts.minimizer_type = ceres::TRUST_REGION;
+    sopts.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    sopts.linear_solver_type = ceres::DENSE_QR;
+    sopts.max_num_iterations = o.max_lm_iterations;
+    sopts.num_threads = 1;
+    sopts.logging_type = ceres::SILENT;
+    sopts.minimizer_progress_to_stdout = false;
+    sopts.function_tolerance = 1e-10;
+    sopts.parameter_tolerance = 1e-10;
+    ceres::Solver::Summary summary;
+    ceres::Solve(sopts, &cp, &summary);
+    ++est.irls_iterations;
+    est.lm_iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+    if (it == 0) est.initial_cost = summary.initial_cost;
+    est.final_cost = summary.final_cost;
+    if (summary.termination_type == ceres::FAILURE || !xi.allFinite() ||
+        !(xi.tail<3>().squaredNorm() < 1.0)) {
+      xi = xi_before;
+      solver_failed = true;
+      break;
+    }
+    xi = poseToXi(xiToPose(xi));  // keep q_w >= 0
+    rw = problem.reweight(xi.data());
+    est.robust_scale = rw.scale;
+    if (it > 0 && poseChangeSmall(xi, xi_before, o)) break;
+  }
+  est.T_curr_prev = xiToPose(xi);
+  est.n_points_used = rw.n_points;
+  est.n_lines_used = rw.n_lines;
+  est.n_planes_used = rw.n_planes;
+  est.n_residuals = rw.rows;
+
+  // --- covariance (eq. 21) and rejection tests --------------------------------------------
+  Matrix6d H, M;
+  problem.information(xi.data(), H, M);
+  Eigen::Matrix<double, 6, 1> dinv_sqrt;
+  bool diag_ok = H.allFinite() && M.allFinite();
+  for (int i = 0; i < 6; ++i) {
+    if (!(H(i, i) > 1e-300)) diag_ok = false;
+    dinv_sqrt(i) = H(i, i) > 1e-300 ? 1.0 / std::sqrt(H(i, i)) : 1.0;
+  }
+  if (H.allFinite() && M.allFinite()) {
+    // Jacobi-scaled eigen-decomposition: pseudo-inverse on the observable subspace,
+    // kLargeVariance on the unobservable directions.
+    const Matrix6d Hs = dinv_sqrt.asDiagonal() * H * dinv_sqrt.asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Matrix6d> es(Hs);
+    const auto& lam = es.eigenvalues();
+    const double lmax = lam.maxCoeff();
+    est.min_relative_eigenvalue = diag_ok && lmax > 0 ? std::max(0.0, lam.minCoeff() / lmax) : 0.0;
+    Matrix6d Hinv = Matrix6d::Zero(), null_part = Matrix6d::Zero();
+    for (int k = 0; k < 6; ++k) {
+      const Vector6d y = dinv_sqrt.asDiagonal() * es.eigenvectors().col(k);
+      if (diag_ok && lmax > 0 && lam(k) / lmax >= o.min_relative_eigenvalue) {
+        Hinv.noalias() += y * y.transpose() / lam(k);
+      } else {
+        null_part.noalias() += kLargeVariance * y.normalized() * y.normalized().transpose();
+      }
+    }
+    const Matrix6d cov = (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
+    if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
+  }
+  est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
+  est.max_rotation_variance = maxRotationVariance(est.covariance);
+
+  if (solver_failed || !est.T_curr_prev.matrix().allFinite()) {
+    est.status = EstimateStatus::kSolverFailure;
+    est.T_curr_prev = xiToPose(poseToXi(guess));
+  } else if (rw.rows < std::max(6, o.min_residuals)) {
+    est.status = EstimateStatus::kTooFewConstraints;
+  } else if (est.min_relative_eigenvalue < o.min_relative_eigenvalue) {
+    est.status = EstimateStatus::kDegenerate;
+  } else if (!(est.max_translation_variance_m2 <= o.max_translation_variance_m2) ||
+             !(est.max_rotation_variance <= o.max_rotation_variance)) {
+    est.status = EstimateStatus::kUncertain;
+  } else {
+    est.status = EstimateStatus::kOk;
+  }
+  return est;
+}
+
+}  // namespace pplvo

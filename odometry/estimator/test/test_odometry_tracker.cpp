@@ -1,0 +1,208 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "pplvo/core/config_visitor.h"
+#include "pplvo/estimator/estimator_config.h"
+#include "pplvo/estimator/odometry_tracker.h"
+#include "pplvo/estimator/pose_parameterisation.h"
+#include "synthetic_scene.h"
+
+namespace pplvo {
+namespace {
+
+PoseEstimate goodEstimate(const Pose3& T) {
+  PoseEstimate e;
+  e.status = EstimateStatus::kOk;
+  e.T_curr_prev = T;
+  Vector6d sd;
+  sd << 1e-3, 1e-3, 2e-3, 5e-4, 5e-4, 5e-4;
+  e.covariance = Matrix6d(sd.cwiseProduct(sd).asDiagonal());
+  return e;
+}
+
+PoseEstimate rejectedEstimate() {
+  PoseEstimate e;
+  e.status = EstimateStatus::kDegenerate;
+  e.T_curr_prev = testing::typicalMotion().inverse();  // must not be used
+  return e;
+}
+
+void expectPoseNear(const Pose3& a, const Pose3& b, double tol = 1e-9) {
+  EXPECT_LT((a.matrix() - b.matrix()).norm(), tol) << a.matrix() << "\n" << b.matrix();
+}
+
+TEST(OdometryTracker, StateMachineAndDecayingVelocity) {
+  OdometryTrackerOptions opts;
+  opts.velocity_decay = 0.5;
+  opts.max_velocity_model_frames = 3;
+  OdometryTracker tracker(opts);
+  const Pose3 M = testing::typicalMotion();  // T_curr_prev of every good frame
+  TrackerOutput out = tracker.initialise(0);
+  EXPECT_EQ(out.status, TrackingStatus::kFirstFrame);
+  Pose3 T_w_c = Pose3::Identity();
+  int64_t seq = 1;
+  for (int i = 0; i < 2; ++i, ++seq) {
+    out = tracker.update(seq, goodEstimate(M));
+    T_w_c = T_w_c * M.inverse();
+    EXPECT_EQ(out.status, TrackingStatus::kTracking);
+    expectPoseNear(out.T_w_c, T_w_c);
+  }
+  // Rejections: decay^k times the last good motion, translation scaled exactly.
+  for (int k = 1; k <= 3; ++k, ++seq) {
+    out = tracker.update(seq, rejectedEstimate());
+    EXPECT_EQ(out.status, TrackingStatus::kVelocityModel) << k;
+    EXPECT_EQ(out.consecutive_rejections, k);
+    const double s = std::pow(0.5, k);
+    EXPECT_LT((out.T_curr_prev.translation() - s * M.translation()).norm(), 1e-12);
+    EXPECT_NEAR(rotationAngle(out.T_curr_prev.linear()), s * rotationAngle(M.linear()), 1e-9);
+    T_w_c = T_w_c * out.T_curr_prev.inverse();
+    expectPoseNear(out.T_w_c, T_w_c);
+    EXPECT_TRUE(out.covariance.allFinite());
+  }
+  // Exhausted: LOST, pose held.
+  for (int k = 0; k < 2; ++k, ++seq) {
+    out = tracker.update(seq, rejectedEstimate());
+    EXPECT_EQ(out.status, TrackingStatus::kLost);
+    expectPoseNear(out.T_w_c, T_w_c);
+    expectPoseNear(out.T_curr_prev, Pose3::Identity());
+    ASSERT_EQ(out.window.size(), 1u);
+    EXPECT_EQ(out.window.back().seq, seq);
+  }
+  // Good estimate: REINITIALISED for one frame, then TRACKING.
+  out = tracker.update(seq++, goodEstimate(M));
+  EXPECT_EQ(out.status, TrackingStatus::kReinitialised);
+  T_w_c = T_w_c * M.inverse();
+  expectPoseNear(out.T_w_c, T_w_c);
+  out = tracker.update(seq++, goodEstimate(M));
+  EXPECT_EQ(out.status, TrackingStatus::kTracking);
+  // A rejection after VELOCITY_MODEL recovery goes back to TRACKING (not REINITIALISED).
+  out = tracker.update(seq++, rejectedEstimate());
+  EXPECT_EQ(out.status, TrackingStatus::kVelocityModel);
+  out = tracker.update(seq++, goodEstimate(M));
+  EXPECT_EQ(out.status, TrackingStatus::kTracking);
+  // Predicted motion for the next frame is the last good motion.
+  expectPoseNear(tracker.predictedMotion(), M, 1e-12);
+}
+
+TEST(OdometryTracker, WindowCovarianceGrowsWithAgeAndMatchesDirectPropagation) {
+  OdometryTrackerOptions opts;
+  opts.window_length = 10;
+  OdometryTracker tracker(opts);
+  tracker.initialise(100);
+  const Pose3 M = testing::typicalMotion();
+  const PoseEstimate good = goodEstimate(M);
+  TrackerOutput out;
+  for (int64_t s = 101; s <= 115; ++s) out = tracker.update(s, good);
+  ASSERT_EQ(out.window.size(), 10u);
+  EXPECT_EQ(out.window.front().seq, 106);
+  EXPECT_EQ(out.window.back().seq, 115);
+  EXPECT_EQ(out.window.back().max_translation_variance_m2, 0.0);
+  for (size_t i = 0; i + 1 < out.window.size(); ++i) {
+    EXPECT_GT(out.window[i].max_translation_variance_m2,
+              out.window[i + 1].max_translation_variance_m2);
+  }
+  // Frame 114 -> 115: exactly the last estimate's covariance.
+  EXPECT_LT((out.window[8].covariance - good.covariance).norm(), 1e-15);
+  // Oldest entry (106 -> 115, 9 steps) equals the eq. 22 recursion done here.
+  Pose3 T = M;
+  Matrix6d P = good.covariance;
+  for (int k = 1; k < 9; ++k) {
+    P = propagateCompositionCovariance(T, P, M, good.covariance);
+    T = M * T;
+  }
+  EXPECT_LT((out.window[0].covariance - P).norm(), 1e-12 * P.norm() + 1e-18);
+  expectPoseNear(out.window[0].T_curr_frame, T, 1e-9);
+  // A velocity-model step inflates every entry above the velocity-model noise.
+  out = tracker.update(116, rejectedEstimate());
+  EXPECT_EQ(out.status, TrackingStatus::kVelocityModel);
+  for (size_t i = 0; i + 1 < out.window.size(); ++i) {
+    EXPECT_GE(out.window[i].max_translation_variance_m2,
+              opts.velocity_model_sigma_t_m * opts.velocity_model_sigma_t_m * 0.99);
+  }
+}
+
+TEST(OdometryTracker, RelativePoseForMessagesIsPrevCurr) {
+  OdometryTracker tracker;
+  tracker.initialise(0);
+  const Pose3 M = testing::typicalMotion();
+  const TrackerOutput out = tracker.update(1, goodEstimate(M));
+  expectPoseNear(out.T_prev_curr, M.inverse(), 1e-12);
+  EXPECT_TRUE(out.covariance_prev_curr.allFinite());
+  EXPECT_NEAR(out.covariance_prev_curr.trace(), out.covariance.trace(),
+              0.2 * out.covariance.trace());
+}
+
+// End to end: synthetic correspondences through track(); degenerate frames hand over to the
+// velocity model without NaN, and tracking resumes.
+TEST(OdometryTracker, TrackSyntheticWithDegenerateFrames) {
+  const PinholeCamera cam = testing::testCamera();
+  testing::SceneConfig cfg;
+  testing::SceneGenerator gen(cam, cfg, 91);
+  OdometryTracker tracker;
+  tracker.initialise(0);
+  const Pose3 M = testing::typicalMotion();
+  Pose3 T_w_true = Pose3::Identity();
+  TrackerOutput out;
+  for (int64_t s = 1; s <= 12; ++s) {
+    const bool degenerate = (s == 6 || s == 7);
+    Correspondences c;
+    if (degenerate) {
+      c.planes.push_back(gen.planeMatch(testing::SceneGenerator::roomPlanes()[0], M));
+    } else {
+      c = gen.generate(M);
+    }
+    out = tracker.track(s, c, cam);
+    T_w_true = T_w_true * M.inverse();
+    EXPECT_TRUE(out.T_w_c.matrix().allFinite());
+    EXPECT_TRUE(out.covariance.allFinite());
+    for (const WindowEntry& w : out.window) {
+      EXPECT_TRUE(w.covariance.allFinite());
+      EXPECT_TRUE(std::isfinite(w.max_translation_variance_m2));
+    }
+    EXPECT_EQ(out.status, degenerate ? TrackingStatus::kVelocityModel : TrackingStatus::kTracking)
+        << s;
+  }
+  // Two velocity-model frames (0.8 and 0.64 of the motion) leave a bounded drift.
+  EXPECT_LT((out.T_w_c.translation() - T_w_true.translation()).norm(), 0.03);
+}
+
+TEST(OdometryTracker, FramePoseForPublishing) {
+  OdometryTracker tracker;
+  tracker.initialise(10);
+  const Pose3 M = testing::typicalMotion();
+  tracker.update(11, goodEstimate(M));
+  const TrackerOutput out = tracker.update(12, goodEstimate(M));
+  const FramePose p = toFramePose(out);
+  EXPECT_EQ(p.seq, 12);
+  EXPECT_EQ(p.status, TrackingStatus::kTracking);
+  expectPoseNear(p.T_prev_curr, M.inverse(), 1e-12);
+  ASSERT_EQ(p.window.size(), 2u);  // frames 10 and 11, oldest first; not the current one
+  EXPECT_EQ(p.window[0].seq, 10);
+  EXPECT_EQ(p.window[1].seq, 11);
+  EXPECT_GT(p.window[0].max_translation_variance_m2, p.window[1].max_translation_variance_m2);
+}
+
+TEST(OdometryTracker, OptionsRoundTripThroughYaml) {
+  OdometryTrackerOptions o;
+  o.velocity_decay = 0.5;
+  o.estimator.use_lines = false;
+  o.estimator.max_translation_variance_m2 = 3e-4;
+  YamlDumper dumper;
+  dumper.section("tracker", [&] { visit(dumper, o); });
+  OdometryTrackerOptions back;
+  YamlLoader loader(YAML::Load(dumper.str()));
+  loader.section("tracker", [&] { visit(loader, back); });
+  loader.finish();
+  EXPECT_EQ(back.velocity_decay, 0.5);
+  EXPECT_FALSE(back.estimator.use_lines);
+  EXPECT_EQ(back.estimator.max_translation_variance_m2, 3e-4);
+
+  YamlLoader bad(YAML::Load("tracker: {velocity_decay: x, no_such_key: 1}"));
+  OdometryTrackerOptions ignored;
+  bad.section("tracker", [&] { visit(bad, ignored); });
+  EXPECT_THROW(bad.finish(), ConfigError);
+}
+
+}  // namespace
+}  // namespace pplvo
