@@ -23,6 +23,19 @@ void StageTimings::add(const std::string& stage, double ms) {
   stages_.back().add(ms);
 }
 
+void StageTimings::merge(const StageStats& stats) {
+  for (auto& s : stages_) {
+    if (s.name == stats.name) {
+      s.count += stats.count;
+      s.last_ms = stats.last_ms;
+      s.total_ms += stats.total_ms;
+      s.max_ms = std::max(s.max_ms, stats.max_ms);
+      return;
+    }
+  }
+  stages_.push_back(stats);
+}
+
 const StageStats* StageTimings::find(const std::string& stage) const {
   for (const auto& s : stages_) {
     if (s.name == stage) return &s;

@@ -8,18 +8,6 @@
 
 namespace pplvo::nodes {
 
-bool parseDepthModel(const std::string& text, DepthModel* model) {
-  if (text == "sensor")
-    *model = DepthModel::kSensor;
-  else if (text == "cgm")
-    *model = DepthModel::kCgm;
-  else if (text == "ogm")
-    *model = DepthModel::kOgm;
-  else
-    return false;
-  return true;
-}
-
 DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, lcm::LCM& lcm)
     : options_(options), lcm_(lcm), cgm_(options.cgm), ogm_(options.ogm) {
   if (options_.max_pending < 1) options_.max_pending = 1;

@@ -21,6 +21,8 @@ struct StageStats {
 class StageTimings {
  public:
   void add(const std::string& stage, double ms);
+  /// Adds a whole StageStats (e.g. from another node's table) to the stage of the same name.
+  void merge(const StageStats& stats);
   const std::vector<StageStats>& stages() const { return stages_; }
   const StageStats* find(const std::string& stage) const;
   /// Multi-line table "stage  count  mean  max" for run summaries.

@@ -17,16 +17,15 @@
 
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/depth_filter/cgm_filter.h"
+#include "pplvo/depth_filter/depth_model.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
 
 namespace pplvo::nodes {
 
-enum class DepthModel { kSensor, kCgm, kOgm };
-
-/// Parses "sensor", "cgm", "ogm"; returns false otherwise.
-bool parseDepthModel(const std::string& text, DepthModel* model);
+using depth_filter::DepthModel;
+using depth_filter::parseDepthModel;
 
 struct DepthFilterNodeOptions {
   std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL

@@ -1,0 +1,122 @@
+#include "pplvo/pipeline/frontend.h"
+
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+namespace pplvo::pipeline {
+
+bool parseFeatureFamilies(const std::string& text, FeatureFamilies* out) {
+  FeatureFamilies f{false, false, false};
+  std::stringstream ss(text);
+  std::string item;
+  bool any = false;
+  while (std::getline(ss, item, ',')) {
+    if (item == "points") f.points = true;
+    else if (item == "lines") f.lines = true;
+    else if (item == "planes") f.planes = true;
+    else if (item == "all") f = {true, true, true};
+    else return false;
+    any = true;
+  }
+  if (!any) return false;
+  *out = f;
+  return true;
+}
+
+std::string toString(const FeatureFamilies& f) {
+  std::string s;
+  auto add = [&](bool on, const char* name) {
+    if (!on) return;
+    if (!s.empty()) s += ',';
+    s += name;
+  };
+  add(f.points, "points");
+  add(f.lines, "lines");
+  add(f.planes, "planes");
+  return s.empty() ? "none" : s;
+}
+
+Frontend::Frontend(const FrontendOptions& options)
+    : options_(options), point_extractor_(options.points), line_extractor_(options.lines) {}
+
+FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVariance& cgm,
+                                  FrontendStats* stats) {
+  FrontendStats local;
+  FrontendStats& s = stats ? *stats : local;
+  s = FrontendStats{};
+  FrameFeatures f;
+  f.seq = frame.seq;
+  f.utime = frame.utime;
+  f.stamp = frame.stamp;
+  f.camera = frame.camera;
+  if (frame.bgr.empty()) {
+    s.warning = "frame without colour image: no points or lines";
+  } else {
+    // Both extractors work on grey: convert once.
+    cv::Mat gray;
+    if (frame.bgr.channels() == 3) cv::cvtColor(frame.bgr, gray, cv::COLOR_BGR2GRAY);
+    else if (frame.bgr.channels() == 4) cv::cvtColor(frame.bgr, gray, cv::COLOR_BGRA2GRAY);
+    else gray = frame.bgr;
+    if (options_.families.points) {
+      ScopedStageTimer t(timings_, "points");
+      const auto ps = point_extractor_.extractInto(gray, frame.camera, f);
+      if (!ps.error.empty()) s.warning = "points: " + ps.error;
+    }
+    if (options_.families.lines) {
+      ScopedStageTimer t(timings_, "lines");
+      const auto ls = line_extractor_.extractInto(gray, frame.camera, f);
+      if (!ls.error.empty()) s.warning = "lines: " + ls.error;
+    }
+  }
+  if (options_.families.planes && !cgm.depth_m.empty()) extractPlanes(f, cgm, &s);
+  s.points = static_cast<int>(f.points.size());
+  s.lines = static_cast<int>(f.lines.size());
+  s.planes = static_cast<int>(f.planes.size());
+  return f;
+}
+
+void Frontend::lift3d(FrameFeatures& features, const DepthWithVariance& fused,
+                      FrontendStats* stats) {
+  FrontendStats local;
+  FrontendStats& s = stats ? *stats : local;
+  const std::string invalid = geometry::validateDepth(fused, features.camera);
+  if (!invalid.empty()) {
+    s.warning = "fused depth unusable: " + invalid;
+    for (auto& p : features.points) p.has_3d = false;
+    for (auto& l : features.lines) l.has_3d = false;
+    return;
+  }
+  {
+    ScopedStageTimer t(timings_, "lift");
+    if (!features.points.empty()) s.points_3d = geometry::liftPoints(features, fused, options_.lift).points_lifted;
+    if (!features.lines.empty()) s.lines_3d = geometry::liftLines(features, fused, options_.lift).lines_lifted;
+  }
+  if (options_.families.planes && options_.planes_from_fused_depth) {
+    extractPlanes(features, fused, &s);
+  }
+  s.points = static_cast<int>(features.points.size());
+  s.lines = static_cast<int>(features.lines.size());
+  s.planes = static_cast<int>(features.planes.size());
+}
+
+void Frontend::extractPlanes(FrameFeatures& features, const DepthWithVariance& depth,
+                             FrontendStats* stats) {
+  const std::string invalid = geometry::validateDepth(depth, features.camera);
+  if (!invalid.empty()) {
+    stats->warning = "depth unusable for planes: " + invalid;
+    features.planes.clear();
+    features.plane_labels = cv::Mat();
+    return;
+  }
+  ScopedStageTimer t(timings_, "planes");
+  // The extractor holds buffers sized for one camera: rebuild only when the camera changes.
+  if (!plane_extractor_ || plane_camera_ != features.camera) {
+    plane_extractor_ = std::make_unique<geometry::PlaneExtractor>(features.camera, options_.planes);
+    plane_camera_ = features.camera;
+  }
+  geometry::PlaneExtractionResult r = plane_extractor_->extract(depth);
+  features.planes = std::move(r.planes);
+  features.plane_labels = r.labels;
+}
+
+}  // namespace pplvo::pipeline
