@@ -846,7 +846,67 @@ PipelineOptions parseNode(const YAML::Node& root, const PipelineOptions& base,
   return o;
 }
 
+/// Nested keys of the override assignments, in the order given.
+struct OverrideTree {
+  std::vector<std::pair<std::string, OverrideTree>> children;
+  bool has_value = false;
+  YAML::Node value;
+
+  OverrideTree& child(const std::string& key) {
+    for (auto& kv : children) {
+      if (kv.first == key) return kv.second;
+    }
+    children.emplace_back(key, OverrideTree());
+    return children.back().second;
+  }
+  YAML::Node toNode() const {
+    if (has_value) return value;
+    YAML::Node node(YAML::NodeType::Map);
+    for (const auto& kv : children) node[kv.first] = kv.second.toNode();
+    return node;
+  }
+};
+
 }  // namespace
+
+PipelineOptions applyPipelineOverrides(const std::vector<std::string>& assignments,
+                                       const PipelineOptions& base) {
+  OverrideTree root;
+  std::vector<std::string> errors;
+  for (const std::string& a : assignments) {
+    const auto eq = a.find('=');
+    const std::string key = a.substr(0, eq);
+    const std::string text = eq == std::string::npos ? "" : a.substr(eq + 1);
+    if (eq == std::string::npos || key.empty() || text.empty()) {
+      errors.push_back("'" + a + "': expected key=value (e.g. depth_filter.ogm.max_window=5)");
+      continue;
+    }
+    OverrideTree* node = &root;
+    std::stringstream parts(key);
+    std::string part;
+    bool ok = true;
+    while (std::getline(parts, part, '.')) {
+      if (part.empty() || node->has_value) {
+        ok = false;
+        break;
+      }
+      node = &node->child(part);
+    }
+    if (!ok || !node->children.empty()) {
+      errors.push_back("'" + a + "': invalid or conflicting key '" + key + "'");
+      continue;
+    }
+    try {
+      node->value = YAML::Load(text);
+    } catch (const YAML::Exception& e) {
+      errors.push_back("'" + a + "': value is not valid YAML (" + e.what() + ")");
+      continue;
+    }
+    node->has_value = true;
+  }
+  if (!errors.empty()) throw ConfigError(joinErrors("overrides", errors));
+  return parseNode(root.toNode(), base, "overrides");
+}
 
 PipelineOptions parsePipelineConfig(const std::string& yaml_text, const PipelineOptions& base) {
   YAML::Node root;

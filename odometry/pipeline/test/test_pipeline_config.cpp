@@ -344,6 +344,35 @@ TEST(PipelineConfig, LoadErrorsNameTheFile) {
   std::remove(path.c_str());
 }
 
+TEST(PipelineConfig, CommandLineOverrides) {
+  PipelineOptions base;
+  base.frontend.points.max_points = 500;
+  const PipelineOptions o = applyPipelineOverrides(
+      {"depth_filter.ogm.max_window=5", "features=[points, planes]", "depth_filter.model=cgm",
+       "depth_filter.ogm.gate_sigma=2.5"},
+      base);
+  EXPECT_EQ(o.depth_filter.ogm.max_window, 5);
+  EXPECT_DOUBLE_EQ(o.depth_filter.ogm.gate_sigma, 2.5);
+  EXPECT_EQ(o.depth_filter.model, depth_filter::DepthModel::kCgm);
+  EXPECT_FALSE(o.frontend.families.lines);
+  EXPECT_FALSE(o.odometry.tracker.estimator.use_lines);
+  EXPECT_EQ(o.frontend.points.max_points, 500);
+
+  std::string msg = configError([&] {
+    applyPipelineOverrides({"depth_filter.ogm.max_windw=5", "depth_filter.ogm.k_consistency=x"},
+                           base);
+  });
+  EXPECT_TRUE(contains(msg, "overrides: configuration has 2 error(s)")) << msg;
+  EXPECT_TRUE(contains(msg, "depth_filter.ogm.max_windw: unknown key")) << msg;
+  EXPECT_TRUE(contains(msg, "depth_filter.ogm.k_consistency: cannot read 'x'")) << msg;
+  msg = configError([&] {
+    applyPipelineOverrides({"depth_filter.ogm", "=3", "a..b=1", "x=1", "x.y=2"}, base);
+  });
+  EXPECT_TRUE(contains(msg, "4 error(s)")) << msg;
+  EXPECT_TRUE(contains(msg, "'depth_filter.ogm': expected key=value")) << msg;
+  EXPECT_TRUE(contains(msg, "'x.y=2': invalid or conflicting key")) << msg;
+}
+
 /// Collects dotted keys from the libraries' own field lists (member visit(v) and the
 /// estimator's visit(V&, Options&)), to check that the configuration lists the same fields.
 struct KeyCollector {

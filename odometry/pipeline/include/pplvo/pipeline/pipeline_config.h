@@ -26,6 +26,13 @@ PipelineOptions loadPipelineConfig(const std::string& path,
 PipelineOptions parsePipelineConfig(const std::string& yaml_text,
                                     const PipelineOptions& base = PipelineOptions());
 
+/// Command-line overrides applied on top of `base`: each entry is "dotted.key=value" with the
+/// value in YAML syntax, e.g. "depth_filter.ogm.max_window=5", "features=[points,planes]",
+/// "depth_filter.model=cgm". Same checks and errors as a file (unknown keys, bad values,
+/// ranges), plus entries without '=' or with an empty key or value. Throws ConfigError.
+PipelineOptions applyPipelineOverrides(const std::vector<std::string>& assignments,
+                                       const PipelineOptions& base);
+
 /// Documented YAML (a comment above every key) that parses back to exactly the same values
 /// (doubles are written with the shortest text that reads back bit for bit). Meant for the
 /// "effective configuration" written at start-up and for regenerating config/pplvo.yaml.
