@@ -1,5 +1,7 @@
 #include "pplvo/pipeline/pipeline_config.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -9,8 +11,6 @@
 #include <limits>
 #include <sstream>
 #include <type_traits>
-
-#include <yaml-cpp/yaml.h>
 
 namespace pplvo::pipeline {
 namespace {
@@ -82,8 +82,10 @@ std::string formatNumber(double x) {
   std::string s = buf;
   const auto e = s.find('e');
   if (s.find('.') == std::string::npos) {
-    if (e == std::string::npos) s += ".0";
-    else s.insert(e, ".0");
+    if (e == std::string::npos)
+      s += ".0";
+    else
+      s.insert(e, ".0");
   }
   return s;
 }
@@ -112,9 +114,12 @@ struct EnumText<PointDetector> {
 template <>
 struct EnumText<LineFitOptions::Weighting> {
   static bool parse(const std::string& s, LineFitOptions::Weighting* out) {
-    if (s == "residual_covariance") *out = LineFitOptions::Weighting::kResidualCovariance;
-    else if (s == "paper_scalar") *out = LineFitOptions::Weighting::kPaperScalar;
-    else return false;
+    if (s == "residual_covariance")
+      *out = LineFitOptions::Weighting::kResidualCovariance;
+    else if (s == "paper_scalar")
+      *out = LineFitOptions::Weighting::kPaperScalar;
+    else
+      return false;
     return true;
   }
   static std::string name(LineFitOptions::Weighting w) {
@@ -224,8 +229,7 @@ void listFields(V& v, depth_filter::OgmOptions& o) {
           "paper: (1 cm)^2)",
           positive());
   v.field("min_depth_m", o.min_depth_m,
-          "projected points closer than this to the current camera are ignored (m)",
-          atLeast(0));
+          "projected points closer than this to the current camera are ignored (m)", atLeast(0));
 }
 
 template <class V>
@@ -248,8 +252,8 @@ void listFields(V& v, geometry::DepthNoiseModel& o) {
           "fallback depth std sigma_z = coeff * z^2 where the depth map has no variance "
           "(paper eq. 1: 1.425e-3 per m; keep equal to depth_filter.sensor)",
           positive());
-  v.field("sigma_z_floor_m", o.sigma_z_floor_m,
-          "smallest depth std used (m), keeps weights finite", positive());
+  v.field("sigma_z_floor_m", o.sigma_z_floor_m, "smallest depth std used (m), keeps weights finite",
+          positive());
 }
 
 template <class V>
@@ -260,8 +264,7 @@ void listFields(V& v, features::PointExtractorOptions& o) {
           "keypoint detector/descriptor: orb, akaze, sift or brisk (the paper's SURF is "
           "non-free and not in Debian's OpenCV; docs/features.md compares them)");
   v.field("max_points", o.max_points,
-          "points kept per frame (VGA); the paper gives no count (docs/features.md)",
-          atLeast(1));
+          "points kept per frame (VGA); the paper gives no count (docs/features.md)", atLeast(1));
   v.field("grid_bucketing", o.grid_bucketing,
           "spread the points over a grid_cols x grid_rows grid of cells");
   v.field("grid_cols", o.grid_cols, "bucketing grid columns", atLeast(1));
@@ -270,17 +273,15 @@ void listFields(V& v, features::PointExtractorOptions& o) {
           "kept points are at least this far apart (px); 0 disables", atLeast(0));
   v.field("oversample", o.oversample,
           "candidates detected before bucketing, as a multiple of max_points", atLeast(1));
-  v.field("min_image_side_px", o.min_image_side_px,
-          "smaller images give no points (px)", atLeast(1));
+  v.field("min_image_side_px", o.min_image_side_px, "smaller images give no points (px)",
+          atLeast(1));
   v.field("orb_levels", o.orb_levels, "ORB pyramid levels (OpenCV default 8)", atLeast(1));
   v.field("orb_scale_factor", o.orb_scale_factor, "ORB pyramid scale factor",
           {1.0, std::numeric_limits<double>::infinity(), true, false});
-  v.field("orb_fast_threshold", o.orb_fast_threshold, "ORB FAST threshold (OpenCV 20)",
-          atLeast(0));
+  v.field("orb_fast_threshold", o.orb_fast_threshold, "ORB FAST threshold (OpenCV 20)", atLeast(0));
   v.field("orb_edge_threshold_px", o.orb_edge_threshold_px, "ORB border without features (px)",
           atLeast(0));
-  v.field("akaze_threshold", o.akaze_threshold, "AKAZE detector response threshold",
-          positive());
+  v.field("akaze_threshold", o.akaze_threshold, "AKAZE detector response threshold", positive());
   v.field("sift_contrast_threshold", o.sift_contrast_threshold, "SIFT contrast threshold",
           positive());
   v.field("brisk_threshold", o.brisk_threshold, "BRISK AGAST threshold", atLeast(0));
@@ -295,14 +296,12 @@ void listFields(V& v, features::LineExtractorOptions& o) {
           openClosed(0, 1));
   v.field("describe_full_resolution", o.describe_full_resolution,
           "compute LBD on the full-resolution image");
-  v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)",
-          atLeast(0));
+  v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)", atLeast(0));
   v.field("max_lines", o.max_lines, "segments kept per frame, longest first", atLeast(1));
   v.field("lsd_refine", o.lsd_refine, "LSD refinement: 0 none, 1 standard, 2 advanced",
           between(0, 2));
   v.field("lbd_band_width", o.lbd_band_width, "LBD band width (OpenCV 7)", atLeast(1));
-  v.field("lbd_octaves", o.lbd_octaves, "LBD pyramid octaves (1 = one resolution)",
-          atLeast(1));
+  v.field("lbd_octaves", o.lbd_octaves, "LBD pyramid octaves (1 = one resolution)", atLeast(1));
   v.field("min_image_side_px", o.min_image_side_px, "smaller images give no lines (px)",
           atLeast(1));
 }
@@ -343,11 +342,9 @@ void listFields(V& v, geometry::PlaneExtractionOptions& o) {
   v.field("min_seed_bin_count", o.min_seed_bin_count,
           "smallest histogram bin count that may seed a region", atLeast(1));
   v.field("grow_max_angle_deg", o.grow_max_angle_deg,
-          "region growing: normal angle to the seed plane (deg; CAPE pi/12)",
-          openClosed(0, 180));
+          "region growing: normal angle to the seed plane (deg; CAPE pi/12)", openClosed(0, 180));
   v.field("grow_dist_sigma_factor", o.grow_dist_sigma_factor,
-          "region growing: cell centroid within k sigma_z(z) + margin of the plane: k",
-          atLeast(0));
+          "region growing: cell centroid within k sigma_z(z) + margin of the plane: k", atLeast(0));
   v.field("grow_dist_margin_m", o.grow_dist_margin_m, "... margin (m)", atLeast(0));
   v.field("min_region_cells", o.min_region_cells, "smaller regions are not planes", atLeast(1));
   v.field("min_region_span_cells", o.min_region_span_cells,
@@ -366,11 +363,9 @@ void listFields(V& v, geometry::PlaneExtractionOptions& o) {
   v.field("refine_sigma_factor", o.refine_sigma_factor,
           "a pixel joins a plane if |n.p + d| < k sigma_z(z) + margin: k", atLeast(0));
   v.field("refine_margin_m", o.refine_margin_m, "... margin (m)", atLeast(0));
-  v.field("min_plane_points", o.min_plane_points, "pixels of a plane after refinement",
-          atLeast(3));
+  v.field("min_plane_points", o.min_plane_points, "pixels of a plane after refinement", atLeast(3));
   v.field("max_fit_points", o.max_fit_points,
-          "the WLS fit uses a grid subsample of between this and 4x as many pixels",
-          atLeast(3));
+          "the WLS fit uses a grid subsample of between this and 4x as many pixels", atLeast(3));
   v.field("max_planes", o.max_planes, "planes per frame (labels are 8-bit)", between(1, 254));
   v.section("fit", "WLS plane fitting (Sec. 4.3, eqs. 11-12)", [&] { listFields(v, o.fit); });
 }
@@ -380,8 +375,8 @@ void listFields(V& v, geometry::LineFitOptions& o) {
   v.field("resolve_with_corrected_weights", o.resolve_with_corrected_weights,
           "solve theta_m again with the corrected weights (false: the paper's literal "
           "wording, covariance corrected only)");
-  v.field("min_extent_m", o.min_extent_m,
-          "smallest spread of the samples along the line (m)", atLeast(0));
+  v.field("min_extent_m", o.min_extent_m, "smallest spread of the samples along the line (m)",
+          atLeast(0));
   v.field("weighting", o.weighting,
           "weights of the second solve: paper_scalar (w_i = 1/Sigma_ri, the paper) or "
           "residual_covariance (matrix weight, consistent covariance; docs/geometry.md)");
@@ -399,16 +394,14 @@ void listFields(V& v, geometry::LiftOptions& o) {
           "no depth at a keypoint: use the lowest-variance pixel within this radius (px)",
           atLeast(0));
   v.field("max_line_samples", o.max_line_samples,
-          "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)",
-          atLeast(2));
+          "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)", atLeast(2));
   v.field("line_ransac_threshold_m", o.line_ransac_threshold_m,
           "RANSAC on 3D point-to-line Euclidean distance (Sec. 4.4; no value in the paper, m)",
           positive());
   v.field("line_ransac_iterations", o.line_ransac_iterations, "RANSAC iterations", atLeast(1));
   v.field("min_line_samples", o.min_line_samples, "fewest valid depth samples of a 3D line",
           atLeast(3));
-  v.field("min_line_inliers", o.min_line_inliers, "fewest RANSAC inliers of a 3D line",
-          atLeast(3));
+  v.field("min_line_inliers", o.min_line_inliers, "fewest RANSAC inliers of a 3D line", atLeast(3));
   v.field("seed", o.seed, "RANSAC seed (line i uses seed + i)");
   v.section("line_fit", "WLS line fitting (Sec. 4.4, eqs. 13-17)",
             [&] { listFields(v, o.line_fit); });
@@ -433,14 +426,12 @@ template <class V>
 void listFields(V& v, PoseEstimatorOptions& o) {
   // Same fields as estimator_config.h's visit() except use_points/use_lines/use_planes, which
   // follow the top-level `features` list (checked by test_pipeline_config).
-  const std::string families_reason =
-      "the families are set once, by the top-level `features` list";
+  const std::string families_reason = "the families are set once, by the top-level `features` list";
   v.forbid("use_points", families_reason);
   v.forbid("use_lines", families_reason);
   v.forbid("use_planes", families_reason);
   v.field("point_sigma_px", o.point_sigma_px,
-          "keypoint pixel std: sigma_p^2 = 1/12 px^2 (Sec. 4.2, uniform quantisation)",
-          positive());
+          "keypoint pixel std: sigma_p^2 = 1/12 px^2 (Sec. 4.2, uniform quantisation)", positive());
   v.field("octave_sigma_scale", o.octave_sigma_scale,
           "point sigma multiplied by scale^octave (1 = same at every octave)", positive());
   v.field("line_sigma_px", o.line_sigma_px,
@@ -456,14 +447,13 @@ void listFields(V& v, PoseEstimatorOptions& o) {
   v.field("tukey_c", o.tukey_c, "Tukey constant on the whitened residuals (4.685)", positive());
   v.field("tukey_mad_scale", o.tukey_mad_scale,
           "robust scale max(1, 1.4826 MAD) of the whitened residuals (false: 1)");
-  v.field("max_irls_iterations", o.max_irls_iterations, "IRLS re-weighting iterations",
-          atLeast(1));
+  v.field("max_irls_iterations", o.max_irls_iterations, "IRLS re-weighting iterations", atLeast(1));
   v.field("max_lm_iterations", o.max_lm_iterations, "Levenberg-Marquardt iterations per solve",
           atLeast(1));
   v.field("irls_tolerance_m", o.irls_tolerance_m, "IRLS stops below this translation step (m)",
           atLeast(0));
-  v.field("irls_tolerance_rad", o.irls_tolerance_rad,
-          "IRLS stops below this rotation step (rad)", atLeast(0));
+  v.field("irls_tolerance_rad", o.irls_tolerance_rad, "IRLS stops below this rotation step (rad)",
+          atLeast(0));
   v.field("min_depth_m", o.min_depth_m,
           "points closer than this to the current image plane are dropped (m)", atLeast(0));
   v.field("min_residuals", o.min_residuals,
@@ -484,8 +474,7 @@ void listFields(V& v, OdometryTrackerOptions& o) {
   v.section("estimator", "Pose estimation and its uncertainty (Sec. 4.6, eqs. 19-25)",
             [&] { listFields(v, o.estimator); });
   v.field("velocity_decay", o.velocity_decay,
-          "constant-velocity motion scaled by decay^k on the k-th rejected frame",
-          between(0, 1));
+          "constant-velocity motion scaled by decay^k on the k-th rejected frame", between(0, 1));
   v.field("max_velocity_model_frames", o.max_velocity_model_frames,
           "consecutive rejected frames bridged by the velocity model, then LOST", atLeast(0));
   v.field("predict_from_velocity", o.predict_from_velocity,
@@ -547,9 +536,11 @@ template <class V>
 void listFields(V& v, FrameOdometryOptions& o) {
   v.section("tracker", "Frame-to-frame tracking, pose estimation and window uncertainty",
             [&] { listFields(v, o.tracker); });
-  v.section("point_matching", "Point matching (Sec. 4.5)", [&] { listFields(v, o.point_matching); });
+  v.section("point_matching", "Point matching (Sec. 4.5)",
+            [&] { listFields(v, o.point_matching); });
   v.section("line_matching", "Line matching (Sec. 4.5)", [&] { listFields(v, o.line_matching); });
-  v.section("plane_matching", "Plane matching (Sec. 4.5)", [&] { listFields(v, o.plane_matching); });
+  v.section("plane_matching", "Plane matching (Sec. 4.5)",
+            [&] { listFields(v, o.plane_matching); });
   v.field("predict_point_positions", o.predict_point_positions,
           "gate points around their position predicted by the constant-velocity model");
   v.field("predict_plane_positions", o.predict_plane_positions,
@@ -617,8 +608,10 @@ class Reader {
     }
     T parsed = value;
     const std::string error = fromNode(node, &parsed);
-    if (error.empty()) value = parsed;
-    else errors_.push_back(path(key) + ": " + error);
+    if (error.empty())
+      value = parsed;
+    else
+      errors_.push_back(path(key) + ": " + error);
   }
 
   void section(const std::string& key, const std::string& /*doc*/,
@@ -765,8 +758,7 @@ class Writer {
     writeComment(out_, indent_, range.any() ? doc : doc + ".", suffix);
     out_ << indent_ << key << ": " << toText(value) << "\n";
   }
-  void section(const std::string& key, const std::string& doc,
-               const std::function<void()>& body) {
+  void section(const std::string& key, const std::string& doc, const std::function<void()>& body) {
     if (!opened_) out_ << "\n";
     if (indent_.empty()) out_ << "# " << std::string(94, '=') << "\n";  // top-level banner
     writeComment(out_, indent_, doc);
@@ -795,7 +787,8 @@ const char* kHeader =
     "# Under Depth Uncertainty\" (section numbers below refer to it). Defaults follow the\n"
     "# paper where it gives a value. Keys left out keep their defaults; unknown keys, bad values\n"
     "# and values outside the Range shown are errors (reported all together).\n"
-    "# Documentation: docs/configuration.md. Written by dumpPipelineConfig(PipelineOptions()); the\n"
+    "# Documentation: docs/configuration.md. Written by dumpPipelineConfig(PipelineOptions()); "
+    "the\n"
     "# test test_pipeline_config fails if this file drifts from the code's defaults.\n";
 
 bool familiesAgree(const PipelineOptions& o) {
@@ -817,11 +810,11 @@ std::vector<std::string> consistencyErrors(const PipelineOptions& o) {
   }
   if (o.depth_filter.model == DepthModel::kOgm &&
       o.odometry.tracker.window_length < o.depth_filter.ogm.max_window) {
-    errors.push_back("odometry.tracker.window_length: " +
-                     std::to_string(o.odometry.tracker.window_length) +
-                     " is shorter than depth_filter.ogm.max_window " +
-                     std::to_string(o.depth_filter.ogm.max_window) +
-                     " (the fusion window needs the uncertainty of every frame it holds)");
+    errors.push_back(
+        "odometry.tracker.window_length: " + std::to_string(o.odometry.tracker.window_length) +
+        " is shorter than depth_filter.ogm.max_window " +
+        std::to_string(o.depth_filter.ogm.max_window) +
+        " (the fusion window needs the uncertainty of every frame it holds)");
   }
   return errors;
 }
@@ -967,7 +960,8 @@ std::vector<std::string> diffPipelineOptions(const PipelineOptions& a, const Pip
   const std::vector<ConfigEntry> eb = flattenPipelineConfig(b);
   std::vector<std::string> diff;
   for (size_t i = 0; i < ea.size() && i < eb.size(); ++i) {
-    if (ea[i].value != eb[i].value) diff.push_back(ea[i].key + ": " + ea[i].value + " != " + eb[i].value);
+    if (ea[i].value != eb[i].value)
+      diff.push_back(ea[i].key + ": " + ea[i].value + " != " + eb[i].value);
   }
   // flatten() of two PipelineOptions always has the same keys; the estimator's use_* are
   // covered by `features` only when they agree with it, so compare them directly.

@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -8,8 +9,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <yaml-cpp/yaml.h>
 
 #include "pplvo/estimator/estimator_config.h"
 #include "pplvo/pipeline/pipeline_config.h"
@@ -186,8 +185,7 @@ TEST(PipelineConfig, DiffNamesTheKeyThatDiffers) {
 TEST(PipelineConfig, PartialFileKeepsBaseValues) {
   PipelineOptions base;
   base.frontend.points.max_points = 500;
-  const PipelineOptions o =
-      parsePipelineConfig("depth_filter:\n  ogm:\n    max_window: 5\n", base);
+  const PipelineOptions o = parsePipelineConfig("depth_filter:\n  ogm:\n    max_window: 5\n", base);
   EXPECT_EQ(o.depth_filter.ogm.max_window, 5);
   EXPECT_EQ(o.frontend.points.max_points, 500);
   EXPECT_EQ(o.depth_filter.ogm.k_consistency, 5);
@@ -198,15 +196,15 @@ TEST(PipelineConfig, UnknownKeyAndBadValueReportedTogether) {
   const std::string yaml =
       "depth_filter:\n"
       "  ogm:\n"
-      "    max_windw: 5\n"          // unknown key (typo)
-      "    k_consistency: five\n"   // bad value
-      "    gate_sigma: -3\n"        // out of range
+      "    max_windw: 5\n"         // unknown key (typo)
+      "    k_consistency: five\n"  // bad value
+      "    gate_sigma: -3\n"       // out of range
       "frontend:\n"
       "  points:\n"
-      "    max_points: 10.5\n"      // not an integer
+      "    max_points: 10.5\n"  // not an integer
       "odometry:\n"
       "  predict_point_positions: maybe\n"  // not a bool
-      "colour: blue\n";                      // unknown top-level key
+      "colour: blue\n";                     // unknown top-level key
   const std::string msg = configError([&] { parsePipelineConfig(yaml); });
   EXPECT_TRUE(contains(msg, "6 error(s)")) << msg;
   EXPECT_TRUE(contains(msg, "depth_filter.ogm.max_windw: unknown key")) << msg;
@@ -236,9 +234,8 @@ TEST(PipelineConfig, OutOfRangeValuesAreErrors) {
 }
 
 TEST(PipelineConfig, TrackerWindowMustCoverFusionWindow) {
-  const std::string msg = configError([] {
-    parsePipelineConfig("odometry: {tracker: {window_length: 5}}\n");
-  });
+  const std::string msg =
+      configError([] { parsePipelineConfig("odometry: {tracker: {window_length: 5}}\n"); });
   EXPECT_TRUE(contains(msg, "window_length: 5 is shorter than depth_filter.ogm.max_window 10"))
       << msg;
   // Without O-GM there is no fusion window to cover.
@@ -284,9 +281,8 @@ TEST(PipelineConfig, FeatureListParsing) {
 }
 
 TEST(PipelineConfig, EstimatorFamilyFlagsAreNotSettable) {
-  const std::string msg = configError([] {
-    parsePipelineConfig("odometry: {tracker: {estimator: {use_lines: false}}}\n");
-  });
+  const std::string msg = configError(
+      [] { parsePipelineConfig("odometry: {tracker: {estimator: {use_lines: false}}}\n"); });
   EXPECT_TRUE(contains(msg, "odometry.tracker.estimator.use_lines: not settable here")) << msg;
   EXPECT_TRUE(contains(msg, "`features`")) << msg;
 
@@ -301,8 +297,9 @@ TEST(PipelineConfig, EstimatorFamilyFlagsAreNotSettable) {
 TEST(PipelineConfig, InvalidEnumStrings) {
   std::string msg = configError([] { parsePipelineConfig("depth_filter: {model: gaussian}\n"); });
   EXPECT_TRUE(contains(msg, "1 error(s)")) << msg;
-  EXPECT_TRUE(contains(msg, "depth_filter.model: invalid value 'gaussian' (choose one of: "
-                            "sensor, cgm, ogm)"))
+  EXPECT_TRUE(contains(msg,
+                       "depth_filter.model: invalid value 'gaussian' (choose one of: "
+                       "sensor, cgm, ogm)"))
       << msg;
   msg = configError([] { parsePipelineConfig("depth_filter: {model: [ogm]}\n"); });
   EXPECT_TRUE(contains(msg, "depth_filter.model: expected a single value")) << msg;
@@ -323,7 +320,8 @@ TEST(PipelineConfig, StructuralErrors) {
   EXPECT_TRUE(contains(msg, "must be a map")) << msg;
   msg = configError([] { parsePipelineConfig("depth_filter: 3\n"); });
   EXPECT_TRUE(contains(msg, "depth_filter: expected a section")) << msg;
-  msg = configError([] { parsePipelineConfig("depth_filter: {ogm: {max_window: 4, max_window: 5}}\n"); });
+  msg = configError(
+      [] { parsePipelineConfig("depth_filter: {ogm: {max_window: 4, max_window: 5}}\n"); });
   EXPECT_TRUE(contains(msg, "depth_filter.ogm.max_window: duplicate key")) << msg;
   msg = configError([] { parsePipelineConfig("depth_filter: {model: }\n"); });
   EXPECT_TRUE(contains(msg, "depth_filter.model: no value")) << msg;
@@ -347,10 +345,10 @@ TEST(PipelineConfig, LoadErrorsNameTheFile) {
 TEST(PipelineConfig, CommandLineOverrides) {
   PipelineOptions base;
   base.frontend.points.max_points = 500;
-  const PipelineOptions o = applyPipelineOverrides(
-      {"depth_filter.ogm.max_window=5", "features=[points, planes]", "depth_filter.model=cgm",
-       "depth_filter.ogm.gate_sigma=2.5"},
-      base);
+  const PipelineOptions o =
+      applyPipelineOverrides({"depth_filter.ogm.max_window=5", "features=[points, planes]",
+                              "depth_filter.model=cgm", "depth_filter.ogm.gate_sigma=2.5"},
+                             base);
   EXPECT_EQ(o.depth_filter.ogm.max_window, 5);
   EXPECT_DOUBLE_EQ(o.depth_filter.ogm.gate_sigma, 2.5);
   EXPECT_EQ(o.depth_filter.model, depth_filter::DepthModel::kCgm);
