@@ -787,9 +787,8 @@ const char* kHeader =
     "# Under Depth Uncertainty\" (section numbers below refer to it). Defaults follow the\n"
     "# paper where it gives a value. Keys left out keep their defaults; unknown keys, bad values\n"
     "# and values outside the Range shown are errors (reported all together).\n"
-    "# Documentation: docs/configuration.md. Written by dumpPipelineConfig(PipelineOptions()); "
-    "the\n"
-    "# test test_pipeline_config fails if this file drifts from the code's defaults.\n";
+    "# Documentation: docs/configuration.md. Written by dumpPipelineConfig(PipelineOptions());\n"
+    "# the test test_pipeline_config fails if this file drifts from the code's defaults.\n";
 
 bool familiesAgree(const PipelineOptions& o) {
   const FeatureFamilies& f = o.frontend.families;
@@ -797,17 +796,19 @@ bool familiesAgree(const PipelineOptions& o) {
   return f.points == e.use_points && f.lines == e.use_lines && f.planes == e.use_planes;
 }
 
+std::string familiesDisagreement(const PipelineOptions& o) {
+  const PoseEstimatorOptions& e = o.odometry.tracker.estimator;
+  return "features: frontend.families " + toText(o.frontend.families) +
+         " disagree with odometry.tracker.estimator.use_* " +
+         toText(FeatureFamilies{e.use_points, e.use_lines, e.use_planes}) +
+         " (set them with PipelineOptions::setFamilies)";
+}
+
 std::vector<std::string> consistencyErrors(const PipelineOptions& o) {
   std::vector<std::string> errors;
   const FeatureFamilies& f = o.frontend.families;
   if (!f.points && !f.lines && !f.planes) errors.push_back("features: no feature family selected");
-  if (!familiesAgree(o)) {
-    const PoseEstimatorOptions& e = o.odometry.tracker.estimator;
-    errors.push_back("features: frontend.families " + toText(f) +
-                     " disagree with odometry.tracker.estimator.use_* " +
-                     toText(FeatureFamilies{e.use_points, e.use_lines, e.use_planes}) +
-                     " (set them with PipelineOptions::setFamilies)");
-  }
+  if (!familiesAgree(o)) errors.push_back(familiesDisagreement(o));
   if (o.depth_filter.model == DepthModel::kOgm &&
       o.odometry.tracker.window_length < o.depth_filter.ogm.max_window) {
     errors.push_back(
@@ -938,7 +939,7 @@ std::vector<std::string> validatePipelineOptions(const PipelineOptions& options)
 
 std::string dumpPipelineConfig(const PipelineOptions& options) {
   if (!familiesAgree(options))
-    throw ConfigError("dumpPipelineConfig: " + consistencyErrors(options).front());
+    throw ConfigError("dumpPipelineConfig: " + familiesDisagreement(options));
   PipelineOptions o = options;
   FeatureFamilies families = o.frontend.families;
   Writer writer;
