@@ -1,5 +1,6 @@
 // pplvo-peer-odometry: runs OpenCV's RGB-D odometry (the benchmark's peer) over a TUM-layout
 // folder and writes a TUM trajectory with the dataset's stamps verbatim.
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -16,11 +17,22 @@ void usage(std::ostream& out) {
   out << "usage: pplvo-peer-odometry --dataset DIR --output TRAJ.txt\n"
          "                           [--method rgbd|icp|rgbd_icp] [--max-frames N]\n"
          "                           [--failure hold|constant_velocity] [--signed-camera]\n"
+         "                           [--max-points-part F] [--max-depth M]\n"
          "  Runs OpenCV contrib's cv::rgbd odometry (default rgbd) on a TUM-layout folder and\n"
          "  writes camera-to-world poses (world = first camera) with the dataset's stamps.\n"
          "  --signed-camera passes a mirrored camera matrix (fy < 0) to OpenCV unchanged\n"
          "  instead of flipping the images (for comparison only).\n"
+         "  --max-points-part: fraction of valid pixels OpenCV samples (default 0.07);\n"
+         "  --max-depth: depths at or beyond this are ignored, metres (default 4).\n"
          "exit codes: 0 ok, 1 dataset or output error, 2 bad arguments\n";
+}
+
+bool parseDouble(const std::string& s, double* v) {
+  char* end = nullptr;
+  const double x = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end != '\0' || !std::isfinite(x)) return false;
+  *v = x;
+  return true;
 }
 
 bool parseInt(const std::string& s, long* v) {
@@ -81,6 +93,16 @@ int main(int argc, char** argv) {
                   << "' (expected hold or constant_velocity)\n";
         return 2;
       }
+    } else if (a == "--max-points-part" || a == "--max-depth") {
+      if (!value(&v)) return 2;
+      double x = 0;
+      const bool part = a == "--max-points-part";
+      if (!parseDouble(v, &x) || x <= 0 || (part && x > 1)) {
+        std::cerr << "pplvo-peer-odometry: " << a << " needs a number in "
+                  << (part ? "(0, 1]" : "(0, inf)") << ", got '" << v << "'\n";
+        return 2;
+      }
+      (part ? options.max_points_part : options.max_depth_m) = static_cast<float>(x);
     } else if (a == "--signed-camera") {
       options.mirror_handling = peer::MirrorHandling::kSignedMatrix;
     } else {
@@ -106,7 +128,12 @@ int main(int argc, char** argv) {
       std::cout << "warning: the camera has distortion coefficients; OpenCV's odometry "
                    "ignores them\n";
     }
-    std::cout << "method: " << peer::methodName(options.method) << "\n";
+    std::cout << "method: " << peer::methodName(options.method)
+              << " (max_points_part " << options.max_points_part << ", depth ("
+              << options.min_depth_m << ", " << options.max_depth_m << ") m, mirrored camera: "
+              << (options.mirror_handling == peer::MirrorHandling::kFlipImage ? "flip images"
+                                                                              : "signed matrix")
+              << ")\n";
 
     size_t n = data.size();
     if (max_frames > 0 && static_cast<size_t>(max_frames) < n) n = static_cast<size_t>(max_frames);

@@ -168,6 +168,27 @@ TEST(PeerOdometry, FirstFrameWithoutDepthWaitsForAUsableOne) {
   EXPECT_TRUE(res.results[1].T_w_c.isApprox(Pose3::Identity()));
 }
 
+TEST(PeerOdometry, ReferenceIsReplacedAfterTooManyFailures) {
+  // A motion limit far below the true frame-to-frame motion (2-3 mm) makes every registration
+  // fail in OpenCV's motion check: after max_consecutive_failures the current frame becomes
+  // the reference so that a real sequence could recover.
+  const Rendered& r = rendered(525.0);
+  const std::vector<RgbdFrame> frames(r.frames.begin(), r.frames.begin() + 12);
+  PeerOdometryOptions o;
+  o.max_translation_m = 1e-5;
+  o.max_consecutive_failures = 5;
+  const RunResult res = run(frames, o);
+  EXPECT_EQ(res.results[0].status, PeerStatus::kFirst);
+  for (int i = 1; i < 12; ++i) EXPECT_EQ(res.results[i].status, PeerStatus::kNotConverged) << i;
+  EXPECT_EQ(res.stats.not_converged, 11);
+  EXPECT_EQ(res.stats.failures, 11);
+  EXPECT_EQ(res.stats.reference_resets, 2);  // after frames 5 and 10
+  EXPECT_EQ(res.results[5].reference_seq, frames[0].seq);
+  EXPECT_EQ(res.results[6].reference_seq, frames[5].seq);
+  EXPECT_EQ(res.results[11].reference_seq, frames[10].seq);
+  for (const PeerFrameResult& fr : res.results) EXPECT_TRUE(fr.T_w_c.isApprox(Pose3::Identity()));
+}
+
 TEST(PeerOdometry, BadInputIsACountedFailureNotACrash) {
   const Rendered& r = rendered(525.0);
   PeerOdometry odo;

@@ -165,6 +165,9 @@ TEST_F(PeerProgram, BadArgumentsExitWithTwo) {
   EXPECT_EQ(runProgram(ds + "--output x.txt --max-frames 0", *tmp_).exit_code, 2);
   EXPECT_EQ(runProgram(ds + "--output x.txt --bogus", *tmp_).exit_code, 2);
   EXPECT_EQ(runProgram(ds + "--output", *tmp_).exit_code, 2);
+  EXPECT_EQ(runProgram(ds + "--output x.txt --max-points-part 1.5", *tmp_).exit_code, 2);
+  EXPECT_EQ(runProgram(ds + "--output x.txt --max-depth -1", *tmp_).exit_code, 2);
+  EXPECT_EQ(runProgram(ds + "--output x.txt --failure sometimes", *tmp_).exit_code, 2);
   const ProgramRun r = runProgram(ds + "--output x.txt --method fast", *tmp_);
   EXPECT_NE(r.err.find("unknown --method"), std::string::npos) << r.err;
   EXPECT_EQ(runProgram("--help", *tmp_).exit_code, 0);
