@@ -128,9 +128,9 @@ int main(int argc, char** argv) {
       std::cout << "warning: the camera has distortion coefficients; OpenCV's odometry "
                    "ignores them\n";
     }
-    std::cout << "method: " << peer::methodName(options.method)
-              << " (max_points_part " << options.max_points_part << ", depth ("
-              << options.min_depth_m << ", " << options.max_depth_m << ") m, mirrored camera: "
+    std::cout << "method: " << peer::methodName(options.method) << " (max_points_part "
+              << options.max_points_part << ", depth (" << options.min_depth_m << ", "
+              << options.max_depth_m << ") m, mirrored camera: "
               << (options.mirror_handling == peer::MirrorHandling::kFlipImage ? "flip images"
                                                                               : "signed matrix")
               << ")\n";
@@ -167,15 +167,15 @@ int main(int argc, char** argv) {
     writeTumTrajectory(output, trajectory);
 
     const peer::PeerStats& s = odometry.stats();
-    std::printf("frames: %lld processed, %lld tracked, %lld failures (no_depth %lld, "
-                "not_converged %lld, bad_input %lld, opencv_error %lld), %lld reference resets, "
-                "%lld unreadable frames skipped\n",
-                static_cast<long long>(s.frames), static_cast<long long>(s.tracked),
-                static_cast<long long>(s.failures), static_cast<long long>(s.no_depth),
-                static_cast<long long>(s.not_converged), static_cast<long long>(s.bad_input),
-                static_cast<long long>(s.opencv_errors),
-                static_cast<long long>(s.reference_resets),
-                static_cast<long long>(load_failures));
+    std::printf(
+        "frames: %lld processed, %lld tracked, %lld failures (no_depth %lld, "
+        "not_converged %lld, bad_input %lld, opencv_error %lld), %lld reference resets, "
+        "%lld unreadable frames skipped\n",
+        static_cast<long long>(s.frames), static_cast<long long>(s.tracked),
+        static_cast<long long>(s.failures), static_cast<long long>(s.no_depth),
+        static_cast<long long>(s.not_converged), static_cast<long long>(s.bad_input),
+        static_cast<long long>(s.opencv_errors), static_cast<long long>(s.reference_resets),
+        static_cast<long long>(load_failures));
     if (load_failures > 0) std::printf("first unreadable frame: %s\n", first_load_error.c_str());
     const double mean_ms = s.meanMs();
     std::printf("time per frame: mean %.2f ms, max %.2f ms; %.1f frames/s (odometry only)\n",

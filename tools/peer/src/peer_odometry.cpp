@@ -2,12 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <utility>
-
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd/depth.hpp>
+#include <utility>
 
 #include "pplvo/core/stage_timer.h"
 
@@ -15,9 +14,12 @@ namespace pplvo::peer {
 
 const char* methodName(PeerMethod method) {
   switch (method) {
-    case PeerMethod::kRgbd: return "rgbd";
-    case PeerMethod::kIcp: return "icp";
-    case PeerMethod::kRgbdIcp: return "rgbd_icp";
+    case PeerMethod::kRgbd:
+      return "rgbd";
+    case PeerMethod::kIcp:
+      return "icp";
+    case PeerMethod::kRgbdIcp:
+      return "rgbd_icp";
   }
   return "?";
 }
@@ -34,12 +36,18 @@ bool parseMethod(const std::string& text, PeerMethod* method) {
 
 const char* statusName(PeerStatus status) {
   switch (status) {
-    case PeerStatus::kFirst: return "first";
-    case PeerStatus::kOk: return "ok";
-    case PeerStatus::kNoDepth: return "no_depth";
-    case PeerStatus::kNotConverged: return "not_converged";
-    case PeerStatus::kBadInput: return "bad_input";
-    case PeerStatus::kOpenCvError: return "opencv_error";
+    case PeerStatus::kFirst:
+      return "first";
+    case PeerStatus::kOk:
+      return "ok";
+    case PeerStatus::kNoDepth:
+      return "no_depth";
+    case PeerStatus::kNotConverged:
+      return "not_converged";
+    case PeerStatus::kBadInput:
+      return "bad_input";
+    case PeerStatus::kOpenCvError:
+      return "opencv_error";
   }
   return "?";
 }
@@ -91,8 +99,8 @@ cv::Mat poseToMat(const Pose3& T) {
 
 struct PeerOdometry::Impl {
   cv::Ptr<cv::rgbd::Odometry> odometry;
-  PinholeCamera camera;       ///< the camera the odometry was built for (as given)
-  int flip_code = 2;          ///< cv::flip code applied to the images, 2 = none
+  PinholeCamera camera;  ///< the camera the odometry was built for (as given)
+  int flip_code = 2;     ///< cv::flip code applied to the images, 2 = none
 
   bool has_reference = false;
   cv::Ptr<cv::rgbd::OdometryFrame> reference;  ///< keeps OpenCV's pyramids between frames
@@ -118,9 +126,8 @@ struct PeerOdometry::Impl {
     const std::vector<float> grads = o.min_gradient_magnitudes;
     switch (o.method) {
       case PeerMethod::kRgbd: {
-        auto odo = cv::rgbd::RgbdOdometry::create(K, o.min_depth_m, o.max_depth_m,
-                                                  o.max_depth_diff_m, iters, grads,
-                                                  o.max_points_part);
+        auto odo = cv::rgbd::RgbdOdometry::create(
+            K, o.min_depth_m, o.max_depth_m, o.max_depth_diff_m, iters, grads, o.max_points_part);
         odo->setMaxTranslation(o.max_translation_m);
         odo->setMaxRotation(o.max_rotation_deg);
         odometry = odo;
@@ -135,9 +142,8 @@ struct PeerOdometry::Impl {
         break;
       }
       case PeerMethod::kRgbdIcp: {
-        auto odo = cv::rgbd::RgbdICPOdometry::create(K, o.min_depth_m, o.max_depth_m,
-                                                     o.max_depth_diff_m, o.max_points_part,
-                                                     iters, grads);
+        auto odo = cv::rgbd::RgbdICPOdometry::create(
+            K, o.min_depth_m, o.max_depth_m, o.max_depth_diff_m, o.max_points_part, iters, grads);
         odo->setMaxTranslation(o.max_translation_m);
         odo->setMaxRotation(o.max_rotation_deg);
         odometry = odo;
@@ -173,7 +179,8 @@ std::string checkFrame(const RgbdFrame& f) {
   if (!f.camera.valid()) return "invalid camera";
   if (f.bgr.empty()) return "empty colour image";
   if (f.depth_m.empty()) return "empty depth image";
-  if (f.bgr.type() != CV_8UC3 && f.bgr.type() != CV_8UC1) return "colour image is not CV_8UC3/CV_8UC1";
+  if (f.bgr.type() != CV_8UC3 && f.bgr.type() != CV_8UC1)
+    return "colour image is not CV_8UC3/CV_8UC1";
   if (f.depth_m.type() != CV_32FC1) return "depth is not CV_32FC1 metres";
   if (f.bgr.size() != f.depth_m.size()) return "colour and depth sizes disagree";
   if (f.bgr.cols != f.camera.width || f.bgr.rows != f.camera.height)
@@ -202,12 +209,23 @@ PeerFrameResult PeerOdometry::process(const RgbdFrame& frame) {
     stats_.total_ms += res.compute_ms;
     stats_.max_ms = std::max(stats_.max_ms, res.compute_ms);
     switch (res.status) {
-      case PeerStatus::kFirst: break;
-      case PeerStatus::kOk: ++stats_.tracked; break;
-      case PeerStatus::kNoDepth: ++stats_.no_depth; break;
-      case PeerStatus::kNotConverged: ++stats_.not_converged; break;
-      case PeerStatus::kBadInput: ++stats_.bad_input; break;
-      case PeerStatus::kOpenCvError: ++stats_.opencv_errors; break;
+      case PeerStatus::kFirst:
+        break;
+      case PeerStatus::kOk:
+        ++stats_.tracked;
+        break;
+      case PeerStatus::kNoDepth:
+        ++stats_.no_depth;
+        break;
+      case PeerStatus::kNotConverged:
+        ++stats_.not_converged;
+        break;
+      case PeerStatus::kBadInput:
+        ++stats_.bad_input;
+        break;
+      case PeerStatus::kOpenCvError:
+        ++stats_.opencv_errors;
+        break;
     }
     if (!res.ok()) {
       ++stats_.failures;
@@ -262,8 +280,8 @@ PeerFrameResult PeerOdometry::process(const RgbdFrame& frame) {
     r.valid_depth_pixels = cv::countNonZero(valid);
 
     const bool enough_depth = r.valid_depth_pixels >= o.min_valid_depth_pixels;
-    auto current = cv::rgbd::OdometryFrame::create(grey, depth, valid, cv::Mat(),
-                                                   static_cast<int>(frame.seq));
+    auto current =
+        cv::rgbd::OdometryFrame::create(grey, depth, valid, cv::Mat(), static_cast<int>(frame.seq));
 
     if (!s.has_reference) {
       if (!enough_depth) {

@@ -1,9 +1,9 @@
 // The peer odometry with a mirrored camera model (fy < 0, like ICL-NUIM): same accuracy as
 // with the ordinary model on the same room and trajectory.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
-
-#include <gtest/gtest.h>
 
 #include "peer_test_util.h"
 
@@ -26,8 +26,7 @@ TEST(PeerOdometryMirrored, MirroredCameraGivesTheSameAccuracy) {
     double bound_m;
     double bound_deg;
   };
-  for (const Case& c :
-       {Case{PeerMethod::kRgbd, 0.08, 2.0}, Case{PeerMethod::kIcp, 0.20, 8.0}}) {
+  for (const Case& c : {Case{PeerMethod::kRgbd, 0.08, 2.0}, Case{PeerMethod::kIcp, 0.20, 8.0}}) {
     PeerOdometryOptions o;
     o.method = c.method;
     const RunResult a = run(normal.frames, o);

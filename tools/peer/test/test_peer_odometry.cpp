@@ -1,12 +1,12 @@
 // Tests of the OpenCV peer odometry on rendered synthetic sequences with known poses.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <map>
-#include <string>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "peer_test_util.h"
 
@@ -38,8 +38,7 @@ TEST_P(PeerOdometryMethods, TracksSyntheticRoom) {
   const RunResult res = run(r.frames, o);
   const DriftErrors e = driftErrors(res.T_w_c, r.T_w_c);
   std::printf("[%s] %s; %lld failures, mean %.1f ms/frame\n", methodName(b.method),
-              describe(e).c_str(), static_cast<long long>(res.stats.failures),
-              res.stats.meanMs());
+              describe(e).c_str(), static_cast<long long>(res.stats.failures), res.stats.meanMs());
   EXPECT_EQ(res.results.front().status, PeerStatus::kFirst);
   EXPECT_EQ(res.stats.frames, kFrames);
   EXPECT_EQ(res.stats.failures, 0);
@@ -57,7 +56,9 @@ INSTANTIATE_TEST_SUITE_P(AllMethods, PeerOdometryMethods,
                          ::testing::Values(Bound{PeerMethod::kRgbd, 0.08, 2.0},
                                            Bound{PeerMethod::kIcp, 0.20, 8.0},
                                            Bound{PeerMethod::kRgbdIcp, 0.10, 2.5}),
-                         [](const auto& test_info) { return std::string(methodName(test_info.param.method)); });
+                         [](const auto& test_info) {
+                           return std::string(methodName(test_info.param.method));
+                         });
 
 TEST(PeerOdometry, IdentityWithoutMotionIsNotAFailureAndStaysPut) {
   // The same frame twice: the motion must come out as (nearly) the identity.
@@ -150,8 +151,8 @@ TEST(PeerOdometry, FrameWithoutDepthIsACountedFailure) {
   cv_opts.failure_policy = FailurePolicy::kConstantVelocity;
   const RunResult cvr = run(frames, cv_opts);
   EXPECT_EQ(cvr.stats.no_depth, 1);
-  const Pose3 predicted = cvr.results[4].T_w_c * (cvr.results[3].T_w_c.inverse() *
-                                                 cvr.results[4].T_w_c);
+  const Pose3 predicted =
+      cvr.results[4].T_w_c * (cvr.results[3].T_w_c.inverse() * cvr.results[4].T_w_c);
   EXPECT_TRUE(cvr.results[5].T_w_c.isApprox(predicted, 1e-9));
 }
 

@@ -1,5 +1,6 @@
 // The pplvo-peer-odometry program on a synthetic TUM-layout folder: trajectory with verbatim
 // stamps, accuracy, unreadable frames skipped and counted, exit codes on bad input.
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -8,8 +9,6 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "pplvo/core/trajectory.h"
 #include "pplvo/dataset/dataset.h"
@@ -76,11 +75,10 @@ synth::SyntheticSequence* PeerProgram::seq_ = nullptr;
 TEST_F(PeerProgram, WritesTheTrajectoryWithVerbatimStamps) {
   const fs::path traj = *tmp_ / "rgbd.txt";
   const ProgramRun r = runProgram("--dataset '" + (*tmp_ / "seq").string() + "' --output '" +
-                               traj.string() + "' --method rgbd --max-frames 10",
-                           *tmp_);
+                                      traj.string() + "' --method rgbd --max-frames 10",
+                                  *tmp_);
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
-  EXPECT_NE(r.out.find("frames: 10 processed, 9 tracked, 0 failures"), std::string::npos)
-      << r.out;
+  EXPECT_NE(r.out.find("frames: 10 processed, 9 tracked, 0 failures"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("frames/s"), std::string::npos) << r.out;
   const TrajectoryReadResult t = readTumTrajectory(traj.string());
   EXPECT_EQ(t.skipped_lines, 0);
@@ -100,8 +98,7 @@ TEST_F(PeerProgram, WritesTheTrajectoryWithVerbatimStamps) {
   for (size_t i = 0; i < 10; ++i) {
     const peer::PeerFrameResult res = odo.process(data.loadFrame(i));
     EXPECT_LT((res.T_w_c.translation() - t.poses[i].T_w_c.translation()).norm(), 1e-6) << i;
-    EXPECT_LT(rotationAngle(res.T_w_c.linear().transpose() * t.poses[i].T_w_c.linear()), 1e-6)
-        << i;
+    EXPECT_LT(rotationAngle(res.T_w_c.linear().transpose() * t.poses[i].T_w_c.linear()), 1e-6) << i;
   }
 }
 
@@ -127,8 +124,8 @@ TEST_F(PeerProgram, UnreadableFrameIsSkippedAndCounted) {
   ASSERT_FALSE(depth_file.empty());
   std::ofstream(dir / depth_file, std::ios::trunc) << "not a png";
   const fs::path traj = *tmp_ / "corrupt.txt";
-  const ProgramRun r = runProgram("--dataset '" + dir.string() + "' --output '" + traj.string() + "'",
-                           *tmp_);
+  const ProgramRun r =
+      runProgram("--dataset '" + dir.string() + "' --output '" + traj.string() + "'", *tmp_);
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("1 unreadable frames skipped"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("0 failures"), std::string::npos) << r.out;
@@ -137,22 +134,22 @@ TEST_F(PeerProgram, UnreadableFrameIsSkippedAndCounted) {
 
 TEST_F(PeerProgram, BadDatasetExitsWithOne) {
   const ProgramRun r = runProgram("--dataset '" + (*tmp_ / "missing").string() + "' --output '" +
-                               (*tmp_ / "x.txt").string() + "'",
-                           *tmp_);
+                                      (*tmp_ / "x.txt").string() + "'",
+                                  *tmp_);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("bad dataset"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(*tmp_ / "x.txt"));
 
   // A folder that exists but holds no index.
   fs::create_directories(*tmp_ / "empty");
-  EXPECT_EQ(runProgram("--dataset '" + (*tmp_ / "empty").string() + "' --output x.txt", *tmp_)
-                .exit_code,
-            1);
+  EXPECT_EQ(
+      runProgram("--dataset '" + (*tmp_ / "empty").string() + "' --output x.txt", *tmp_).exit_code,
+      1);
 
   // An output that cannot be written.
-  const ProgramRun w = runProgram("--dataset '" + (*tmp_ / "seq").string() +
-                               "' --max-frames 2 --output /nonexistent_dir/x.txt",
-                           *tmp_);
+  const ProgramRun w = runProgram(
+      "--dataset '" + (*tmp_ / "seq").string() + "' --max-frames 2 --output /nonexistent_dir/x.txt",
+      *tmp_);
   EXPECT_EQ(w.exit_code, 1);
   EXPECT_FALSE(w.err.empty());
 }

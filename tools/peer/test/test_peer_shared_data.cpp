@@ -1,13 +1,12 @@
 // The peer odometry (rgbd method) on the shared real sequences, evaluated with pplvo_eval
 // against their ground truth. Skipped when PPLVO_SHARED_DATA is not set or the data is absent.
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "pplvo/core/trajectory.h"
 #include "pplvo/dataset/dataset.h"
@@ -38,8 +37,8 @@ Figures runAndEvaluate(const fs::path& dir, double fps, peer::PeerMethod method)
     p.T_w_c = odo.process(f).T_w_c;
     traj.push_back(p);
   }
-  const fs::path est = fs::temp_directory_path() /
-                       ("pplvo_test_peer_" + std::to_string(::getpid()) + ".txt");
+  const fs::path est =
+      fs::temp_directory_path() / ("pplvo_test_peer_" + std::to_string(::getpid()) + ".txt");
   writeTumTrajectory(est.string(), traj);
   eval::TumReadOptions ro;
   ro.fps = fps;
@@ -53,13 +52,14 @@ Figures runAndEvaluate(const fs::path& dir, double fps, peer::PeerMethod method)
   Figures f;
   f.report = eval::evaluateTrajectories(gt.file, es.file, eo);
   f.stats = odo.stats();
-  std::printf("%s [%s]: ATE rmse %.4f m (%d pairs), RPE %.4f m/s %.3f deg/s; %lld/%lld "
-              "failures, mean %.1f ms/frame\n",
-              dir.filename().c_str(), peer::methodName(method), f.report.ate.error_m.rmse,
-              f.report.ate.error_m.count, f.report.rpe.trans_m.rmse / f.report.delta_s,
-              f.report.rpe.rot_rad.rmse / f.report.delta_s * 180.0 / M_PI,
-              static_cast<long long>(f.stats.failures), static_cast<long long>(f.stats.frames),
-              f.stats.meanMs());
+  std::printf(
+      "%s [%s]: ATE rmse %.4f m (%d pairs), RPE %.4f m/s %.3f deg/s; %lld/%lld "
+      "failures, mean %.1f ms/frame\n",
+      dir.filename().c_str(), peer::methodName(method), f.report.ate.error_m.rmse,
+      f.report.ate.error_m.count, f.report.rpe.trans_m.rmse / f.report.delta_s,
+      f.report.rpe.rot_rad.rmse / f.report.delta_s * 180.0 / M_PI,
+      static_cast<long long>(f.stats.failures), static_cast<long long>(f.stats.frames),
+      f.stats.meanMs());
   return f;
 }
 
@@ -78,7 +78,7 @@ TEST(PeerSharedData, IclLivingRoomMirroredCamera) {
   ASSERT_TRUE(f.report.ok());
   EXPECT_EQ(f.stats.failures, 0);
   EXPECT_GE(f.report.ate.error_m.count, 240);
-  EXPECT_LT(f.report.ate.error_m.rmse, 0.08);  // measured 0.037 m
+  EXPECT_LT(f.report.ate.error_m.rmse, 0.08);                     // measured 0.037 m
   EXPECT_LT(f.report.rpe.trans_m.rmse / f.report.delta_s, 0.09);  // measured 0.042 m/s
 }
 
@@ -89,7 +89,7 @@ TEST(PeerSharedData, TumSittingStatic) {
   ASSERT_TRUE(f.report.ok());
   EXPECT_EQ(f.stats.failures, 0);
   EXPECT_GE(f.report.ate.error_m.count, 130);
-  EXPECT_LT(f.report.ate.error_m.rmse, 0.04);  // measured 0.014 m
+  EXPECT_LT(f.report.ate.error_m.rmse, 0.04);                     // measured 0.014 m
   EXPECT_LT(f.report.rpe.trans_m.rmse / f.report.delta_s, 0.06);  // measured 0.026 m/s
 }
 

@@ -70,7 +70,7 @@ struct PeerOdometryOptions {
   /// Start OpenCV's iterations from the last estimated frame-to-frame motion (scaled by the
   /// frames elapsed since the reference) instead of the identity.
   bool use_motion_prior = true;
-  /// A frame with fewer valid depth pixels (finite, inside [min, max] depth) fails at once
+  /// A frame with fewer valid depth pixels (finite, inside (min, max) depth) fails at once
   /// without calling OpenCV.
   int min_valid_depth_pixels = 1000;
   FailurePolicy failure_policy = FailurePolicy::kHoldPose;
@@ -82,12 +82,12 @@ struct PeerOdometryOptions {
 
 /// Outcome of one frame.
 enum class PeerStatus {
-  kFirst,          ///< first frame (or first usable after a reset): defines the world frame
-  kOk,             ///< motion estimated by OpenCV
-  kNoDepth,        ///< too few valid depth pixels in this frame or in the reference
-  kNotConverged,   ///< OpenCV returned false (too few correspondences, motion too large, ...)
-  kBadInput,       ///< empty image, sizes that disagree, invalid camera, wrong types
-  kOpenCvError,    ///< cv::Exception thrown inside OpenCV (message kept)
+  kFirst,         ///< first frame (or first usable after a reset): defines the world frame
+  kOk,            ///< motion estimated by OpenCV
+  kNoDepth,       ///< too few valid depth pixels in this frame or in the reference
+  kNotConverged,  ///< OpenCV returned false (too few correspondences, motion too large, ...)
+  kBadInput,      ///< empty image, sizes that disagree, invalid camera, wrong types
+  kOpenCvError,   ///< cv::Exception thrown inside OpenCV (message kept)
 };
 const char* statusName(PeerStatus status);
 
@@ -100,10 +100,10 @@ struct PeerFrameResult {
   Pose3 T_w_c = Pose3::Identity();
   /// Estimated motion from the reference frame to this one (T_ref_c); identity on failure.
   Pose3 T_ref_c = Pose3::Identity();
-  int64_t reference_seq = -1;     ///< RgbdFrame::seq of the reference frame used
-  int valid_depth_pixels = 0;     ///< in this frame, inside [min, max] depth
-  double compute_ms = 0.0;        ///< wall time of process(): conversion + OpenCV
-  std::string message;            ///< why it failed (empty when ok)
+  int64_t reference_seq = -1;  ///< RgbdFrame::seq of the reference frame used
+  int valid_depth_pixels = 0;  ///< in this frame: finite, inside (min, max) depth
+  double compute_ms = 0.0;     ///< wall time of process(): conversion + OpenCV
+  std::string message;         ///< why it failed (empty when ok)
 };
 
 /// Running counters.
