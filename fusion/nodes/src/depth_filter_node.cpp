@@ -9,7 +9,11 @@
 namespace pplvo::nodes {
 
 DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, lcm::LCM& lcm)
-    : options_(options), lcm_(lcm), cgm_(options.cgm), ogm_(options.ogm) {
+    : options_(options),
+      lcm_(lcm),
+      sensor_(options.sensor),
+      cgm_(options.cgm, std::make_shared<depth_filter::QuadraticSensorModel>(options.sensor)),
+      ogm_(options.ogm) {
   if (options_.max_pending < 1) options_.max_pending = 1;
   subscriptions_.push_back(lcm_.subscribe(options_.rgbd_channel, &DepthFilterNode::onFrame, this));
   subscriptions_.push_back(lcm_.subscribe(options_.pose_channel, &DepthFilterNode::onPose, this));

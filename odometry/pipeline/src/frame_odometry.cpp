@@ -21,6 +21,14 @@ TrackerOutput FrameOdometry::initialise(const FrameFeatures& first) {
   return tracker_.initialise(first.seq);
 }
 
+TrackerOutput FrameOdometry::restart(const FrameFeatures& current) {
+  const Pose3 T_w_c = tracker_.T_w_c();
+  last_seq_ = current.seq;
+  TrackerOutput out = tracker_.initialise(current.seq, T_w_c);
+  out.status = TrackingStatus::kReinitialised;
+  return out;
+}
+
 FeatureMatches FrameOdometry::match(const FrameFeatures& reference, const FrameFeatures& current,
                                     const Pose3& T_curr_ref) {
   const PoseEstimatorOptions& use = options_.tracker.estimator;
@@ -67,9 +75,7 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
     // The reference is not the frame tracked last (frames were lost in between or the stream
     // restarted): a motion from it would not chain onto T_w_c. Restart at this frame.
     s.reinitialised = true;
-    TrackerOutput out = initialise(current);
-    if (last_seq_ >= 0) out.status = TrackingStatus::kReinitialised;
-    return out;
+    return last_seq_ < 0 ? initialise(current) : restart(current);
   }
   const FeatureMatches matches = match(reference, current, tracker_.predictedMotion());
   s.point_matches = static_cast<int>(matches.points.size());

@@ -40,6 +40,7 @@ struct DepthFilterNodeOptions {
   /// Frames waiting for their pose (1 s at 30 Hz); older ones are dropped and counted.
   int max_pending = 30;
   bool compress = false;  ///< ZLIB_F32 instead of RAW_F32 on the outputs
+  depth_filter::QuadraticSensorModel::Options sensor;  ///< sigma_z = coeff z^2 (paper eq. 1)
   depth_filter::CgmOptions cgm;
   depth_filter::OgmOptions ogm;  ///< ogm.max_window = --window
 };

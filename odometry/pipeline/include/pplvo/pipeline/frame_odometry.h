@@ -40,9 +40,13 @@ class FrameOdometry {
   /// Starts (or restarts) tracking at `first`: FIRST_FRAME with T_w_c = identity.
   TrackerOutput initialise(const FrameFeatures& first);
 
+  /// Restarts tracking at `current` without a motion estimate: the last pose is held and the
+  /// status is REINITIALISED (e.g. the reference never arrived).
+  TrackerOutput restart(const FrameFeatures& current);
+
   /// Estimates the pose of `current` (2D stage) from `reference`, the 3D stage of the frame
   /// tracked last. `reference.seq` must be that frame; otherwise (frames lost in between)
-  /// tracking is reinitialised at `current` with status REINITIALISED and stats->reinitialised.
+  /// tracking restarts at `current` (see restart()) and stats->reinitialised is set.
   TrackerOutput track(const FrameFeatures& reference, const FrameFeatures& current,
                       FrameOdometryStats* stats = nullptr);
 

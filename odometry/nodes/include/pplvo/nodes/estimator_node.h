@@ -1,0 +1,89 @@
+#pragma once
+/// pplvo-estimator: frame-to-frame odometry (pplvo::pipeline::FrameOdometry) as an LCM process.
+///
+/// | channel (default)   | type          | direction | content                                   |
+/// |---------------------|---------------|-----------|-------------------------------------------|
+/// | PPLVO_FEATURES      | features_t    | in        | STAGE_2D of each frame                    |
+/// | PPLVO_FEATURES_3D   | features_t    | in        | STAGE_3D: the reference for the next frame|
+/// | PPLVO_POSE          | pose_t        | out       | T_w_c, motion + covariance, status, window|
+/// | PPLVO_STATUS        | node_status_t | out       | once a second                             |
+///
+/// Frame k is tracked against the 3D features of the frame tracked last, which come back only
+/// after its pose went round the depth filter and the frontend. Frames that arrive meanwhile
+/// wait (at most max_waiting; the oldest are dropped, counted, and the next one is matched to
+/// the same reference over a longer motion). If the reference never comes (an upstream
+/// process died or dropped it), tracking restarts at the newest waiting frame with the last
+/// pose held (status REINITIALISED), so a lost message never stalls the pipeline.
+#include <cstdint>
+#include <deque>
+#include <lcm/lcm-cpp.hpp>
+#include <pplvo_msgs/features_t.hpp>
+#include <string>
+#include <vector>
+
+#include "pplvo/msgs/channels.h"
+#include "pplvo/msgs/convert.h"
+#include "pplvo/pipeline/frame_odometry.h"
+
+namespace pplvo::nodes {
+
+struct EstimatorNodeOptions {
+  std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::string features_channel = channels::kFeatures;
+  std::string features_3d_channel = channels::kFeatures3d;
+  std::string pose_channel = channels::kPose;
+  std::string status_channel = channels::kStatus;
+  /// Frames waiting for their reference; beyond this the oldest is dropped.
+  int max_waiting = 3;
+  /// Consecutive drops while the reference is missing before tracking restarts.
+  int max_drops_without_reference = 3;
+  pipeline::FrameOdometryOptions odometry;
+};
+
+/// Tracking outcome counts (per status), for summaries and tests.
+struct EstimatorCounts {
+  int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
+  int64_t restarts_missing_reference = 0;
+};
+
+class EstimatorNode {
+ public:
+  static constexpr const char* kName = "pplvo-estimator";
+
+  EstimatorNode(const EstimatorNodeOptions& options, lcm::LCM& lcm);
+  ~EstimatorNode();
+  EstimatorNode(const EstimatorNode&) = delete;
+  EstimatorNode& operator=(const EstimatorNode&) = delete;
+
+  void publishStatus(int64_t utime);
+  const msgs::NodeCounters& counters() const { return counters_; }
+  const EstimatorCounts& counts() const { return counts_; }
+  StageTimings allTimings() const;
+
+  void onFeatures(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                  const pplvo_msgs::features_t* msg);
+  void onFeatures3d(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                    const pplvo_msgs::features_t* msg);
+
+ private:
+  void handleFeatures(const pplvo_msgs::features_t& msg);
+  void handleFeatures3d(const pplvo_msgs::features_t& msg);
+  /// Tracks waiting frames while the reference they need is in.
+  void processWaiting();
+  void publish(const TrackerOutput& out, const FrameFeatures& frame,
+               const pipeline::FrameOdometryStats& stats);
+
+  EstimatorNodeOptions options_;
+  lcm::LCM& lcm_;
+  std::vector<lcm::Subscription*> subscriptions_;
+  pipeline::FrameOdometry odometry_;
+  std::deque<FrameFeatures> waiting_;  ///< stage 2D, oldest first
+  FrameFeatures reference_;            ///< stage 3D of the newest posed frame received
+  bool have_reference_ = false;
+  int drops_without_reference_ = 0;
+  msgs::NodeCounters counters_;
+  EstimatorCounts counts_;
+  StageTimings timings_;
+};
+
+}  // namespace pplvo::nodes

@@ -1,0 +1,90 @@
+#pragma once
+/// pplvo-frontend: the feature frontend (pplvo::pipeline::Frontend) as an LCM process.
+///
+/// | channel (default)   | type          | direction | content                                   |
+/// |---------------------|---------------|-----------|-------------------------------------------|
+/// | PPLVO_RGBD          | rgbd_frame_t  | in        | colour image of each frame                |
+/// | PPLVO_DEPTH_CGM     | depth_map_t   | in        | C-GM depth of the frame (planes, stage 2D)|
+/// | PPLVO_DEPTH_FUSED   | depth_map_t   | in        | fused depth once the pose is known        |
+/// | PPLVO_FEATURES      | features_t    | out       | STAGE_2D: points, lines, C-GM planes      |
+/// | PPLVO_FEATURES_3D   | features_t    | out       | STAGE_3D: the same lifted, fused planes   |
+/// | PPLVO_STATUS        | node_status_t | out       | once a second                             |
+///
+/// A frame's stage 2D is published when both its colour image and its C-GM depth are in
+/// (either may come first), stage 3D when its fused depth arrives. Every queue is bounded:
+/// entries older than the newest handled sequence number, or beyond max_pending, are dropped
+/// and counted.
+#include <cstdint>
+#include <deque>
+#include <lcm/lcm-cpp.hpp>
+#include <pplvo_msgs/depth_map_t.hpp>
+#include <pplvo_msgs/rgbd_frame_t.hpp>
+#include <string>
+#include <vector>
+
+#include "pplvo/msgs/channels.h"
+#include "pplvo/msgs/convert.h"
+#include "pplvo/pipeline/frontend.h"
+
+namespace pplvo::nodes {
+
+struct FrontendNodeOptions {
+  std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::string rgbd_channel = channels::kRgbd;
+  std::string cgm_channel = channels::kDepthCgm;
+  std::string fused_channel = channels::kDepthFused;
+  std::string features_channel = channels::kFeatures;
+  std::string features_3d_channel = channels::kFeatures3d;
+  std::string status_channel = channels::kStatus;
+  /// Frames held per queue (1 s at 30 Hz); older ones are dropped and counted.
+  int max_pending = 30;
+  pipeline::FrontendOptions frontend;
+};
+
+class FrontendNode {
+ public:
+  static constexpr const char* kName = "pplvo-frontend";
+
+  FrontendNode(const FrontendNodeOptions& options, lcm::LCM& lcm);
+  ~FrontendNode();
+  FrontendNode(const FrontendNode&) = delete;
+  FrontendNode& operator=(const FrontendNode&) = delete;
+
+  void publishStatus(int64_t utime);
+  const msgs::NodeCounters& counters() const { return counters_; }
+  const StageTimings& timings() const { return timings_; }
+  /// Decode/encode times of this node and the frontend's own stages, in one table.
+  StageTimings allTimings() const;
+
+  void onFrame(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+               const pplvo_msgs::rgbd_frame_t* msg);
+  void onCgm(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+             const pplvo_msgs::depth_map_t* msg);
+  void onFused(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+               const pplvo_msgs::depth_map_t* msg);
+
+ private:
+  struct PendingDepth {
+    int64_t seq;
+    DepthWithVariance depth;
+  };
+  void handleFrame(const pplvo_msgs::rgbd_frame_t& msg);
+  void handleCgm(const pplvo_msgs::depth_map_t& msg);
+  void handleFused(const pplvo_msgs::depth_map_t& msg);
+  /// Runs stage 2D for every frame whose colour and C-GM depth are both in.
+  void extractReady();
+  void warn(const std::string& what);
+
+  FrontendNodeOptions options_;
+  lcm::LCM& lcm_;
+  std::vector<lcm::Subscription*> subscriptions_;
+  pipeline::Frontend frontend_;
+  std::deque<RgbdFrame> frames_;           ///< colour in, C-GM depth not yet
+  std::deque<PendingDepth> cgm_;           ///< C-GM depth in, colour not yet
+  std::deque<FrameFeatures> awaiting_3d_;  ///< stage 2D published, fused depth not yet
+  int64_t last_extracted_seq_ = -1;
+  msgs::NodeCounters counters_;
+  StageTimings timings_;
+};
+
+}  // namespace pplvo::nodes

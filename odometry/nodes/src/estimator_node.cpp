@@ -1,0 +1,143 @@
+#include "pplvo/nodes/estimator_node.h"
+
+#include <pplvo_msgs/pose_t.hpp>
+
+#include "pplvo/msgs/convert_features.h"
+#include "pplvo/msgs/convert_pose.h"
+#include "pplvo/msgs/node_runtime.h"
+#include "pplvo/pipeline/odometry_pipeline.h"
+
+namespace pplvo::nodes {
+
+EstimatorNode::EstimatorNode(const EstimatorNodeOptions& options, lcm::LCM& lcm)
+    : options_(options), lcm_(lcm), odometry_(options.odometry) {
+  if (options_.max_waiting < 1) options_.max_waiting = 1;
+  subscriptions_.push_back(
+      lcm_.subscribe(options_.features_channel, &EstimatorNode::onFeatures, this));
+  subscriptions_.push_back(
+      lcm_.subscribe(options_.features_3d_channel, &EstimatorNode::onFeatures3d, this));
+}
+
+EstimatorNode::~EstimatorNode() {
+  for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+}
+
+void EstimatorNode::onFeatures(const lcm::ReceiveBuffer*, const std::string&,
+                               const pplvo_msgs::features_t* msg) {
+  msgs::guarded(counters_, kName, [&] { handleFeatures(*msg); });
+}
+void EstimatorNode::onFeatures3d(const lcm::ReceiveBuffer*, const std::string&,
+                                 const pplvo_msgs::features_t* msg) {
+  msgs::guarded(counters_, kName, [&] { handleFeatures3d(*msg); });
+}
+
+void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
+  ++counters_.frames_in;
+  counters_.last_seq = msg.seq;
+  if (msg.stage != pplvo_msgs::features_t::STAGE_2D) {
+    throw msgs::MessageError("features_t on the 2D channel is not STAGE_2D");
+  }
+  const int64_t last = odometry_.lastSeq();
+  if (last >= 0 && msg.seq <= last) {
+    ++counters_.frames_skipped;
+    counters_.last_warning = "features of frame " + std::to_string(msg.seq) + " came too late";
+    return;
+  }
+  FrameFeatures frame;
+  {
+    ScopedStageTimer t(timings_, "decode");
+    frame = msgs::fromMsg(msg);
+  }
+  if (last < 0) {  // first frame of the stream: the origin of the world frame
+    const TrackerOutput out = odometry_.initialise(frame);
+    publish(out, frame, {});
+    return;
+  }
+  waiting_.push_back(std::move(frame));
+  while (static_cast<int>(waiting_.size()) > options_.max_waiting) {
+    waiting_.pop_front();
+    ++counters_.frames_dropped;
+    ++drops_without_reference_;
+    counters_.last_warning = "frame dropped: the reference of the last pose is late";
+  }
+  processWaiting();
+  if (!waiting_.empty() && drops_without_reference_ > options_.max_drops_without_reference) {
+    // The reference is not coming: restart at the newest frame, holding the last pose.
+    FrameFeatures newest = std::move(waiting_.back());
+    counters_.frames_dropped += static_cast<int64_t>(waiting_.size()) - 1;
+    waiting_.clear();
+    ++counts_.restarts_missing_reference;
+    counters_.last_warning = "no 3D features for frame " + std::to_string(odometry_.lastSeq()) +
+                             ": tracking restarted at " + std::to_string(newest.seq);
+    TrackerOutput out = odometry_.restart(newest);
+    drops_without_reference_ = 0;
+    publish(out, newest, {});
+  }
+}
+
+void EstimatorNode::handleFeatures3d(const pplvo_msgs::features_t& msg) {
+  if (msg.stage != pplvo_msgs::features_t::STAGE_3D) {
+    throw msgs::MessageError("features_t on the 3D channel is not STAGE_3D");
+  }
+  if (msg.seq != odometry_.lastSeq()) {
+    // Only the last posed frame can serve as a reference.
+    ++counters_.frames_skipped;
+    counters_.last_warning = "3D features of frame " + std::to_string(msg.seq) +
+                             " are not the reference (" + std::to_string(odometry_.lastSeq()) +
+                             ")";
+    return;
+  }
+  {
+    ScopedStageTimer t(timings_, "decode");
+    reference_ = msgs::fromMsg(msg);
+  }
+  have_reference_ = true;
+  processWaiting();
+}
+
+void EstimatorNode::processWaiting() {
+  while (!waiting_.empty() && have_reference_ && reference_.seq == odometry_.lastSeq()) {
+    FrameFeatures current = std::move(waiting_.front());
+    waiting_.pop_front();
+    pipeline::FrameOdometryStats stats;
+    const TrackerOutput out = odometry_.track(reference_, current, &stats);
+    have_reference_ = false;  // the next frame needs this one's 3D features
+    drops_without_reference_ = 0;
+    publish(out, current, stats);
+  }
+}
+
+void EstimatorNode::publish(const TrackerOutput& out, const FrameFeatures& frame,
+                            const pipeline::FrameOdometryStats& stats) {
+  FramePose pose = toFramePose(out);
+  pose.utime = frame.utime;
+  pose.seq = frame.seq;
+  pose.stamp = frame.stamp;
+  (void)stats;  // pose_t carries the inliers the estimate used (toFramePose)
+  switch (pose.status) {
+    case TrackingStatus::kFirstFrame: ++counts_.first; break;
+    case TrackingStatus::kTracking: ++counts_.tracking; break;
+    case TrackingStatus::kVelocityModel: ++counts_.velocity_model; break;
+    case TrackingStatus::kLost: ++counts_.lost; break;
+    case TrackingStatus::kReinitialised: ++counts_.reinitialised; break;
+  }
+  {
+    ScopedStageTimer t(timings_, "encode");
+    const pplvo_msgs::pose_t m = msgs::toMsg(pose);
+    lcm_.publish(options_.pose_channel, &m);
+  }
+  ++counters_.frames_out;
+}
+
+StageTimings EstimatorNode::allTimings() const {
+  return pipeline::mergeTimings({&timings_, &odometry_.timings()});
+}
+
+void EstimatorNode::publishStatus(int64_t utime) {
+  msgs::guarded(counters_, kName, [&] {
+    const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, allTimings(), utime);
+    lcm_.publish(options_.status_channel, &m);
+  });
+}
+
+}  // namespace pplvo::nodes

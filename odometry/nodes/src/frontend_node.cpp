@@ -1,0 +1,176 @@
+#include "pplvo/nodes/frontend_node.h"
+
+#include <pplvo_msgs/features_t.hpp>
+
+#include "pplvo/msgs/convert_features.h"
+#include "pplvo/msgs/node_runtime.h"
+#include "pplvo/pipeline/odometry_pipeline.h"
+
+namespace pplvo::nodes {
+
+namespace {
+
+/// Drops the front of `q` while it holds more than `max` entries; returns how many.
+template <typename Q>
+int64_t trim(Q& q, int max) {
+  int64_t dropped = 0;
+  while (static_cast<int>(q.size()) > max) {
+    q.pop_front();
+    ++dropped;
+  }
+  return dropped;
+}
+
+}  // namespace
+
+FrontendNode::FrontendNode(const FrontendNodeOptions& options, lcm::LCM& lcm)
+    : options_(options), lcm_(lcm), frontend_(options.frontend) {
+  if (options_.max_pending < 1) options_.max_pending = 1;
+  subscriptions_.push_back(lcm_.subscribe(options_.rgbd_channel, &FrontendNode::onFrame, this));
+  subscriptions_.push_back(lcm_.subscribe(options_.cgm_channel, &FrontendNode::onCgm, this));
+  subscriptions_.push_back(lcm_.subscribe(options_.fused_channel, &FrontendNode::onFused, this));
+}
+
+FrontendNode::~FrontendNode() {
+  for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+}
+
+void FrontendNode::onFrame(const lcm::ReceiveBuffer*, const std::string&,
+                           const pplvo_msgs::rgbd_frame_t* msg) {
+  msgs::guarded(counters_, kName, [&] { handleFrame(*msg); });
+}
+void FrontendNode::onCgm(const lcm::ReceiveBuffer*, const std::string&,
+                         const pplvo_msgs::depth_map_t* msg) {
+  msgs::guarded(counters_, kName, [&] { handleCgm(*msg); });
+}
+void FrontendNode::onFused(const lcm::ReceiveBuffer*, const std::string&,
+                           const pplvo_msgs::depth_map_t* msg) {
+  msgs::guarded(counters_, kName, [&] { handleFused(*msg); });
+}
+
+void FrontendNode::warn(const std::string& what) { counters_.last_warning = what; }
+
+void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
+  ++counters_.frames_in;
+  counters_.last_seq = msg.seq;
+  if (msg.seq <= last_extracted_seq_) {
+    ++counters_.frames_skipped;
+    warn("frame " + std::to_string(msg.seq) + " is older than one already handled");
+    return;
+  }
+  RgbdFrame frame;
+  {
+    ScopedStageTimer t(timings_, "decode");
+    frame = msgs::fromMsg(msg);  // MessageError -> counted skip
+  }
+  if (frame.bgr.empty() || frame.bgr.rows != frame.camera.height ||
+      frame.bgr.cols != frame.camera.width) {
+    throw msgs::MessageError("rgbd_frame_t: colour image size disagrees with camera_info");
+  }
+  frame.depth_m.release();  // the frontend takes depth from the depth filter
+  frames_.push_back(std::move(frame));
+  if (const int64_t n = trim(frames_, options_.max_pending)) {
+    counters_.frames_dropped += n;
+    warn("frames dropped: no C-GM depth came for them");
+  }
+  extractReady();
+}
+
+void FrontendNode::handleCgm(const pplvo_msgs::depth_map_t& msg) {
+  if (msg.seq <= last_extracted_seq_) {
+    ++counters_.frames_skipped;
+    warn("C-GM depth of frame " + std::to_string(msg.seq) + " came too late");
+    return;
+  }
+  PendingDepth p{msg.seq, {}};
+  {
+    ScopedStageTimer t(timings_, "decode");
+    p.depth = msgs::fromMsg(msg);
+  }
+  cgm_.push_back(std::move(p));
+  if (const int64_t n = trim(cgm_, options_.max_pending)) {
+    counters_.frames_dropped += n;
+    warn("C-GM maps dropped: their frames never came");
+  }
+  extractReady();
+}
+
+void FrontendNode::extractReady() {
+  // Pair colour and C-GM depth by sequence number; anything older than a pair is stale.
+  while (!frames_.empty() && !cgm_.empty()) {
+    const int64_t fs = frames_.front().seq, ds = cgm_.front().seq;
+    if (fs < ds) {
+      frames_.pop_front();
+      ++counters_.frames_dropped;
+      warn("frame " + std::to_string(fs) + " dropped: its C-GM depth never came");
+      continue;
+    }
+    if (ds < fs) {
+      cgm_.pop_front();
+      ++counters_.frames_dropped;
+      warn("C-GM depth " + std::to_string(ds) + " dropped: its frame never came");
+      continue;
+    }
+    RgbdFrame frame = std::move(frames_.front());
+    DepthWithVariance depth = std::move(cgm_.front().depth);
+    frames_.pop_front();
+    cgm_.pop_front();
+    last_extracted_seq_ = frame.seq;
+    pipeline::FrontendStats stats;
+    FrameFeatures features = frontend_.extract2d(frame, depth, &stats);
+    if (!stats.warning.empty()) warn(stats.warning);
+    {
+      ScopedStageTimer t(timings_, "encode");
+      const pplvo_msgs::features_t m = msgs::toMsg(features, pplvo_msgs::features_t::STAGE_2D);
+      lcm_.publish(options_.features_channel, &m);
+    }
+    awaiting_3d_.push_back(std::move(features));
+    if (const int64_t n = trim(awaiting_3d_, options_.max_pending)) {
+      counters_.frames_dropped += n;
+      warn("features dropped: their fused depth never came");
+    }
+  }
+}
+
+void FrontendNode::handleFused(const pplvo_msgs::depth_map_t& msg) {
+  // Stage-2D features of frames older than this map will never get theirs.
+  while (!awaiting_3d_.empty() && awaiting_3d_.front().seq < msg.seq) {
+    awaiting_3d_.pop_front();
+    ++counters_.frames_dropped;
+    warn("features dropped: their fused depth never came");
+  }
+  if (awaiting_3d_.empty() || awaiting_3d_.front().seq != msg.seq) {
+    ++counters_.frames_skipped;
+    warn("fused depth for unknown frame " + std::to_string(msg.seq));
+    return;
+  }
+  FrameFeatures features = std::move(awaiting_3d_.front());
+  awaiting_3d_.pop_front();
+  DepthWithVariance fused;
+  {
+    ScopedStageTimer t(timings_, "decode");
+    fused = msgs::fromMsg(msg);
+  }
+  pipeline::FrontendStats stats;
+  frontend_.lift3d(features, fused, &stats);
+  if (!stats.warning.empty()) warn(stats.warning);
+  {
+    ScopedStageTimer t(timings_, "encode");
+    const pplvo_msgs::features_t m = msgs::toMsg(features, pplvo_msgs::features_t::STAGE_3D);
+    lcm_.publish(options_.features_3d_channel, &m);
+  }
+  ++counters_.frames_out;
+}
+
+StageTimings FrontendNode::allTimings() const {
+  return pipeline::mergeTimings({&timings_, &frontend_.timings()});
+}
+
+void FrontendNode::publishStatus(int64_t utime) {
+  msgs::guarded(counters_, kName, [&] {
+    const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, allTimings(), utime);
+    lcm_.publish(options_.status_channel, &m);
+  });
+}
+
+}  // namespace pplvo::nodes

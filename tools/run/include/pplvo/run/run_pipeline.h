@@ -1,0 +1,60 @@
+#pragma once
+/// pplvo-run: every pplvo process (player, depth filter, frontend, estimator) in one process on
+/// one memq:// LCM instance. The player publishes as fast as possible and dispatches the
+/// queue after each frame, so every message of frame k is handled before frame k+1 is read:
+/// deterministic, every frame processed, the same code and messages as the separate
+/// processes. Evaluations use this.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pplvo/core/stage_timer.h"
+#include "pplvo/core/trajectory.h"
+#include "pplvo/msgs/convert.h"
+#include "pplvo/pipeline/pipeline_options.h"
+#include "pplvo/player/player_node.h"
+
+namespace pplvo::run {
+
+struct RunOptions {
+  std::string dataset_dir;           ///< --dataset
+  std::string output;                ///< --output: TUM trajectory (empty: not written)
+  std::string summary;               ///< --summary: YAML run summary (empty: not written)
+  int64_t max_frames = 0;            ///< --max-frames (0: all)
+  int64_t start = 0;                 ///< --start: first associated frame
+  double fps = 0.0;                  ///< --fps: frame rate of integer-stamped datasets
+  bool skip_bad = false;             ///< --skip-bad: skip corrupt frames (counted)
+  bool progress = false;             ///< progress line on stderr
+  pipeline::PipelineOptions pipeline;
+};
+
+/// Counters of one node as the run summary reports them.
+struct NodeReport {
+  std::string name;
+  msgs::NodeCounters counters;
+  StageTimings timings;
+};
+
+struct RunResult {
+  Trajectory trajectory;  ///< T_w_c per posed frame, stamps verbatim from the dataset
+  int64_t frames_published = 0, frames_skipped = 0;
+  int64_t poses = 0;
+  int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
+  double elapsed_s = 0.0;  ///< wall time of the run (reading the dataset included)
+  std::vector<NodeReport> nodes;
+  bool failed = false;
+  std::string error;
+
+  double framesPerSecond() const { return elapsed_s > 0 ? poses / elapsed_s : 0.0; }
+  /// Sum of the mean stage times of every node except the player (ms per frame).
+  double pipelineMsPerFrame() const;
+  /// Human-readable summary: counts, per-stage timing per node, throughput.
+  std::string text() const;
+  /// The same as YAML (key: value), for scripts.
+  std::string yaml() const;
+};
+
+/// Runs the whole sequence. Never throws: errors are returned in the result.
+RunResult runPipeline(const RunOptions& options);
+
+}  // namespace pplvo::run

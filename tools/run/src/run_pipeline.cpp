@@ -1,0 +1,185 @@
+#include "pplvo/run/run_pipeline.h"
+
+#include <cstdio>
+#include <lcm/lcm-cpp.hpp>
+#include <pplvo_msgs/pose_t.hpp>
+#include <sstream>
+
+#include "pplvo/msgs/convert_pose.h"
+#include "pplvo/msgs/node_runtime.h"
+#include "pplvo/nodes/depth_filter_node.h"
+#include "pplvo/nodes/estimator_node.h"
+#include "pplvo/nodes/frontend_node.h"
+
+namespace pplvo::run {
+
+namespace {
+
+/// Collects the published poses into the trajectory (the logger's job in a launch).
+class PoseCollector {
+ public:
+  PoseCollector(lcm::LCM& lcm, RunResult& result) : lcm_(lcm), result_(result) {
+    sub_ = lcm_.subscribe(channels::kPose, &PoseCollector::onPose, this);
+  }
+  ~PoseCollector() { lcm_.unsubscribe(sub_); }
+  void onPose(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::pose_t* msg) {
+    msgs::guarded(counters_, "pplvo-run", [&] {
+      const FramePose p = msgs::fromMsg(*msg);
+      StampedPose s;
+      s.stamp_text = p.stamp;
+      s.T_w_c = p.T_w_c;
+      result_.trajectory.push_back(s);
+      ++result_.poses;
+      switch (p.status) {
+        case TrackingStatus::kFirstFrame: ++result_.first; break;
+        case TrackingStatus::kTracking: ++result_.tracking; break;
+        case TrackingStatus::kVelocityModel: ++result_.velocity_model; break;
+        case TrackingStatus::kLost: ++result_.lost; break;
+        case TrackingStatus::kReinitialised: ++result_.reinitialised; break;
+      }
+    });
+  }
+  const msgs::NodeCounters& counters() const { return counters_; }
+
+ private:
+  lcm::LCM& lcm_;
+  RunResult& result_;
+  lcm::Subscription* sub_ = nullptr;
+  msgs::NodeCounters counters_;
+};
+
+}  // namespace
+
+double RunResult::pipelineMsPerFrame() const {
+  double ms = 0;
+  for (const NodeReport& n : nodes) {
+    if (n.name == "pplvo-player") continue;
+    for (const StageStats& s : n.timings.stages()) {
+      // Stages that run once per frame; per-frame cost = total / frames.
+      if (poses > 0) ms += s.total_ms / static_cast<double>(poses);
+    }
+  }
+  return ms;
+}
+
+std::string RunResult::text() const {
+  std::ostringstream out;
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "frames: published %lld, skipped %lld, posed %lld (first %lld, tracking %lld, "
+                "velocity model %lld, lost %lld, reinitialised %lld)\n",
+                static_cast<long long>(frames_published), static_cast<long long>(frames_skipped),
+                static_cast<long long>(poses), static_cast<long long>(first),
+                static_cast<long long>(tracking), static_cast<long long>(velocity_model),
+                static_cast<long long>(lost), static_cast<long long>(reinitialised));
+  out << buf;
+  for (const NodeReport& n : nodes) {
+    std::snprintf(buf, sizeof buf, "%s: in %lld out %lld dropped %lld skipped %lld errors %lld\n",
+                  n.name.c_str(), static_cast<long long>(n.counters.frames_in),
+                  static_cast<long long>(n.counters.frames_out),
+                  static_cast<long long>(n.counters.frames_dropped),
+                  static_cast<long long>(n.counters.frames_skipped),
+                  static_cast<long long>(n.counters.errors));
+    out << buf;
+    if (!n.counters.last_warning.empty()) out << "  last warning: " << n.counters.last_warning << "\n";
+    std::istringstream table(n.timings.table());
+    for (std::string line; std::getline(table, line);) out << "  " << line << "\n";
+  }
+  std::snprintf(buf, sizeof buf,
+                "throughput: %.1f frames/s end to end (%.2f s wall), pipeline %.1f ms/frame "
+                "(sum of stages, excluding the player)\n",
+                framesPerSecond(), elapsed_s, pipelineMsPerFrame());
+  out << buf;
+  if (failed) out << "FAILED: " << error << "\n";
+  return out.str();
+}
+
+std::string RunResult::yaml() const {
+  std::ostringstream out;
+  out << "frames_published: " << frames_published << "\n"
+      << "frames_skipped: " << frames_skipped << "\n"
+      << "poses: " << poses << "\n"
+      << "status: {first: " << first << ", tracking: " << tracking
+      << ", velocity_model: " << velocity_model << ", lost: " << lost
+      << ", reinitialised: " << reinitialised << "}\n"
+      << "elapsed_s: " << elapsed_s << "\n"
+      << "frames_per_s: " << framesPerSecond() << "\n"
+      << "pipeline_ms_per_frame: " << pipelineMsPerFrame() << "\n"
+      << "failed: " << (failed ? "true" : "false") << "\n";
+  if (failed) out << "error: \"" << error << "\"\n";
+  out << "nodes:\n";
+  for (const NodeReport& n : nodes) {
+    out << "  " << n.name << ":\n"
+        << "    frames_in: " << n.counters.frames_in << "\n"
+        << "    frames_out: " << n.counters.frames_out << "\n"
+        << "    frames_dropped: " << n.counters.frames_dropped << "\n"
+        << "    frames_skipped: " << n.counters.frames_skipped << "\n"
+        << "    errors: " << n.counters.errors << "\n"
+        << "    stages_mean_ms:\n";
+    for (const StageStats& s : n.timings.stages()) {
+      out << "      " << s.name << ": " << s.meanMs() << "\n";
+    }
+  }
+  return out.str();
+}
+
+RunResult runPipeline(const RunOptions& options) {
+  RunResult result;
+  try {
+    lcm::LCM lcm("memq://");
+    if (!lcm.good()) throw std::runtime_error("cannot open memq:// LCM");
+
+    nodes::DepthFilterNodeOptions df;
+    df.model = options.pipeline.depth_filter.model;
+    df.sensor = options.pipeline.depth_filter.sensor;
+    df.cgm = options.pipeline.depth_filter.cgm;
+    df.ogm = options.pipeline.depth_filter.ogm;
+    nodes::DepthFilterNode depth_filter(df, lcm);
+
+    nodes::FrontendNodeOptions fe;
+    fe.frontend = options.pipeline.frontend;
+    nodes::FrontendNode frontend(fe, lcm);
+
+    nodes::EstimatorNodeOptions es;
+    es.odometry = options.pipeline.odometry;
+    nodes::EstimatorNode estimator(es, lcm);
+
+    PoseCollector collector(lcm, result);
+
+    player::PlayerOptions po;
+    po.dataset_dir = options.dataset_dir;
+    po.rate = 0.0;  // as fast as possible; the player drains memq after each frame
+    po.fps = options.fps;
+    po.start = options.start;
+    po.max_frames = options.max_frames;
+    po.skip_bad = options.skip_bad;
+    po.progress = options.progress;
+    po.status_period_s = 1e9;  // no status messages inside one process
+    player::PlayerNode player(po, lcm);
+
+    const player::PlayerResult pr = player.run();
+    result.frames_published = pr.published;
+    result.frames_skipped = pr.skipped;
+    result.elapsed_s = pr.elapsed_s;
+    if (pr.failed) {
+      result.failed = true;
+      result.error = pr.error;
+    }
+    result.nodes.push_back({"pplvo-player", player.counters(), player.timings()});
+    result.nodes.push_back(
+        {nodes::DepthFilterNode::kName, depth_filter.counters(), depth_filter.timings()});
+    result.nodes.push_back({nodes::FrontendNode::kName, frontend.counters(), frontend.allTimings()});
+    result.nodes.push_back(
+        {nodes::EstimatorNode::kName, estimator.counters(), estimator.allTimings()});
+    if (collector.counters().frames_skipped + collector.counters().errors > 0) {
+      result.failed = true;
+      result.error = "invalid pose messages: " + collector.counters().last_warning;
+    }
+  } catch (const std::exception& e) {
+    result.failed = true;
+    result.error = e.what();
+  }
+  return result;
+}
+
+}  // namespace pplvo::run
