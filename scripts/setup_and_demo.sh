@@ -11,9 +11,8 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release > build/configure.log 2>&1 || { c
 cmake --build build -j "$(nproc)"
 out=build/demo
 mkdir -p "$out"
-if [ ! -f "$out/synth_room/groundtruth.txt" ]; then
-  build/bin/pplvo-synth --output "$out/synth_room" --frames 90 --seed 1 --scene room
-fi
+rm -rf "$out/synth_room"
+build/bin/pplvo-synth --output "$out/synth_room" --frames 90 --seed 1 --scene room
 scripts/run_demo_pipeline.sh "$out/synth_room" "$out/run"
 echo "demo: trajectory $out/run/trajectory.txt, processes' report $out/run/launch_report.txt," \
      "errors $out/run/eval.txt (plot: build/bin/pplvo-plot $out/synth_room/groundtruth.txt" \
