@@ -285,6 +285,10 @@ void listFields(V& v, features::PointExtractorOptions& o) {
   v.field("sift_contrast_threshold", o.sift_contrast_threshold, "SIFT contrast threshold",
           positive());
   v.field("brisk_threshold", o.brisk_threshold, "BRISK AGAST threshold", atLeast(0));
+  v.field("subpixel_refinement", o.subpixel_refinement,
+          "sub-pixel keypoints: quadratic peak of the Shi-Tomasi response near the detection");
+  v.field("subpixel_window_px", o.subpixel_window_px, "half-width of the structure-tensor window",
+          atLeast(1));
 }
 
 template <class V>
