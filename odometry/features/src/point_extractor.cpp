@@ -258,13 +258,12 @@ PointExtraction PointExtractor::extract(const cv::Mat& image, const PinholeCamer
     const bool undistort = camera.valid() && camera.hasDistortion();
     result.points.reserve(selected.size());
     for (auto& kp : selected) {
-      if (options_.subpixel_refinement) {
+      // FAST corners only: SIFT, AKAZE and BRISK interpolate their own extrema.
+      if (options_.subpixel_refinement && options_.detector == PointDetector::kOrb) {
         // Search as far as the detection's own rounding reaches: half a pixel of its level.
         const double level_px = std::pow(options_.orb_scale_factor, std::max(0, kp.octave));
-        const int radius = options_.detector == PointDetector::kOrb
-                               ? static_cast<int>(std::ceil(0.5 * level_px - 1e-9))
-                               : 0;
-        kp.pt = refineCorner(gray, kp.pt, std::max(radius, 1), options_.subpixel_window_px);
+        const int radius = std::max(1, static_cast<int>(std::ceil(0.5 * level_px - 1e-9)));
+        kp.pt = refineCorner(gray, kp.pt, radius, options_.subpixel_window_px);
       }
       PointFeature f;
       const Eigen::Vector2d raw(kp.pt.x, kp.pt.y);

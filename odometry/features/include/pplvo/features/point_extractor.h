@@ -53,14 +53,16 @@ struct PointExtractorOptions {
   double akaze_threshold = 0.0008;
   double sift_contrast_threshold = 0.03;
   int brisk_threshold = 20;
-  /// Sub-pixel keypoint positions: the peak of the Shi-Tomasi corner response around the
+  /// Sub-pixel keypoint positions (ORB only: the other detectors interpolate their own
+  /// extrema): the peak of the Shi-Tomasi corner response around the
   /// detected pixel, interpolated by a quadratic (as SIFT/SURF interpolate their extrema).
   /// FAST corners are integer pixels (x 1.2^octave above level 0); with slow motion their
-  /// rounding errors are the same for most points of a frame and bias the pose. Measured
-  /// (docs/features.md): synthetic room RPE 25 -> 11 mm/s with points alone, but no gain on
-  /// the real ICL/TUM sequences (image noise moves the response peak), hence off by default.
-  bool subpixel_refinement = false;
-  int subpixel_window_px = 2;  ///< half-width of the structure-tensor window
+  /// rounding errors are the same for most points of a frame and bias the pose. Measured in
+  /// docs/features.md (ATE and RPE lower on the synthetic, ICL and TUM sequences).
+  bool subpixel_refinement = true;
+  /// Half-width of the structure-tensor window: 5 (11x11) averages the image noise of real
+  /// sensors; 2 (5x5) is better on noiseless renders only.
+  int subpixel_window_px = 5;
 
   /// Calls v(name, field) for every field (config load/dump/compare; `detector` is passed as
   /// PointDetector&: use parsePointDetector / pointDetectorName for text).
