@@ -8,6 +8,7 @@
 #include <pplvo_msgs/stream_event_t.hpp>
 #include <string>
 
+#include "pplvo/core/args.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/msgs/node_runtime.h"
 
@@ -40,89 +41,57 @@ std::string nodeUsage() {
 
 bool parseNodeArgs(int argc, const char* const* argv, NodeOptions* o, std::string* error,
                    bool* help) {
-  *help = false;
-  for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      *help = true;
-      return true;
-    }
-    std::string v;
-    const auto eq = a.find('=');
-    if (a.rfind("--", 0) == 0 && eq != std::string::npos) {  // --key=value
-      v = a.substr(eq + 1);
-      a = a.substr(0, eq);
-    } else if (i + 1 >= argc) {
-      *error = "missing value after " + a;
-      return false;
-    } else {
-      v = argv[++i];
-    }
-    try {
-      if (a == "--backend")
-        o->backend = v;
-      else if (a == "--device")
-        o->device.device = v;
-      else if (a == "--lcm-url")
-        o->lcm_url = v;
-      else if (a == "--channel")
-        o->channel = v;
-      else if (a == "--stream-channel")
-        o->stream_channel = v;
-      else if (a == "--status-channel")
-        o->status_channel = v;
-      else if (a == "--width")
-        o->device.width = std::stoi(v);
-      else if (a == "--height")
-        o->device.height = std::stoi(v);
-      else if (a == "--fps")
-        o->device.fps = std::stoi(v);
-      else if (a == "--registration") {
-        if (v != "on" && v != "off") {
-          *error = "--registration takes on or off";
-          return false;
-        }
-        o->device.registration = v == "on";
-      } else if (a == "--calib")
-        o->calib = v;
-      else if (a == "--rgb-encoding") {
-        const auto e = parseRgbEncoding(v);
-        if (!e) {
-          *error = "--rgb-encoding takes raw, jpeg or png";
-          return false;
-        }
-        o->rgb_encoding = *e;
-      } else if (a == "--depth-encoding") {
-        const auto e = parseDepthEncoding(v);
-        if (!e) {
-          *error = "--depth-encoding takes raw, zlib or png";
-          return false;
-        }
-        o->depth_encoding = *e;
-      } else if (a == "--jpeg-quality")
-        o->jpeg_quality = std::stoi(v);
-      else if (a == "--max-fps")
-        o->max_fps = std::stod(v);
-      else if (a == "--max-frames")
-        o->max_frames = std::stoll(v);
-      else if (a == "--lost-after")
-        o->lost_after_s = std::stod(v);
-      else if (a == "--reconnect-period")
-        o->reconnect_period_s = std::stod(v);
-      else if (a == "--fakenect-end") {
-        if (v != "stop" && v != "unplug") {
-          *error = "--fakenect-end takes stop or unplug";
-          return false;
-        }
-        o->device.fakenect_end_is_unplug = v == "unplug";
-      } else {
-        *error = "unknown option " + a;
-        return false;
-      }
-    } catch (const std::exception&) {
-      *error = "bad value '" + v + "' for " + a;
-      return false;
-    }
+  auto choice = [](const std::string& error_text, auto apply) {
+    return [error_text, apply](const std::string& v) -> std::string {
+      return apply(v) ? "" : error_text;
+    };
+  };
+  ArgParser p;
+  p.option("--backend", &o->backend)
+      .option("--device", &o->device.device)
+      .option("--lcm-url", &o->lcm_url)
+      .option("--channel", &o->channel)
+      .option("--stream-channel", &o->stream_channel)
+      .option("--status-channel", &o->status_channel)
+      .option("--width", &o->device.width)
+      .option("--height", &o->device.height)
+      .option("--fps", &o->device.fps)
+      .option("--calib", &o->calib)
+      .option("--jpeg-quality", &o->jpeg_quality)
+      .option("--max-fps", &o->max_fps)
+      .option("--max-frames", &o->max_frames)
+      .option("--lost-after", &o->lost_after_s)
+      .option("--reconnect-period", &o->reconnect_period_s)
+      .option("--registration", choice("--registration takes on or off",
+                                       [o](const std::string& v) {
+                                         if (v != "on" && v != "off") return false;
+                                         o->device.registration = v == "on";
+                                         return true;
+                                       }))
+      .option("--rgb-encoding", choice("--rgb-encoding takes raw, jpeg or png",
+                                       [o](const std::string& v) {
+                                         const auto e = parseRgbEncoding(v);
+                                         if (e) o->rgb_encoding = *e;
+                                         return e.has_value();
+                                       }))
+      .option("--depth-encoding", choice("--depth-encoding takes raw, zlib or png",
+                                         [o](const std::string& v) {
+                                           const auto e = parseDepthEncoding(v);
+                                           if (e) o->depth_encoding = *e;
+                                           return e.has_value();
+                                         }))
+      .option("--fakenect-end", choice("--fakenect-end takes stop or unplug",
+                                       [o](const std::string& v) {
+                                         if (v != "stop" && v != "unplug") return false;
+                                         o->device.fakenect_end_is_unplug = v == "unplug";
+                                         return true;
+                                       }));
+  p.parse(argsFromArgv(argc, argv));
+  *help = p.help();
+  if (*help) return true;
+  if (!p.ok()) {
+    *error = p.errors().front();
+    return false;
   }
   if (o->backend != "openni2" && o->backend != "freenect") {
     *error = "--backend takes openni2 or freenect";

@@ -1,15 +1,13 @@
 // pplvo-player: publishes a TUM-layout RGB-D folder on LCM. See docs/player.md.
-#include <unistd.h>
-
-#include <algorithm>
 #include <cstdio>
 
+#include "pplvo/core/args.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/player/player_node.h"
 
 int main(int argc, char** argv) {
   using namespace pplvo;
-  const std::vector<std::string> args(argv + 1, argv + argc);
+  const std::vector<std::string> args = argsFromArgv(argc, argv);
   player::ParseResult parsed = player::parsePlayerArgs(args);
   if (parsed.help) {
     std::fputs(player::playerUsage().c_str(), stdout);
@@ -21,10 +19,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   player::PlayerOptions& opt = parsed.options;
-  if (std::find(args.begin(), args.end(), "--progress") == args.end() &&
-      std::find(args.begin(), args.end(), "--no-progress") == args.end()) {
-    opt.progress = ::isatty(STDERR_FILENO) == 1;
-  }
+  opt.progress = progressEnabled(args, opt.progress);  // default: stderr is a terminal
   msgs::installShutdownHandlers();
   try {
     auto lcm = msgs::openLcm(opt.lcm_url);

@@ -5,31 +5,17 @@
 #include <cstdio>
 #include <exception>
 #include <future>
-#include <map>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
 #include <sstream>
 
+#include "pplvo/core/args.h"
 #include "pplvo/msgs/node_runtime.h"
 
 namespace pplvo::player {
 namespace {
 
 using Img = pplvo_msgs::image_t;
-
-bool parseDouble(const std::string& s, double& out) {
-  if (s.empty()) return false;
-  char* end = nullptr;
-  out = std::strtod(s.c_str(), &end);
-  return end == s.c_str() + s.size() && std::isfinite(out);
-}
-
-bool parseInt(const std::string& s, int64_t& out) {
-  if (s.empty()) return false;
-  char* end = nullptr;
-  out = std::strtoll(s.c_str(), &end, 10);
-  return end == s.c_str() + s.size();
-}
 
 dataset::DatasetOptions datasetOptions(const PlayerOptions& o) {
   dataset::DatasetOptions d;
@@ -79,130 +65,56 @@ Exit status: 0 done (or stopped by Ctrl-C), 1 fatal error, 2 bad command line.
 ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
   ParseResult r;
   PlayerOptions& o = r.options;
-  const std::map<std::string, int> flags = {
-      {"--lockstep", 0}, {"--skip-bad", 1}, {"--loop", 2}, {"--progress", 3}, {"--no-progress", 4}};
-  for (size_t i = 0; i < args.size(); ++i) {
-    std::string key = args[i];
-    std::string value;
-    bool has_value = false;
-    if (key == "-h" || key == "--help") {
-      r.help = true;
-      continue;
-    }
-    const auto eq = key.find('=');
-    if (key.rfind("--", 0) == 0 && eq != std::string::npos) {
-      value = key.substr(eq + 1);
-      key = key.substr(0, eq);
-      has_value = true;
-    }
-    if (auto f = flags.find(key); f != flags.end()) {
-      if (has_value) r.errors.push_back(key + " takes no value");
-      switch (f->second) {
-        case 0:
-          o.lockstep = true;
-          break;
-        case 1:
-          o.skip_bad = true;
-          break;
-        case 2:
-          o.loop = true;
-          break;
-        case 3:
-          o.progress = true;
-          break;
-        case 4:
-          o.progress = false;
-          break;
+  auto encoding = [](const char* name, std::vector<std::pair<const char*, int8_t>> choices,
+                     int8_t* out) {
+    return [=](const std::string& v) -> std::string {
+      std::string names;
+      for (size_t k = 0; k < choices.size(); ++k) {
+        if (v == choices[k].first) {
+          *out = choices[k].second;
+          return "";
+        }
+        names += (k == 0 ? "" : k + 1 == choices.size() ? " or " : ", ") +
+                 std::string(choices[k].first);
       }
-      continue;
-    }
-    static const char* kValued[] = {
-        "--dataset",      "--camera",           "--lcm-url",        "--channel",
-        "--pose-channel", "--stream-channel",   "--status-channel", "--rate",
-        "--fps",          "--lockstep-timeout", "--start",          "--max-frames",
-        "--max-depth-m",  "--rgb-encoding",     "--depth-encoding", "--jpeg-quality"};
-    bool known = false;
-    for (const char* k : kValued) known = known || key == k;
-    if (!known) {
-      r.errors.push_back("unknown option '" + args[i] + "'");
-      continue;
-    }
-    if (!has_value) {
-      if (i + 1 >= args.size()) {
-        r.errors.push_back(key + " needs a value");
-        continue;
-      }
-      value = args[++i];
-    }
-    auto number = [&](double& out, double min_value) {
-      double v = 0;
-      if (!parseDouble(value, v) || v < min_value) {
-        char buf[64];
-        std::snprintf(buf, sizeof buf, "%g", min_value);
-        r.errors.push_back(key + ": expected a number >= " + buf + ", got '" + value + "'");
-      } else {
-        out = v;
-      }
+      return std::string(name) + " must be " + names + ", got '" + v + "'";
     };
-    auto integer = [&](int64_t& out) {
-      int64_t v = 0;
-      if (!parseInt(value, v) || v < 0) {
-        r.errors.push_back(key + ": expected an integer >= 0, got '" + value + "'");
-      } else {
-        out = v;
-      }
-    };
-    if (key == "--dataset")
-      o.dataset_dir = value;
-    else if (key == "--camera")
-      o.camera_file = value;
-    else if (key == "--lcm-url")
-      o.lcm_url = value;
-    else if (key == "--channel")
-      o.channel = value;
-    else if (key == "--pose-channel")
-      o.pose_channel = value;
-    else if (key == "--stream-channel")
-      o.stream_channel = value;
-    else if (key == "--status-channel")
-      o.status_channel = value;
-    else if (key == "--rate")
-      number(o.rate, 0.0);
-    else if (key == "--fps")
-      number(o.fps, 0.0);
-    else if (key == "--lockstep-timeout")
-      number(o.lockstep_timeout_s, 0.0);
-    else if (key == "--max-depth-m")
-      number(o.max_depth_m, 0.0);
-    else if (key == "--start")
-      integer(o.start);
-    else if (key == "--max-frames")
-      integer(o.max_frames);
-    else if (key == "--jpeg-quality") {
-      int64_t q = 0;
-      integer(q);
-      if (q < 1 || q > 100) r.errors.push_back("--jpeg-quality must be 1..100");
-      o.jpeg_quality = static_cast<int>(q);
-    } else if (key == "--rgb-encoding") {
-      if (value == "raw")
-        o.rgb_encoding = Img::ENCODING_RAW_BGR8;
-      else if (value == "jpeg")
-        o.rgb_encoding = Img::ENCODING_JPEG;
-      else if (value == "png")
-        o.rgb_encoding = Img::ENCODING_PNG;
-      else
-        r.errors.push_back("--rgb-encoding must be raw, jpeg or png, got '" + value + "'");
-    } else if (key == "--depth-encoding") {
-      if (value == "raw")
-        o.depth_encoding = Img::ENCODING_RAW_U16;
-      else if (value == "zlib")
-        o.depth_encoding = Img::ENCODING_ZLIB_U16;
-      else if (value == "png")
-        o.depth_encoding = Img::ENCODING_PNG_U16;
-      else
-        r.errors.push_back("--depth-encoding must be raw, zlib or png, got '" + value + "'");
-    }
-  }
+  };
+  ArgParser p;
+  p.option("--dataset", &o.dataset_dir)
+      .option("--camera", &o.camera_file)
+      .option("--lcm-url", &o.lcm_url)
+      .option("--channel", &o.channel)
+      .option("--pose-channel", &o.pose_channel)
+      .option("--stream-channel", &o.stream_channel)
+      .option("--status-channel", &o.status_channel)
+      .option("--rate", &o.rate, 0.0)
+      .option("--fps", &o.fps, 0.0)
+      .option("--lockstep-timeout", &o.lockstep_timeout_s, 0.0)
+      .option("--max-depth-m", &o.max_depth_m, 0.0)
+      .option("--start", &o.start, int64_t{0})
+      .option("--max-frames", &o.max_frames, int64_t{0})
+      .option("--jpeg-quality", &o.jpeg_quality, 1, 100)
+      .option("--rgb-encoding",
+              encoding("--rgb-encoding",
+                       {{"raw", Img::ENCODING_RAW_BGR8},
+                        {"jpeg", Img::ENCODING_JPEG},
+                        {"png", Img::ENCODING_PNG}},
+                       &o.rgb_encoding))
+      .option("--depth-encoding",
+              encoding("--depth-encoding",
+                       {{"raw", Img::ENCODING_RAW_U16},
+                        {"zlib", Img::ENCODING_ZLIB_U16},
+                        {"png", Img::ENCODING_PNG_U16}},
+                       &o.depth_encoding))
+      .flag("--lockstep", &o.lockstep)
+      .flag("--skip-bad", &o.skip_bad)
+      .flag("--loop", &o.loop)
+      .flag("--progress", &o.progress)
+      .flag("--no-progress", &o.progress, false);
+  p.parse(args);
+  r.help = p.help();
+  r.errors = p.errors();
   if (!r.help && o.dataset_dir.empty()) r.errors.push_back("--dataset DIR is required");
   if (o.channel.empty()) r.errors.push_back("--channel must not be empty");
   return r;

@@ -7,16 +7,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <fstream>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/core/trajectory.h"
+#include "pplvo/dataset/dataset.h"
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
 #include "pplvo/synth/synthetic_sequence.h"
@@ -33,57 +31,43 @@ struct Sequence {
   std::vector<Pose3> T_w_c;
 };
 
-bool loadCamera(const std::string& path, PinholeCamera* cam) {
-  cv::FileStorage fs(path, cv::FileStorage::READ);
-  if (!fs.isOpened()) return false;
-  cv::Mat K;
-  fs["RGB_intrinsic_params"] >> K;
-  if (K.rows != 3 || K.cols != 3) return false;
-  K.convertTo(K, CV_64F);
-  cam->fx = K.at<double>(0, 0);
-  cam->fy = K.at<double>(1, 1);
-  cam->cx = K.at<double>(0, 2);
-  cam->cy = K.at<double>(1, 2);
-  return true;
-}
-
-/// ICL: associations.txt (depth first) and the pose with the same integer stamp.
-/// TUM: depth.txt entries whose file exists and the ground-truth pose nearest in time (< 20 ms).
+/// Frames read with pplvo_dataset (associations.txt, or rgb.txt + depth.txt associated within
+/// 20 ms with absent files dropped; camera and depth scale from calib_params.xml), each with the
+/// ground-truth pose of its depth stamp: the same stamp for ICL (integer frame indices), the
+/// nearest within 20 ms for TUM.
 bool loadSequence(const std::string& dir, Sequence* seq) {
-  if (!loadCamera(dir + "/calib_params.xml", &seq->camera)) return false;
-  const TrajectoryReadResult gt = readTumTrajectory(dir + "/groundtruth.txt");
-  std::vector<std::pair<double, std::string>> depth_files;
-  std::ifstream assoc(dir + "/associations.txt");
-  const bool icl = assoc.good();
-  std::ifstream list(icl ? dir + "/associations.txt" : dir + "/depth.txt");
-  std::string line;
-  while (std::getline(list, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ss(line);
-    double stamp;
-    std::string file;
-    if (ss >> stamp >> file) depth_files.emplace_back(stamp, file);
-  }
-  for (const auto& [stamp, file] : depth_files) {
-    const StampedPose* best = nullptr;
-    double best_dt = icl ? 1e-6 : 0.02;
-    for (const StampedPose& p : gt.poses) {
-      const double dt = std::abs(p.stamp - stamp);
-      if (dt <= best_dt) {
-        best_dt = dt;
-        best = &p;
+  try {
+    const dataset::Dataset ds = dataset::Dataset::open(dir);
+    seq->camera = ds.camera().camera;
+    const TrajectoryReadResult gt = readTumTrajectory(dir + "/groundtruth.txt");
+    const bool icl = ds.index().summary.index_stamps;
+    for (size_t i = 0; i < ds.size(); ++i) {
+      const double stamp = std::atof(ds.entry(i).depth_stamp_text.c_str());
+      const StampedPose* best = nullptr;
+      double best_dt = icl ? 1e-6 : 0.02;
+      for (const StampedPose& p : gt.poses) {
+        const double dt = std::abs(p.stamp - stamp);
+        if (dt <= best_dt) {
+          best_dt = dt;
+          best = &p;
+        }
       }
+      if (!best) continue;
+      RgbdFrame frame;
+      try {
+        frame = ds.loadFrame(i);
+      } catch (const dataset::FrameLoadError& e) {
+        std::fprintf(stderr, "skipping frame: %s\n", e.what());
+        continue;
+      }
+      seq->depth_m.push_back(frame.depth_m);
+      seq->T_w_c.push_back(best->T_w_c);
     }
-    if (!best || !std::ifstream(dir + "/" + file).good()) continue;  // depth.txt lists absent files
-    const cv::Mat raw = cv::imread(dir + "/" + file, cv::IMREAD_ANYDEPTH);
-    if (raw.empty() || raw.type() != CV_16UC1) continue;
-    seq->depth_m.push_back(depthUnitsToMetres(raw, 5000.0));
-    seq->T_w_c.push_back(best->T_w_c);
+  } catch (const std::exception& e) {  // DatasetError, unreadable groundtruth.txt
+    std::fprintf(stderr, "%s\n", e.what());
+    return false;
   }
-  if (seq->depth_m.empty()) return false;
-  seq->camera.width = seq->depth_m[0].cols;
-  seq->camera.height = seq->depth_m[0].rows;
-  return true;
+  return !seq->depth_m.empty();
 }
 
 /// Thread CPU time (ms): the machine is shared, wall time includes waiting for a core.

@@ -1,9 +1,9 @@
 // pplvo-depth-filter: see pplvo/nodes/depth_filter_node.h and docs/depth_filter.md.
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
+#include "pplvo/core/args.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/depth_filter_node.h"
@@ -31,59 +31,36 @@ void usage() {
 int main(int argc, char** argv) {
   using namespace pplvo;
   nodes::DepthFilterNodeOptions o;
-  std::vector<std::string> errors;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&](std::string* out) {
-      if (i + 1 >= argc) {
-        errors.push_back(a + " needs a value");
-        return false;
-      }
-      *out = argv[++i];
-      return true;
-    };
-    std::string v;
-    if (a == "--help" || a == "-h") {
-      usage();
-      return 0;
-    } else if (a == "--lcm-url") {
-      value(&o.lcm_url);
-    } else if (a == "--rgbd-channel") {
-      value(&o.rgbd_channel);
-    } else if (a == "--pose-channel") {
-      value(&o.pose_channel);
-    } else if (a == "--cgm-channel") {
-      value(&o.cgm_channel);
-    } else if (a == "--fused-channel") {
-      value(&o.fused_channel);
-    } else if (a == "--status-channel") {
-      value(&o.status_channel);
-    } else if (a == "--window") {
-      if (value(&v)) {
-        o.ogm.max_window = std::atoi(v.c_str());
-        if (o.ogm.max_window < 1 || o.ogm.max_window > 100) errors.push_back("--window: 1..100");
-      }
-    } else if (a == "--max-pending") {
-      if (value(&v)) {
-        o.max_pending = std::atoi(v.c_str());
-        if (o.max_pending < 1) errors.push_back("--max-pending: >= 1");
-      }
-    } else if (a == "--max-translation-variance") {
-      if (value(&v)) {
-        o.ogm.max_translation_variance_m2 = std::atof(v.c_str());
-        if (!(o.ogm.max_translation_variance_m2 > 0))
-          errors.push_back("--max-translation-variance: > 0");
-      }
-    } else if (a == "--depth-model") {
-      if (value(&v) && !nodes::parseDepthModel(v, &o.model)) {
-        errors.push_back("--depth-model: sensor, cgm or ogm, not '" + v + "'");
-      }
-    } else if (a == "--compress") {
-      o.compress = true;
-    } else {
-      errors.push_back("unknown option " + a);
-    }
+  ArgParser p;
+  p.option("--lcm-url", &o.lcm_url)
+      .option("--rgbd-channel", &o.rgbd_channel)
+      .option("--pose-channel", &o.pose_channel)
+      .option("--cgm-channel", &o.cgm_channel)
+      .option("--fused-channel", &o.fused_channel)
+      .option("--status-channel", &o.status_channel)
+      .option("--window", &o.ogm.max_window, 1, 100)
+      .option("--max-pending", &o.max_pending, 1)
+      .option("--max-translation-variance",
+              [&](const std::string& v) -> std::string {
+                double m2 = 0;
+                if (!parseDouble(v, &m2) || !(m2 > 0)) {
+                  return "--max-translation-variance: expected a number > 0, got '" + v + "'";
+                }
+                o.ogm.max_translation_variance_m2 = m2;
+                return "";
+              })
+      .option("--depth-model",
+              [&](const std::string& v) -> std::string {
+                if (nodes::parseDepthModel(v, &o.model)) return "";
+                return "--depth-model: sensor, cgm or ogm, not '" + v + "'";
+              })
+      .flag("--compress", &o.compress);
+  p.parse(argsFromArgv(argc, argv));
+  if (p.help()) {
+    usage();
+    return 0;
   }
+  const std::vector<std::string>& errors = p.errors();
   if (!errors.empty()) {
     for (const std::string& e : errors) std::fprintf(stderr, "pplvo-depth-filter: %s\n", e.c_str());
     usage();

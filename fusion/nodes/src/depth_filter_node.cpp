@@ -1,8 +1,10 @@
 #include "pplvo/nodes/depth_filter_node.h"
 
+#include <optional>
 #include <pplvo_msgs/depth_map_t.hpp>
 #include <utility>
 
+#include "pplvo/msgs/convert_pose.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/depth_filter_convert.h"
 
@@ -75,22 +77,39 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   }
 }
 
-void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
-  const PoseInput pose = poseFromMsg(msg);
+std::optional<DepthFilterNode::Pending> DepthFilterNode::takePending(int64_t seq) {
   // Frames older than this pose will never get theirs: stale, drop and count.
-  while (!pending_.empty() && pending_.front().seq < pose.seq) {
+  while (!pending_.empty() && pending_.front().seq < seq) {
     pending_.pop_front();
     ++counters_.frames_dropped;
     counters_.last_warning = "frame dropped: its pose never came";
   }
-  if (pending_.empty() || pending_.front().seq != pose.seq) {
+  if (pending_.empty() || pending_.front().seq != seq) return std::nullopt;
+  Pending p = std::move(pending_.front());
+  pending_.pop_front();
+  return p;
+}
+
+void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
+  FramePose pose;
+  try {
+    pose = msgs::fromMsg(msg);  // NaN / invalid rotation / bad window arrays: MessageError
+  } catch (const msgs::MessageError&) {
+    // Downstream still gets the frame's own stage-1/2 map; guarded() counts the skip.
+    if (std::optional<Pending> p = takePending(msg.seq)) {
+      publishDepth(options_.fused_channel, *p, p->depth, p->stage);
+      ++counters_.frames_out;
+    }
+    throw;
+  }
+  std::optional<Pending> taken = takePending(pose.seq);
+  if (!taken) {
     ++unknown_poses_;
     ++counters_.frames_skipped;
     counters_.last_warning = "pose for unknown frame " + std::to_string(pose.seq);
     return;
   }
-  Pending p = std::move(pending_.front());
-  pending_.pop_front();
+  Pending& p = *taken;
   if (options_.model != DepthModel::kOgm) {
     publishDepth(options_.fused_channel, p, p.depth, p.stage);
     ++counters_.frames_out;
@@ -99,11 +118,12 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
   depth_filter::OgmResult& result = fused_;  // buffers reused frame to frame
   {
     ScopedStageTimer t(timings_, "ogm");
-    if (pose.status == pplvo_msgs::pose_t::STATUS_LOST ||
-        pose.status == pplvo_msgs::pose_t::STATUS_REINITIALISED) {
+    if (pose.status == TrackingStatus::kLost || pose.status == TrackingStatus::kReinitialised) {
       ogm_.reset();  // poses across a tracking loss cannot register the window
     }
-    for (const auto& w : pose.window_uncertainty) ogm_.setWindowUncertainty(w.first, w.second);
+    for (const WindowUncertainty& w : pose.window) {
+      ogm_.setWindowUncertainty(w.seq, w.max_translation_variance_m2);
+    }
     ogm_.addFrame(p.seq, p.camera, p.depth);
     ogm_.fuse(p.seq, pose.T_w_c, &result);
   }

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include "analytic_scene.h"
 #include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/convert_pose.h"
 #include "pplvo/nodes/depth_filter_convert.h"
 #include "pplvo/nodes/depth_filter_node.h"
 
@@ -45,15 +47,15 @@ pplvo_msgs::rgbd_frame_t frameMsg(const AnalyticScene& scene, int i) {
 }
 
 pplvo_msgs::pose_t poseMsg(const AnalyticScene& scene, int i,
-                           std::vector<std::pair<int64_t, double>> w = {}) {
-  PoseInput p;
+                           const std::vector<std::pair<int64_t, double>>& w = {}) {
+  FramePose p;
   p.utime = 1000000 + 33333 * i;
   p.seq = i;
   p.stamp = std::to_string(i);
-  p.status = pplvo_msgs::pose_t::STATUS_TRACKING;
+  p.status = TrackingStatus::kTracking;
   p.T_w_c = scene.pose(i);
-  p.window_uncertainty = std::move(w);
-  return poseToMsg(p);
+  for (const auto& [seq, var_m2] : w) p.window.push_back({seq, var_m2});
+  return msgs::toMsg(p);
 }
 
 /// Collects depth maps (decoded and as encoded bytes).
@@ -73,26 +75,31 @@ void drain(lcm::LCM& lcm) {
   }
 }
 
-TEST(DepthFilterConvert, PoseAndDepthRoundTrip) {
-  PoseInput p;
+TEST(DepthFilterConvert, PoseWindowAndDepthRoundTrip) {
+  // The node decodes pose_t with msgs::fromMsg; the fields it uses survive the round trip.
+  FramePose p;
   p.utime = 123;
   p.seq = 7;
   p.stamp = "7.000";
-  p.status = pplvo_msgs::pose_t::STATUS_VELOCITY_MODEL;
+  p.status = TrackingStatus::kVelocityModel;
   p.T_w_c =
       makePose(Eigen::Vector3d(1, -2, 3),
                Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())));
-  p.window_uncertainty = {{5, 1e-5}, {6, 2e-4}};
-  const PoseInput q = poseFromMsg(poseToMsg(p));
+  p.window = {{5, 1e-5}, {6, 2e-4}};
+  const FramePose q = msgs::fromMsg(msgs::toMsg(p));
   EXPECT_EQ(q.utime, 123);
   EXPECT_EQ(q.seq, 7);
   EXPECT_EQ(q.stamp, "7.000");
   EXPECT_EQ(q.status, p.status);
   EXPECT_TRUE(q.T_w_c.isApprox(p.T_w_c, 1e-12));
-  EXPECT_EQ(q.window_uncertainty, p.window_uncertainty);
-  pplvo_msgs::pose_t bad = poseToMsg(p);
+  ASSERT_EQ(q.window.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(q.window[i].seq, p.window[i].seq);
+    EXPECT_EQ(q.window[i].max_translation_variance_m2, p.window[i].max_translation_variance_m2);
+  }
+  pplvo_msgs::pose_t bad = msgs::toMsg(p);
   bad.n_window = 3;
-  EXPECT_THROW(poseFromMsg(bad), msgs::MessageError);
+  EXPECT_THROW(msgs::fromMsg(bad), msgs::MessageError);
 
   DepthWithVariance d;
   d.depth_m = cv::Mat(4, 6, CV_32FC1, cv::Scalar(2.5f));
@@ -210,7 +217,8 @@ TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   drain(lcm);
   ASSERT_EQ(c.fused.size(), 1u);
   EXPECT_EQ(cv::countNonZero(depthFromMsg(c.fused[0]).depth_m), 0);
-  // NaN pose: the frame's C-GM is published as fused, counted.
+  // NaN pose: rejected by msgs::fromMsg (never reaches the fusion), counted as a skipped
+  // message; the frame's C-GM is still published as fused.
   f = frameMsg(scene, 2);
   lcm.publish(channels::kRgbd, &f);
   p = poseMsg(scene, 2);
@@ -219,8 +227,9 @@ TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   drain(lcm);
   ASSERT_EQ(c.fused.size(), 2u);
   EXPECT_EQ(c.fused[1].stage, pplvo_msgs::depth_map_t::STAGE_CGM);
-  EXPECT_EQ(node.ogmStats().invalid_poses, 1);
+  EXPECT_EQ(node.ogmStats().invalid_poses, 0);
   EXPECT_EQ(node.counters().frames_skipped, 3);
+  EXPECT_EQ(node.counters().errors, 0);
   // Frames whose pose never comes: bounded queue drops the oldest.
   for (int i = 3; i < 9; ++i) {
     f = frameMsg(scene, i);
@@ -250,6 +259,56 @@ TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   drain(lcm);
   EXPECT_EQ(node.ogmStats().size_changes, 1);
   EXPECT_EQ(c.fused.back().window_length, 1);
+  EXPECT_EQ(node.counters().errors, 0);
+}
+
+TEST(DepthFilterNode, NonFinitePosesAreCountedSkips) {
+  // Every kind of pose msgs::fromMsg rejects is one counted skip (not an error), releases the
+  // frame's C-GM as fused output, and leaves the node working for the next frame.
+  AnalyticScene scene(smallScene());
+  lcm::LCM lcm("memq://");
+  DepthFilterNode node(DepthFilterNodeOptions{}, lcm);
+  Collector c;
+  lcm.subscribe(channels::kDepthFused, &Collector::onDepth, &c);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<std::function<void(pplvo_msgs::pose_t&)>> spoil = {
+      [&](pplvo_msgs::pose_t& m) { m.position[2] = nan; },
+      [&](pplvo_msgs::pose_t& m) { m.orientation[0] = nan; },
+      [&](pplvo_msgs::pose_t& m) { m.window_max_translation_variance[0] = nan; },
+      [&](pplvo_msgs::pose_t& m) { m.rel_covariance[7] = std::numeric_limits<double>::infinity(); },
+  };
+  int seq = 0;
+  for (size_t k = 0; k < spoil.size(); ++k, ++seq) {
+    pplvo_msgs::rgbd_frame_t f = frameMsg(scene, seq);
+    lcm.publish(channels::kRgbd, &f);
+    pplvo_msgs::pose_t p = poseMsg(scene, seq, {{seq - 1, 1e-5}});
+    spoil[k](p);
+    lcm.publish(channels::kPose, &p);
+    drain(lcm);
+    EXPECT_EQ(node.counters().frames_skipped, static_cast<int64_t>(k + 1)) << "case " << k;
+    EXPECT_NE(node.counters().last_warning.find("skipped bad message"), std::string::npos)
+        << node.counters().last_warning;
+    ASSERT_EQ(c.fused.size(), k + 1);
+    EXPECT_EQ(c.fused.back().seq, seq);
+    EXPECT_EQ(c.fused.back().stage, pplvo_msgs::depth_map_t::STAGE_CGM);
+  }
+  EXPECT_EQ(node.pending(), 0);
+  EXPECT_EQ(node.ogmStats().invalid_poses, 0);
+  // A NaN pose for a frame that is not pending is still one counted skip, nothing published.
+  pplvo_msgs::pose_t orphan = poseMsg(scene, 100);
+  orphan.position[0] = nan;
+  lcm.publish(channels::kPose, &orphan);
+  drain(lcm);
+  EXPECT_EQ(node.counters().frames_skipped, static_cast<int64_t>(spoil.size() + 1));
+  EXPECT_EQ(c.fused.size(), spoil.size());
+  // A good pose afterwards is fused normally.
+  pplvo_msgs::rgbd_frame_t f = frameMsg(scene, 101);
+  lcm.publish(channels::kRgbd, &f);
+  pplvo_msgs::pose_t good = poseMsg(scene, 101);
+  lcm.publish(channels::kPose, &good);
+  drain(lcm);
+  ASSERT_EQ(c.fused.size(), spoil.size() + 1);
+  EXPECT_EQ(c.fused.back().stage, pplvo_msgs::depth_map_t::STAGE_OGM);
   EXPECT_EQ(node.counters().errors, 0);
 }
 

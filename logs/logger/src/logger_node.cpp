@@ -14,19 +14,13 @@
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
 
+#include "pplvo/core/args.h"
 #include "pplvo/msgs/node_runtime.h"
 
 namespace pplvo::logging {
 namespace {
 
 constexpr const char* kNode = "pplvo-logger";
-
-bool parseDouble(const std::string& s, double& out) {
-  if (s.empty()) return false;
-  char* end = nullptr;
-  out = std::strtod(s.c_str(), &end);
-  return end == s.c_str() + s.size() && std::isfinite(out);
-}
 
 int64_t fingerprint(const lcm::ReceiveBuffer* rbuf) {
   if (rbuf->data_size < 8) return 0;
@@ -96,74 +90,34 @@ error (full disk) or LCM failure, 2 bad command line, 3 --until-end was given bu
 LoggerParseResult parseLoggerArgs(const std::vector<std::string>& args) {
   LoggerParseResult r;
   LoggerOptions& o = r.options;
-  for (size_t i = 0; i < args.size(); ++i) {
-    std::string key = args[i];
-    std::string value;
-    bool has_value = false;
-    if (key == "-h" || key == "--help") {
-      r.help = true;
-      continue;
-    }
-    const auto eq = key.find('=');
-    if (key.rfind("--", 0) == 0 && eq != std::string::npos) {
-      value = key.substr(eq + 1);
-      key = key.substr(0, eq);
-      has_value = true;
-    }
-    if (key == "--force" || key == "--until-end" || key == "--progress" || key == "--no-progress") {
-      if (has_value) r.errors.push_back(key + " takes no value");
-      if (key == "--force") o.force = true;
-      if (key == "--until-end") o.until_end = true;
-      if (key == "--progress") o.progress = true;
-      if (key == "--no-progress") o.progress = false;
-      continue;
-    }
-    std::string* str = nullptr;
-    double* num = nullptr;
-    if (key == "--output" || key == "-o")
-      str = &o.output;
-    else if (key == "--channels")
-      str = &o.channels;
-    else if (key == "--trajectory")
-      str = &o.trajectory;
-    else if (key == "--summary")
-      str = &o.summary;
-    else if (key == "--pose-channel")
-      str = &o.pose_channel;
-    else if (key == "--stream-channel")
-      str = &o.stream_channel;
-    else if (key == "--status-channel")
-      str = &o.status_channel;
-    else if (key == "--lcm-url")
-      str = &o.lcm_url;
-    else if (key == "--drain")
-      num = &o.drain_s;
-    else if (key == "--timeout")
-      num = &o.timeout_s;
-    else if (key == "--idle-timeout")
-      num = &o.idle_timeout_s;
-    else {
-      r.errors.push_back("unknown option '" + args[i] + "'");
-      continue;
-    }
-    if (!has_value) {
-      if (i + 1 >= args.size()) {
-        r.errors.push_back(key + " needs a value");
-        continue;
-      }
-      value = args[++i];
-    }
-    if (str) {
-      *str = value;
-    } else {
-      double v = 0;
-      if (!parseDouble(value, v) || v < 0) {
-        r.errors.push_back(key + ": expected seconds >= 0, got '" + value + "'");
-      } else {
-        *num = v;
-      }
-    }
-  }
+  auto seconds = [](const std::string& name, double* out) {
+    return [name, out](const std::string& v) -> std::string {
+      double s = 0;
+      if (!parseDouble(v, &s) || s < 0) return name + ": expected seconds >= 0, got '" + v + "'";
+      *out = s;
+      return "";
+    };
+  };
+  ArgParser p;
+  p.option("--output", &o.output)
+      .option("-o", &o.output)
+      .option("--channels", &o.channels)
+      .option("--trajectory", &o.trajectory)
+      .option("--summary", &o.summary)
+      .option("--pose-channel", &o.pose_channel)
+      .option("--stream-channel", &o.stream_channel)
+      .option("--status-channel", &o.status_channel)
+      .option("--lcm-url", &o.lcm_url)
+      .option("--drain", seconds("--drain", &o.drain_s))
+      .option("--timeout", seconds("--timeout", &o.timeout_s))
+      .option("--idle-timeout", seconds("--idle-timeout", &o.idle_timeout_s))
+      .flag("--force", &o.force)
+      .flag("--until-end", &o.until_end)
+      .flag("--progress", &o.progress)
+      .flag("--no-progress", &o.progress, false);
+  p.parse(args);
+  r.help = p.help();
+  r.errors = p.errors();
   if (!r.help && o.output.empty() && o.trajectory.empty() && o.summary.empty()) {
     r.errors.push_back("nothing to record: give --output, --trajectory and/or --summary");
   }

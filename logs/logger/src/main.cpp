@@ -1,15 +1,13 @@
 // pplvo-logger: records LCM channels, the trajectory and a run summary. See docs/logger.md.
-#include <unistd.h>
-
-#include <algorithm>
 #include <cstdio>
 
+#include "pplvo/core/args.h"
 #include "pplvo/logging/logger_node.h"
 #include "pplvo/msgs/node_runtime.h"
 
 int main(int argc, char** argv) {
   using namespace pplvo;
-  const std::vector<std::string> args(argv + 1, argv + argc);
+  const std::vector<std::string> args = argsFromArgv(argc, argv);
   logging::LoggerParseResult parsed = logging::parseLoggerArgs(args);
   if (parsed.help) {
     std::fputs(logging::loggerUsage().c_str(), stdout);
@@ -21,10 +19,7 @@ int main(int argc, char** argv) {
     return logging::kExitUsage;
   }
   logging::LoggerOptions& opt = parsed.options;
-  if (std::find(args.begin(), args.end(), "--progress") == args.end() &&
-      std::find(args.begin(), args.end(), "--no-progress") == args.end()) {
-    opt.progress = ::isatty(STDERR_FILENO) == 1;
-  }
+  opt.progress = progressEnabled(args, opt.progress);  // default: stderr is a terminal
   msgs::installShutdownHandlers();
   try {
     auto lcm = msgs::openLcm(opt.lcm_url);

@@ -1,13 +1,11 @@
 #include "shared_sequence.h"
 
-#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/core/trajectory.h"
@@ -23,39 +21,20 @@ std::string sharedDataDir() {
 
 namespace {
 
-bool readCamera(const std::string& dir, PinholeCamera* cam, int w, int h) {
-  cv::FileStorage fsr(dir + "/calib_params.xml", cv::FileStorage::READ);
-  if (!fsr.isOpened()) return false;
-  cv::Mat k, d;
-  fsr["RGB_intrinsic_params"] >> k;
-  fsr["RGB_distortion_coefficients"] >> d;
-  if (k.rows != 3 || k.cols != 3) return false;
-  k.convertTo(k, CV_64F);
-  cam->width = w;
-  cam->height = h;
-  cam->fx = k.at<double>(0, 0);
-  cam->fy = k.at<double>(1, 1);
-  cam->cx = k.at<double>(0, 2);
-  cam->cy = k.at<double>(1, 2);
-  if (d.total() >= 5) {
-    d.convertTo(d, CV_64F);
-    for (int i = 0; i < 5; ++i) cam->distortion[i] = d.at<double>(i);
+/// TUM ground truth (100 Hz mocap) at time t: linear interpolation of the translation, slerp of
+/// the rotation, between two poses less than 50 ms apart.
+std::optional<Pose3> interpolate(const Trajectory& gt, double t) {
+  for (size_t k = 1; k < gt.size(); ++k) {
+    if (gt[k - 1].stamp <= t && t <= gt[k].stamp && gt[k].stamp - gt[k - 1].stamp < 0.05) {
+      const double a = (t - gt[k - 1].stamp) / (gt[k].stamp - gt[k - 1].stamp);
+      const Eigen::Quaterniond q0(gt[k - 1].T_w_c.linear()), q1(gt[k].T_w_c.linear());
+      Pose3 T = Pose3::Identity();
+      T.linear() = q0.slerp(a, q1).toRotationMatrix();
+      T.translation() = (1 - a) * gt[k - 1].T_w_c.translation() + a * gt[k].T_w_c.translation();
+      return T;
+    }
   }
-  return true;
-}
-
-std::vector<std::pair<double, std::string>> readList(const std::string& path) {
-  std::vector<std::pair<double, std::string>> out;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ss(line);
-    double t;
-    std::string f;
-    if (ss >> t >> f) out.emplace_back(t, f);
-  }
-  return out;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -63,84 +42,65 @@ std::vector<std::pair<double, std::string>> readList(const std::string& path) {
 std::optional<SharedSequence> loadSharedSequence(const std::string& name) {
   const std::string dir = sharedDataDir() + "/" + name;
   if (!fs::exists(dir)) return std::nullopt;
+  std::optional<dataset::Dataset> ds;
+  try {
+    ds.emplace(dataset::Dataset::open(dir));
+  } catch (const dataset::DatasetError& e) {
+    std::fprintf(stderr, "shared sequence %s: %s\n", name.c_str(), e.what());
+    return std::nullopt;
+  }
   SharedSequence seq;
   seq.name = name;
+  seq.camera = ds->camera().camera;
   Trajectory gt;
   try {
     gt = readTumTrajectory(dir + "/groundtruth.txt").poses;
   } catch (const std::exception&) {
   }
-  if (fs::exists(dir + "/associations.txt")) {
-    std::map<std::string, Pose3> gt_by_stamp;
-    for (const auto& p : gt) gt_by_stamp[p.stamp_text] = p.T_w_c;
-    std::ifstream in(dir + "/associations.txt");
-    std::string line;
-    while (std::getline(in, line)) {
-      if (line.empty() || line[0] == '#') continue;
-      std::istringstream ss(line);
-      std::string ts_d, fd, ts_c, fc;
-      if (!(ss >> ts_d >> fd >> ts_c >> fc)) continue;
-      SequenceFrame f;
-      f.depth_path = dir + "/" + fd;
-      f.rgb_path = dir + "/" + fc;
-      f.stamp = std::atof(ts_c.c_str());
-      auto it = gt_by_stamp.find(ts_c);
-      if (it != gt_by_stamp.end()) {
-        f.has_gt = true;
-        f.T_w_c = it->second;
-      }
-      seq.frames.push_back(f);
+  std::map<std::string, Pose3> gt_by_stamp;
+  for (const auto& p : gt) gt_by_stamp[p.stamp_text] = p.T_w_c;
+  const bool index_stamps = ds->index().summary.index_stamps;  // ICL: frame indices
+  for (const dataset::DatasetEntry& e : ds->index().entries) {
+    SequenceFrame f;
+    f.rgb_path = e.rgb_path;
+    f.depth_path = e.depth_path;
+    f.stamp = e.stamp;
+    f.entry = e;
+    f.depth_scale = ds->camera().depth_scale;
+    std::optional<Pose3> T_w_c;
+    if (index_stamps) {
+      if (auto it = gt_by_stamp.find(e.stamp_text); it != gt_by_stamp.end()) T_w_c = it->second;
+    } else {
+      T_w_c = interpolate(gt, e.stamp);
     }
-  } else {
-    std::vector<std::pair<double, std::string>> depth;
-    for (const auto& e : fs::directory_iterator(dir + "/depth")) {
-      const std::string stem = e.path().stem().string();
-      depth.emplace_back(std::atof(stem.c_str()), e.path().string());
+    if (T_w_c) {
+      f.has_gt = true;
+      f.T_w_c = *T_w_c;
     }
-    std::sort(depth.begin(), depth.end());
-    for (const auto& [t, f] : readList(dir + "/rgb.txt")) {
-      const std::string rgb = dir + "/" + f;
-      if (!fs::exists(rgb) || depth.empty()) continue;
-      SequenceFrame fr;
-      fr.rgb_path = rgb;
-      fr.stamp = t;
-      auto it = std::lower_bound(depth.begin(), depth.end(), std::make_pair(t, std::string()));
-      double best = 1e9;
-      for (auto c : {it, it == depth.begin() ? it : it - 1}) {
-        if (c == depth.end()) continue;
-        if (std::abs(c->first - t) < best) {
-          best = std::abs(c->first - t);
-          fr.depth_path = c->second;
-        }
-      }
-      if (best > 0.02) continue;
-      // Ground truth: linear interpolation of translation, nearest rotation (100 Hz mocap).
-      for (size_t k = 1; k < gt.size(); ++k) {
-        if (gt[k - 1].stamp <= t && t <= gt[k].stamp && gt[k].stamp - gt[k - 1].stamp < 0.05) {
-          const double a = (t - gt[k - 1].stamp) / (gt[k].stamp - gt[k - 1].stamp);
-          const Eigen::Quaterniond q0(gt[k - 1].T_w_c.linear()), q1(gt[k].T_w_c.linear());
-          fr.T_w_c.linear() = q0.slerp(a, q1).toRotationMatrix();
-          fr.T_w_c.translation() = (1 - a) * gt[k - 1].T_w_c.translation() +
-                                   a * gt[k].T_w_c.translation();
-          fr.has_gt = true;
-          break;
-        }
-      }
-      seq.frames.push_back(fr);
-    }
+    seq.frames.push_back(std::move(f));
   }
   if (seq.frames.empty()) return std::nullopt;
-  const cv::Mat first = cv::imread(seq.frames.front().rgb_path, cv::IMREAD_GRAYSCALE);
-  if (first.empty() || !readCamera(dir, &seq.camera, first.cols, first.rows)) return std::nullopt;
   return seq;
 }
 
-cv::Mat loadGray(const SequenceFrame& f) { return cv::imread(f.rgb_path, cv::IMREAD_GRAYSCALE); }
+cv::Mat loadGray(const SequenceFrame& f) {
+  try {
+    const dataset::RawFrame raw = dataset::loadRawFrame(f.entry, f.depth_scale);
+    cv::Mat gray;
+    cv::cvtColor(raw.bgr, gray, cv::COLOR_BGR2GRAY);
+    return gray;
+  } catch (const dataset::FrameLoadError&) {
+    return {};
+  }
+}
 
 cv::Mat loadDepthM(const SequenceFrame& f) {
-  const cv::Mat d = cv::imread(f.depth_path, cv::IMREAD_ANYDEPTH);
-  if (d.empty() || d.type() != CV_16U) return {};
-  return depthUnitsToMetres(d, 5000.0);
+  try {
+    return depthUnitsToMetres(dataset::loadRawFrame(f.entry, f.depth_scale).depth_units,
+                              f.depth_scale);
+  } catch (const dataset::FrameLoadError&) {
+    return {};
+  }
 }
 
 }  // namespace pplvo::features::testdata

@@ -1,21 +1,21 @@
 // Benchmarks of the 3D frontend on the shared sequences (VGA): plane extraction + WLS fitting,
 // point and line lifting, plane matching. Time per iteration = per frame, one thread.
-// Data: $PPLVO_SHARED_DATA (default ../shared/data from the repository root). Depth PNG / 5000
-// metres; variance from the sensor model (1.425e-3 z^2)^2 since no depth filter runs here.
+// Data: $PPLVO_SHARED_DATA (default ../shared/data from the repository root), read with
+// pplvo_dataset (index, calib_params.xml, depth PNG / depth_scale metres); variance from the
+// sensor model (1.425e-3 z^2)^2 since no depth filter runs here.
 // Line segments: OpenCV LSD on the grey image, only to have realistic inputs.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <map>
+#include <optional>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "pplvo/dataset/dataset.h"
 #include "pplvo/geometry/lifting.h"
 #include "pplvo/geometry/plane_extraction.h"
 #include "pplvo/geometry/plane_matching.h"
@@ -43,77 +43,35 @@ std::string dataDir() {
   return e ? e : "../shared/data";
 }
 
-bool readCamera(const std::string& dir, PinholeCamera* cam) {
-  cv::FileStorage fs(dir + "/calib_params.xml", cv::FileStorage::READ);
-  if (!fs.isOpened()) return false;
-  cv::Mat K;
-  fs["RGB_intrinsic_params"] >> K;
-  if (K.rows != 3 || K.cols != 3) return false;
-  K.convertTo(K, CV_64F);
-  cam->fx = K.at<double>(0, 0);
-  cam->fy = K.at<double>(1, 1);
-  cam->cx = K.at<double>(0, 2);
-  cam->cy = K.at<double>(1, 2);
-  cam->width = 640;
-  cam->height = 480;
-  return true;
-}
-
-// (depth file, rgb file) pairs: ICL from associations.txt (depth first); TUM by nearest stamp.
-std::vector<std::pair<std::string, std::string>> pairs(const std::string& dir) {
-  std::vector<std::pair<std::string, std::string>> out;
-  std::ifstream as(dir + "/associations.txt");
-  std::string line;
-  if (as) {
-    while (std::getline(as, line)) {
-      std::istringstream is(line);
-      std::string t1, d, t2, r;
-      if (line.empty() || line[0] == '#' || !(is >> t1 >> d >> t2 >> r)) continue;
-      out.emplace_back(d, r);
-    }
-    return out;
-  }
-  auto readList = [&](const std::string& f) {
-    std::map<double, std::string> m;
-    std::ifstream in(dir + "/" + f);
-    while (std::getline(in, line)) {
-      std::istringstream is(line);
-      double t;
-      std::string p;
-      if (line.empty() || line[0] == '#' || !(is >> t >> p)) continue;
-      if (std::ifstream(dir + "/" + p).good()) m[t] = p;  // depth.txt lists absent files
-    }
-    return m;
-  };
-  const auto depth = readList("depth.txt"), rgb = readList("rgb.txt");
-  for (const auto& [t, d] : depth) {
-    auto it = rgb.lower_bound(t);
-    if (it == rgb.end()) continue;
-    if (it != rgb.begin() && std::abs(std::prev(it)->first - t) < std::abs(it->first - t)) --it;
-    if (std::abs(it->first - t) < 0.02) out.emplace_back(d, it->second);
-  }
-  return out;
-}
-
 Sequence load(const std::string& name) {
   Sequence s;
   s.name = name;
   const std::string dir = dataDir() + "/" + name;
-  if (!readCamera(dir, &s.cam)) {
-    std::fprintf(stderr, "cannot read %s/calib_params.xml\n", dir.c_str());
+  // Index, camera (calib_params.xml) and frame decoding: pplvo_dataset.
+  std::optional<dataset::Dataset> ds;
+  try {
+    ds.emplace(dataset::Dataset::open(dir));
+  } catch (const dataset::DatasetError& e) {
+    std::fprintf(stderr, "cannot open %s: %s\n", dir.c_str(), e.what());
     return s;
   }
+  s.cam = ds->camera().camera;
   auto lsd = cv::createLineSegmentDetector();
   auto fast = cv::FastFeatureDetector::create(20);
   const DepthNoiseModel model;
-  for (const auto& [d, r] : pairs(dir)) {
+  for (size_t i = 0; i < ds->size(); ++i) {
     if (static_cast<int>(s.frames.size()) >= kMaxFrames) break;
-    const cv::Mat d16 = cv::imread(dir + "/" + d, cv::IMREAD_UNCHANGED);
-    const cv::Mat grey = cv::imread(dir + "/" + r, cv::IMREAD_GRAYSCALE);
-    if (d16.empty() || grey.empty() || d16.type() != CV_16UC1 || d16.size() != grey.size())
+    RgbdFrame frame;
+    try {
+      frame = ds->loadFrame(i);
+    } catch (const dataset::FrameLoadError& e) {
+      std::fprintf(stderr, "skipping frame: %s\n", e.what());
       continue;
+    }
+    cv::Mat grey;
+    cv::cvtColor(frame.bgr, grey, cv::COLOR_BGR2GRAY);
     Frame f;
-    f.depth.depth_m = depthUnitsToMetres(d16, 5000.0);
+    f.depth.depth_m = frame.depth_m;
     f.depth.var_m2 = cv::Mat(f.depth.depth_m.size(), CV_32F);
     f.depth.depth_m.forEach<float>([&](float& z, const int* p) {
       f.depth.var_m2.at<float>(p[0], p[1]) = z > 0 ? static_cast<float>(model.varianceZ(z)) : 0.0f;

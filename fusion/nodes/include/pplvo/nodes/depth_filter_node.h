@@ -11,9 +11,11 @@
 #include <cstdint>
 #include <deque>
 #include <lcm/lcm-cpp.hpp>
+#include <optional>
 #include <pplvo_msgs/pose_t.hpp>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <string>
+#include <vector>
 
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/depth_filter/cgm_filter.h"
@@ -80,7 +82,12 @@ class DepthFilterNode {
     DepthWithVariance depth;
   };
   void handleFrame(const pplvo_msgs::rgbd_frame_t& msg);
+  /// Handles a pose; a pose msgs::fromMsg rejects (NaN, invalid rotation, inconsistent window
+  /// arrays) releases its frame's stage-1/2 map as the fused output and rethrows the
+  /// MessageError, which guarded() counts in frames_skipped.
   void handlePose(const pplvo_msgs::pose_t& msg);
+  /// Drops (and counts) pending frames older than seq; returns the frame seq if it is next.
+  std::optional<Pending> takePending(int64_t seq);
   void publishDepth(const std::string& channel, const Pending& p, const DepthWithVariance& d,
                     int8_t stage);
 
