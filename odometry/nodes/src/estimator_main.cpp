@@ -6,7 +6,8 @@
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/estimator_node.h"
-#include "pplvo/nodes/node_args.h"
+#include "pplvo/core/args.h"
+#include "pplvo/pipeline/pipeline_args.h"
 
 namespace {
 
@@ -14,13 +15,13 @@ void usage() {
   std::printf(
       "usage: pplvo-estimator [options]\n"
       "  --lcm-url URL              LCM URL (default $LCM_DEFAULT_URL)\n"
-      "  --config FILE              pipeline YAML (config/pplvo.yaml); odometry section used\n"
-      "  --features LIST            points,lines,planes (any subset; default all)\n"
       "  --features-channel NAME    in, features_t stage 2D (PPLVO_FEATURES)\n"
       "  --features-3d-channel NAME in, features_t stage 3D (PPLVO_FEATURES_3D)\n"
       "  --pose-channel NAME        out, pose_t (PPLVO_POSE)\n"
       "  --status-channel NAME      out, node_status_t (PPLVO_STATUS)\n"
-      "  --max-waiting N            frames waiting for their reference (3)\n");
+      "  --max-waiting N            frames waiting for their reference (3)\n"
+      "pipeline options (the odometry section is used):\n%s",
+      pplvo::pipeline::pipelineOptionsUsage());
 }
 
 }  // namespace
@@ -28,21 +29,25 @@ void usage() {
 int main(int argc, char** argv) {
   using namespace pplvo;
   nodes::EstimatorNodeOptions o;
-  nodes::NodeArgs args(argc, argv);
-  if (args.help()) {
+  pipeline::PipelineArgs pa;
+  ArgParser p;
+  pipeline::addPipelineOptions(p, &pa);
+  p.option("--lcm-url", &o.lcm_url)
+      .option("--features-channel", &o.features_channel)
+      .option("--features-3d-channel", &o.features_3d_channel)
+      .option("--pose-channel", &o.pose_channel)
+      .option("--status-channel", &o.status_channel)
+      .option("--max-waiting", &o.max_waiting, 1);
+  p.parse(argsFromArgv(argc, argv));
+  if (p.help()) {
     usage();
     return 0;
   }
   pipeline::PipelineOptions pipeline_options;
-  args.pipeline(&pipeline_options);
+  pipeline::applyPipelineArgs(pa, &pipeline_options, &p);
   o.odometry = pipeline_options.odometry;
-  args.value("--lcm-url", &o.lcm_url);
-  args.value("--features-channel", &o.features_channel);
-  args.value("--features-3d-channel", &o.features_3d_channel);
-  args.value("--pose-channel", &o.pose_channel);
-  args.value("--status-channel", &o.status_channel);
-  args.value("--max-waiting", &o.max_waiting);
-  if (!args.finish("pplvo-estimator")) {
+  if (!p.ok()) {
+    for (const std::string& e : p.errors()) std::fprintf(stderr, "pplvo-estimator: %s\n", e.c_str());
     usage();
     return 2;
   }

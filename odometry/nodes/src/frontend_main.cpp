@@ -6,7 +6,8 @@
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/frontend_node.h"
-#include "pplvo/nodes/node_args.h"
+#include "pplvo/core/args.h"
+#include "pplvo/pipeline/pipeline_args.h"
 
 namespace {
 
@@ -14,15 +15,15 @@ void usage() {
   std::printf(
       "usage: pplvo-frontend [options]\n"
       "  --lcm-url URL              LCM URL (default $LCM_DEFAULT_URL)\n"
-      "  --config FILE              pipeline YAML (config/pplvo.yaml); frontend section used\n"
-      "  --features LIST            points,lines,planes (any subset; default all)\n"
       "  --rgbd-channel NAME        in, rgbd_frame_t (PPLVO_RGBD)\n"
       "  --cgm-channel NAME         in, depth_map_t (PPLVO_DEPTH_CGM)\n"
       "  --fused-channel NAME       in, depth_map_t (PPLVO_DEPTH_FUSED)\n"
       "  --features-channel NAME    out, features_t stage 2D (PPLVO_FEATURES)\n"
       "  --features-3d-channel NAME out, features_t stage 3D (PPLVO_FEATURES_3D)\n"
       "  --status-channel NAME      out, node_status_t (PPLVO_STATUS)\n"
-      "  --max-pending N            frames held per queue (30)\n");
+      "  --max-pending N            frames held per queue (30)\n"
+      "pipeline options (the frontend section is used):\n%s",
+      pplvo::pipeline::pipelineOptionsUsage());
 }
 
 }  // namespace
@@ -30,23 +31,27 @@ void usage() {
 int main(int argc, char** argv) {
   using namespace pplvo;
   nodes::FrontendNodeOptions o;
-  nodes::NodeArgs args(argc, argv);
-  if (args.help()) {
+  pipeline::PipelineArgs pa;
+  ArgParser p;
+  pipeline::addPipelineOptions(p, &pa);
+  p.option("--lcm-url", &o.lcm_url)
+      .option("--rgbd-channel", &o.rgbd_channel)
+      .option("--cgm-channel", &o.cgm_channel)
+      .option("--fused-channel", &o.fused_channel)
+      .option("--features-channel", &o.features_channel)
+      .option("--features-3d-channel", &o.features_3d_channel)
+      .option("--status-channel", &o.status_channel)
+      .option("--max-pending", &o.max_pending, 1);
+  p.parse(argsFromArgv(argc, argv));
+  if (p.help()) {
     usage();
     return 0;
   }
   pipeline::PipelineOptions pipeline_options;
-  args.pipeline(&pipeline_options);
+  pipeline::applyPipelineArgs(pa, &pipeline_options, &p);
   o.frontend = pipeline_options.frontend;
-  args.value("--lcm-url", &o.lcm_url);
-  args.value("--rgbd-channel", &o.rgbd_channel);
-  args.value("--cgm-channel", &o.cgm_channel);
-  args.value("--fused-channel", &o.fused_channel);
-  args.value("--features-channel", &o.features_channel);
-  args.value("--features-3d-channel", &o.features_3d_channel);
-  args.value("--status-channel", &o.status_channel);
-  args.value("--max-pending", &o.max_pending);
-  if (!args.finish("pplvo-frontend")) {
+  if (!p.ok()) {
+    for (const std::string& e : p.errors()) std::fprintf(stderr, "pplvo-frontend: %s\n", e.c_str());
     usage();
     return 2;
   }

@@ -1,8 +1,9 @@
 // pplvo-frontend and pplvo-estimator nodes on one memq:// LCM: message pairing in any order,
 // bounded queues, the reference hand-over between the two stages, restarts when a reference
-// never comes, counted skips for bad messages; and the shared command-line parser.
+// never comes, counted skips for bad messages; and the pipeline's command-line options.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <limits>
 
 #include <lcm/lcm-cpp.hpp>
@@ -14,7 +15,8 @@
 #include "pplvo/msgs/convert_pose.h"
 #include "pplvo/nodes/estimator_node.h"
 #include "pplvo/nodes/frontend_node.h"
-#include "pplvo/nodes/node_args.h"
+#include "pplvo/core/args.h"
+#include "pplvo/pipeline/pipeline_args.h"
 #include "pplvo/synth/synthetic_sequence.h"
 
 namespace pplvo::nodes {
@@ -243,41 +245,38 @@ TEST(EstimatorNode, InconsistentMessagesAreCountedNotFatal) {
   EXPECT_EQ(poses.msgs.size(), 1u);
 }
 
-TEST(NodeArgs, ParsesTypedValuesFlagsAndRepeatedOptions) {
-  NodeArgs a({"--max-frames", "12", "--rate=0.5", "--quiet", "--set", "features=[points]",
-              "--set=depth_filter.model=cgm", "--name", "x", "--name", "y"});
-  long long n = 0;
-  double r = 0;
-  bool quiet = false;
-  std::string name;
-  EXPECT_TRUE(a.value("--max-frames", &n));
-  EXPECT_TRUE(a.value("--rate", &r));
-  EXPECT_TRUE(a.flag("--quiet", &quiet));
-  EXPECT_TRUE(a.value("--name", &name));
+TEST(PipelineArgs, ConfigSetFeaturesAndDepthModel) {
+  pipeline::PipelineArgs pa;
+  ArgParser p;
+  pipeline::addPipelineOptions(p, &pa);
+  const std::string config = std::string(std::getenv("PPLVO_SOURCE_DIR")) + "/config/pplvo.yaml";
+  ASSERT_TRUE(p.parse({"--config", config, "--set", "features=[points, lines]",
+                       "--set=odometry.tracker.estimator.plane_scale_alpha=1",
+                       "--depth-model", "cgm"}));
   pipeline::PipelineOptions o;
-  a.pipeline(&o);
-  EXPECT_TRUE(a.finish("test"));
-  EXPECT_EQ(n, 12);
-  EXPECT_DOUBLE_EQ(r, 0.5);
-  EXPECT_TRUE(quiet);
-  EXPECT_EQ(name, "y");
+  pipeline::applyPipelineArgs(pa, &o, &p);
+  EXPECT_TRUE(p.ok());
   EXPECT_TRUE(o.frontend.families.points);
-  EXPECT_FALSE(o.frontend.families.lines);
-  EXPECT_FALSE(o.odometry.tracker.estimator.use_lines);
+  EXPECT_TRUE(o.frontend.families.lines);
+  EXPECT_FALSE(o.frontend.families.planes);
+  EXPECT_FALSE(o.odometry.tracker.estimator.use_planes);
+  EXPECT_DOUBLE_EQ(o.odometry.tracker.estimator.plane_scale_alpha, 1.0);
   EXPECT_EQ(o.depth_filter.model, depth_filter::DepthModel::kCgm);
 }
 
-TEST(NodeArgs, ReportsEveryProblem) {
-  NodeArgs a({"--max-frames", "twelve", "--features", "points,surf", "--unknown", "--config",
-              "/nonexistent/pplvo.yaml", "--lcm-url"});
-  long long n = 0;
-  std::string url;
-  a.value("--max-frames", &n);
-  a.value("--lcm-url", &url);
+TEST(PipelineArgs, ReportsEveryProblem) {
+  pipeline::PipelineArgs pa;
+  ArgParser p;
+  pipeline::addPipelineOptions(p, &pa);
+  p.parse({"--features", "points,surf", "--depth-model", "bilateral", "--config",
+           "/nonexistent/pplvo.yaml"});
   pipeline::PipelineOptions o;
-  a.pipeline(&o);
-  EXPECT_FALSE(a.finish("test"));
-  EXPECT_EQ(a.errors().size(), 5u);  // integer, needs a value, config file, features, unknown
+  pipeline::applyPipelineArgs(pa, &o, &p);
+  ASSERT_EQ(p.errors().size(), 3u);
+  EXPECT_NE(p.errors()[0].find("/nonexistent/pplvo.yaml"), std::string::npos);
+  // The defaults are untouched.
+  EXPECT_TRUE(o.frontend.families.lines);
+  EXPECT_EQ(o.depth_filter.model, depth_filter::DepthModel::kOgm);
 }
 
 }  // namespace

@@ -2,7 +2,8 @@
 // one (see pplvo/replay/replay_stage.h, docs/replay.md).
 #include <cstdio>
 
-#include "pplvo/nodes/node_args.h"
+#include "pplvo/core/args.h"
+#include "pplvo/pipeline/pipeline_args.h"
 #include "pplvo/replay/replay_stage.h"
 
 namespace {
@@ -12,27 +13,29 @@ void usage() {
       "Feeds the stage's recorded inputs to a fresh node (memq://, in recorded order) and\n"
       "compares everything it publishes with the recorded outputs. Exit 0 if identical,\n"
       "1 if different, 2 on bad arguments, 3 if the log cannot be read.\n"
-      "  --config FILE, --set KEY=VALUE, --features LIST, --depth-model MODEL: as pplvo-run\n"
-      "  (the recording's configuration reproduces it exactly)\n");
+      "pipeline options (the recording's configuration reproduces it exactly):\n%s",
+      pplvo::pipeline::pipelineOptionsUsage());
 }
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace pplvo;
-  nodes::NodeArgs args(argc, argv);
-  if (args.help()) {
+  replay::ReplayOptions o;
+  pipeline::PipelineArgs pa;
+  std::string stage;
+  ArgParser p;
+  pipeline::addPipelineOptions(p, &pa);
+  p.option("--log", &o.log).option("--stage", &stage);
+  p.parse(argsFromArgv(argc, argv));
+  if (p.help()) {
     usage();
     return 0;
   }
-  replay::ReplayOptions o;
-  std::string stage;
-  args.pipeline(&o.pipeline);
-  args.value("--log", &o.log);
-  if (!args.value("--stage", &stage) || !replay::parseStage(stage, &o.stage)) {
-    args.error("--stage: depth-filter, frontend or estimator");
-  }
-  if (o.log.empty()) args.error("--log is required");
-  if (!args.finish("pplvo-replay")) {
+  pipeline::applyPipelineArgs(pa, &o.pipeline, &p);
+  if (!replay::parseStage(stage, &o.stage)) p.addError("--stage: depth-filter, frontend or estimator");
+  if (o.log.empty()) p.addError("--log is required");
+  if (!p.ok()) {
+    for (const std::string& e : p.errors()) std::fprintf(stderr, "pplvo-replay: %s\n", e.c_str());
     usage();
     return 2;
   }

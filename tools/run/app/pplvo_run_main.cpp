@@ -5,7 +5,8 @@
 #include <fstream>
 #include <string>
 
-#include "pplvo/nodes/node_args.h"
+#include "pplvo/core/args.h"
+#include "pplvo/pipeline/pipeline_args.h"
 #include "pplvo/run/run_pipeline.h"
 
 namespace {
@@ -17,44 +18,43 @@ void usage() {
       "every frame processed in order; writes the TUM trajectory and prints per-stage timing.\n"
       "  --dataset DIR           TUM-layout folder (rgb.txt/depth.txt or associations.txt)\n"
       "  --output TRAJ           TUM trajectory (stamp tx ty tz qx qy qz qw), stamps verbatim\n"
-      "  --config FILE           pipeline YAML (default: built-in defaults = config/pplvo.yaml)\n"
-      "  --features LIST         points,lines,planes (any subset; default all)\n"
-      "  --depth-model MODEL     sensor | cgm | ogm (default ogm)\n"
       "  --max-frames N          stop after N frames (0 = all)\n"
       "  --start N               first associated frame (0)\n"
       "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
       "  --skip-bad              skip (and count) corrupt frames instead of stopping\n"
       "  --summary FILE          write the run summary as YAML\n"
       "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
-      "  --set KEY=VALUE         override one configuration value (repeatable), e.g.\n"
-      "                          --set odometry.tracker.estimator.plane_scale_alpha=1\n"
-      "  --quiet                 no summary on stdout\n");
+      "  --quiet                 no summary on stdout\n%s",
+      pplvo::pipeline::pipelineOptionsUsage());
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace pplvo;
-  nodes::NodeArgs args(argc, argv);
-  if (args.help()) {
+  run::RunOptions o;
+  pipeline::PipelineArgs pa;
+  bool quiet = false;
+  ArgParser p;
+  pipeline::addPipelineOptions(p, &pa);
+  p.option("--dataset", &o.dataset_dir)
+      .option("--output", &o.output)
+      .option("--summary", &o.summary)
+      .option("--log", &o.log)
+      .option("--max-frames", &o.max_frames, int64_t{0})
+      .option("--start", &o.start, int64_t{0})
+      .option("--fps", &o.fps, 0.0)
+      .flag("--skip-bad", &o.skip_bad)
+      .flag("--quiet", &quiet);
+  p.parse(argsFromArgv(argc, argv));
+  if (p.help()) {
     usage();
     return 0;
   }
-  run::RunOptions o;
-  args.pipeline(&o.pipeline);
-  args.value("--dataset", &o.dataset_dir);
-  args.value("--output", &o.output);
-  args.value("--summary", &o.summary);
-  args.value("--log", &o.log);
-  long long n = 0;
-  if (args.value("--max-frames", &n)) o.max_frames = n;
-  if (args.value("--start", &n)) o.start = n;
-  args.value("--fps", &o.fps);
-  args.flag("--skip-bad", &o.skip_bad);
-  bool quiet = false;
-  args.flag("--quiet", &quiet);
-  if (o.dataset_dir.empty()) args.error("--dataset is required");
-  if (!args.finish("pplvo-run")) {
+  pipeline::applyPipelineArgs(pa, &o.pipeline, &p);
+  if (o.dataset_dir.empty()) p.addError("--dataset is required");
+  if (!p.ok()) {
+    for (const std::string& e : p.errors()) std::fprintf(stderr, "pplvo-run: %s\n", e.c_str());
     usage();
     return 2;
   }
