@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Runs the pipeline as separate processes on a TUM-layout folder with groundtruth.txt and prints
+# ATE and RPE: pplvo-launch --isolated --lockstep (player, depth filter, frontend, estimator and
+# logger in a private network namespace, nothing on the host network), then pplvo-eval.
+# Usage: scripts/run_demo_pipeline.sh DATASET_DIR OUTDIR [extra pplvo-launch args...]
+# Writes OUTDIR/trajectory.txt, OUTDIR/launch_report.txt, OUTDIR/eval.txt.
+# Programs are taken from $PPLVO_BIN_DIR (default: build/bin of this repository).
+set -euo pipefail
+if [ $# -lt 2 ]; then
+  echo "usage: $0 DATASET_DIR OUTDIR [extra pplvo-launch args...]" >&2
+  exit 2
+fi
+dataset=$1
+outdir=$2
+shift 2
+root=$(cd "$(dirname "$0")/.." && pwd)
+bin=${PPLVO_BIN_DIR:-$root/build/bin}
+for p in pplvo-launch pplvo-eval; do
+  [ -x "$bin/$p" ] || { echo "$0: $bin/$p is missing: build it (cmake --build build --target $p)" >&2; exit 1; }
+done
+[ -f "$dataset/groundtruth.txt" ] || { echo "$0: $dataset/groundtruth.txt is missing" >&2; exit 1; }
+mkdir -p "$outdir"
+
+# Integer frame stamps (ICL-NUIM) are frame indices: 30 Hz for both the player and the evaluator.
+index=$dataset/associations.txt
+[ -f "$index" ] || index=$dataset/rgb.txt
+fps=()
+if awk '!/^#/ && NF >= 2 { if ($1 !~ /^[0-9]+$/) bad = 1; n++ } END { exit (n > 0 && !bad) ? 0 : 1 }' "$index"; then
+  fps=(--fps 30)
+fi
+
+traj=$outdir/trajectory.txt
+rm -f "$traj"
+echo "== pplvo-launch --isolated --lockstep on $dataset" >&2
+"$bin/pplvo-launch" --isolated --lockstep --dataset "$dataset" --output "$traj" ${fps[@]+"${fps[@]}"} "$@" \
+  | tee "$outdir/launch_report.txt"
+echo "== pplvo-eval $dataset/groundtruth.txt $traj ${fps[*]+${fps[*]}}" >&2
+"$bin/pplvo-eval" "$dataset/groundtruth.txt" "$traj" ${fps[@]+"${fps[@]}"} | tee "$outdir/eval.txt"
