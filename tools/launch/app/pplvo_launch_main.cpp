@@ -368,7 +368,7 @@ int main(int argc, char** argv) {
     }
     std::fprintf(stderr, "pplvo-launch: FAILED: %s; process logs kept in %s\n",
                  report.failures.front().c_str(), log_dir.c_str());
-    return 1;
+    return g_interrupted ? 130 : 1;
   }
   if (temp_logs) {
     std::error_code ec;

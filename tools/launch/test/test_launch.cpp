@@ -466,7 +466,11 @@ class LaunchProgram : public ::testing::Test {
     if (const std::string why = isolationUnavailable(); !why.empty()) GTEST_SKIP() << why;
     ASSERT_TRUE(synth_ok_);
   }
-  static std::string launch() { return binDir() + "/pplvo-launch --isolated --timeout 80 "; }
+  /// The launch command; process logs go to the suite's temp dir (kept out of /tmp on failure).
+  static std::string launch(const std::string& tag) {
+    return binDir() + "/pplvo-launch --isolated --timeout 80 --node-logs " +
+           (*dir_ / ("logs_" + tag)).string() + " ";
+  }
   static fs::path seq() { return *dir_ / "seq"; }
   static fs::path* dir_;
   static bool synth_ok_;
@@ -483,7 +487,7 @@ TEST_F(LaunchProgram, LockstepEqualsPplvoRun) {
                              *dir_, "run");
   ASSERT_EQ(run.code, 0) << run.err;
   const fs::path traj = *dir_ / "launch_traj.txt";
-  const CommandRun l = runCommand(launch() + "--lockstep --dataset " + seq().string() + " --output " +
+  const CommandRun l = runCommand(launch("lockstep") + "--lockstep --dataset " + seq().string() + " --output " +
                                traj.string(),
                            *dir_, "lockstep");
   std::printf("pplvo-launch --isolated --lockstep: %.1f s wall\n%s", l.seconds, l.out.c_str());
@@ -522,7 +526,7 @@ TEST_F(LaunchProgram, LockstepEqualsPplvoRun) {
 
 TEST_F(LaunchProgram, FreeRunningAtRealTimeCompletes) {
   const fs::path traj = *dir_ / "free_traj.txt";
-  const CommandRun l = runCommand(launch() + "--rate 1 --dataset " + seq().string() + " --output " +
+  const CommandRun l = runCommand(launch("free") + "--rate 1 --dataset " + seq().string() + " --output " +
                                traj.string(),
                            *dir_, "free");
   std::printf("pplvo-launch --isolated --rate 1: %.1f s wall\n%s", l.seconds, l.out.c_str());
@@ -539,7 +543,7 @@ TEST_F(LaunchProgram, MissingProgramIsNamed) {
   for (const std::string& n : allPrograms()) {
     if (n != kFrontend) fs::create_symlink(fs::absolute(binDir() + "/" + n), bins / n);
   }
-  const CommandRun l = runCommand(launch() + "--bin-dir " + bins.string() + " --dataset " +
+  const CommandRun l = runCommand(launch("missing") + "--bin-dir " + bins.string() + " --dataset " +
                                seq().string() + " --output " + (*dir_ / "x.txt").string(),
                            *dir_, "missing");
   EXPECT_EQ(l.code, 1);
@@ -549,7 +553,7 @@ TEST_F(LaunchProgram, MissingProgramIsNamed) {
 }
 
 TEST_F(LaunchProgram, KilledNodeIsReportedAndStopsTheLaunch) {
-  const CommandRun l = runCommand(launch() + "--lockstep --test-kill pplvo-estimator:5 --dataset " +
+  const CommandRun l = runCommand(launch("kill") + "--lockstep --test-kill pplvo-estimator:5 --dataset " +
                                seq().string() + " --output " + (*dir_ / "killed.txt").string(),
                            *dir_, "kill");
   std::printf("killed estimator: exit %d after %.1f s\n%s", l.code, l.seconds, l.out.c_str());
