@@ -31,7 +31,7 @@ std::string launchUsage() {
          "  --lockstep              player publishes frame k+1 only after the pose of frame k\n"
          "                          (trajectory equal to pplvo-run's); default --rate 0 then\n"
          "  --rate R                player speed: 1 real time (default), 0 as fast as possible\n"
-         "  --lockstep-timeout S    player's wait for each pose in lockstep mode (5)\n"
+         "  --lockstep-timeout S    player's wait for each pose in lockstep mode (10)\n"
          "  --config FILE           pipeline YAML (frontend and estimator)\n"
          "  --features LIST         points,lines,planes (frontend and estimator)\n"
          "  --depth-model M         sensor | cgm | ogm (depth filter)\n"
@@ -439,6 +439,10 @@ std::string LaunchReport::text() const {
   if (transport_known) {
     out << "launch.frames_not_received: " << not_received
         << "  # player out minus depth-filter/frontend in\n";
+  }
+  if (lockstep && player && player->counts.known) {
+    out << "launch.lockstep_timeouts: " << player->counts.errors
+        << "  # poses the player gave up waiting for (player errors)\n";
   }
   out << "launch.wall_s: " << wall_s << "\n";
   out << "launch.result: " << (ok() ? "ok" : "FAILED") << "\n";

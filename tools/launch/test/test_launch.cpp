@@ -497,6 +497,7 @@ TEST_F(LaunchProgram, LockstepEqualsPplvoRun) {
   EXPECT_EQ(reportValue(l.out, "launch.dropped_total"), 0);
   EXPECT_EQ(reportValue(l.out, "launch.frames_not_received"), 0);
   EXPECT_EQ(reportValue(l.out, "launch.trajectory_poses"), 30);
+  EXPECT_EQ(reportValue(l.out, "launch.lockstep_timeouts"), 0);
   // Every process ended with exit code 0 after the launcher's stop.
   for (const char* n : {kDepthFilter, kFrontend, kEstimator, kLogger, kPlayer}) {
     const size_t at = l.out.find(std::string("  ") + n + " ");

@@ -31,7 +31,7 @@ struct LaunchOptions {
   std::string output;           ///< --output: TUM trajectory written by the logger (required)
   bool lockstep = false;        ///< --lockstep: player waits for pose k before frame k+1
   double rate = 1.0;            ///< --rate: player speed (1 real time, 0 as fast as possible)
-  double lockstep_timeout_s = 5.0;  ///< --lockstep-timeout: player's wait per pose
+  double lockstep_timeout_s = 10.0;  ///< --lockstep-timeout: player's wait per pose
   std::string config;           ///< --config: pipeline YAML for frontend and estimator
   std::string features;         ///< --features: points,lines,planes subset
   std::string depth_model;      ///< --depth-model: sensor | cgm | ogm (depth filter)
