@@ -563,6 +563,6 @@ TEST_F(LaunchProgram, KilledNodeIsReportedAndStopsTheLaunch) {
   EXPECT_NE(l.out.find("launch.failure: pplvo-estimator ended early (killed by signal 9"),
             std::string::npos)
       << l.out;
-  EXPECT_EQ(l.out.find("timeout"), std::string::npos) << l.out;
+  EXPECT_EQ(l.out.find("launch.failure: timeout"), std::string::npos) << l.out;
   EXPECT_NE(l.err.find("FAILED: pplvo-estimator"), std::string::npos) << l.err;
 }
