@@ -46,7 +46,7 @@ std::string launchUsage() {
          "  --bin-dir DIR           where the node programs are (default: next to pplvo-launch)\n"
          "  --node-logs DIR         stdout/stderr of each process as DIR/NAME.log (default: a\n"
          "                          temporary directory, kept and named only on failure)\n"
-         "  --timeout S             bound on the whole launch (600)\n"
+         "  --timeout S             bound on the whole launch (3600)\n"
          "  --startup-timeout S     wait for each node's first status message (20)\n"
          "  --drain-idle S          after the player ends, stop once no pose came for S s (2)\n"
          "  --stop-grace S          SIGINT -> SIGKILL delay when stopping (5)\n"

@@ -147,6 +147,10 @@ size_t Supervisor::spawn(const ProcessSpec& spec) {
       ::dup2(log_fd, STDOUT_FILENO);
       ::dup2(log_fd, STDERR_FILENO);
     }
+    // No inherited descriptors (the launcher's LCM sockets are not close-on-exec) except the
+    // exec-error pipe, which closes itself on a successful exec.
+    if (err_pipe[1] > 3) ::close_range(3, static_cast<unsigned>(err_pipe[1]) - 1, 0);
+    ::close_range(static_cast<unsigned>(err_pipe[1]) + 1, ~0U, 0);
     ::execve(argv[0], argv.data(), envp.data());
     const int e = errno;
     writeAll(err_pipe[1], &e, sizeof e);
@@ -185,8 +189,6 @@ std::vector<size_t> Supervisor::poll() {
     const pid_t r = ::waitpid(c.pid, &status, WNOHANG);
     if (r == c.pid) {
       c.exit = ExitInfo::fromWaitStatus(status);
-      // Leftovers of the group (a node's own children, if any) go with it.
-      ::kill(-c.pid, SIGKILL);
       reaped.push_back(i);
     } else if (r < 0 && errno == ECHILD) {
       c.exit = ExitInfo{};  // reaped elsewhere: unknown end

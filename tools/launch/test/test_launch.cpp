@@ -2,6 +2,7 @@
 // integration tests of the pplvo-launch program. The integration tests run the launch only
 // with --isolated (private network namespace; nothing reaches the host network) and are
 // skipped with a message when the kernel refuses unprivileged user namespaces.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <net/if.h>
 #include <signal.h>
@@ -282,6 +283,32 @@ TEST(Supervisor, ExitCodesLogsAndEnvironment) {
   const std::string log = readAll(s.log_path);
   EXPECT_NE(log.find("out forty-two"), std::string::npos) << log;
   EXPECT_NE(log.find("err"), std::string::npos) << log;
+  fs::remove_all(dir);
+}
+
+TEST(Supervisor, ChildInheritsNoDescriptors) {
+  const fs::path dir = tempDir("fds");
+  // Not close-on-exec, like LCM's sockets; a high number, apart from the shell's own fds.
+  const int opened = ::open("/dev/null", O_RDONLY);
+  ASSERT_GE(opened, 3);
+  const int leak = ::dup2(opened, 57);
+  ::close(opened);
+  ASSERT_EQ(leak, 57);
+  Supervisor sup;
+  ProcessSpec s;
+  s.name = "fds";
+  s.path = "/bin/sh";
+  s.args = {"-c", "for f in /proc/$$/fd/*; do echo \"fd ${f##*/}\"; done"};
+  s.log_path = (dir / "fds.log").string();
+  const size_t i = sup.spawn(s);
+  for (int k = 0; k < 500 && sup.child(i).running(); ++k) {
+    sup.poll();
+    usleep(10000);
+  }
+  ::close(leak);
+  const std::string log = readAll(s.log_path);
+  EXPECT_NE(log.find("fd 2\n"), std::string::npos) << log;
+  EXPECT_EQ(log.find("fd " + std::to_string(leak) + "\n"), std::string::npos) << log;
   fs::remove_all(dir);
 }
 

@@ -43,7 +43,7 @@ struct LaunchOptions {
   bool isolated = false;        ///< --isolated: private user+network namespace
   std::string bin_dir;          ///< --bin-dir (empty: the directory of pplvo-launch)
   std::string node_log_dir;     ///< --node-logs: per-process stdout/stderr (empty: temp dir)
-  double timeout_s = 600.0;     ///< --timeout: whole launch, seconds (always bounded)
+  double timeout_s = 3600.0;    ///< --timeout: whole launch, seconds (always bounded)
   double startup_timeout_s = 20.0;  ///< --startup-timeout: wait for each node's first status
   double drain_idle_s = 2.0;    ///< --drain-idle: no new pose for this long ends the drain
   double stop_grace_s = 5.0;    ///< --stop-grace: SIGINT -> SIGKILL delay
