@@ -355,6 +355,17 @@ int main(int argc, char** argv) {
       report.frames_published = p.counts.frames_out;
     }
   }
+  if (o.lockstep) {
+    // A pose the player stopped waiting for was lost (UDP loss, a dead node): the lockstep
+    // promise (trajectory equal to pplvo-run's) no longer holds, so the launch fails.
+    for (const auto& p : report.processes) {
+      if (p.name == kPlayer && p.counts.known && p.counts.errors > 0) {
+        failures.push_back(std::to_string(p.counts.errors) +
+                           " lockstep timeout(s): poses lost (receive buffers too small? see "
+                           "docs/launch.md)");
+      }
+    }
+  }
   report.poses_seen = bus.poses();
   report.trajectory_poses = countTrajectoryLines(o.output);
   report.wall_s = seconds();

@@ -274,7 +274,13 @@ UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url
     const int64_t size = std::min<int64_t>(rmem_max_bytes, 16 << 20);
     d.url += (d.url.find('?') == std::string::npos ? "?" : "&");
     d.url += "recv_buf_size=" + std::to_string(size);
-    if (size < kMinRawRecvBufBytes) {
+    if (size < kMinCompressedRecvBufBytes) {
+      d.compress = true;
+      d.warnings.push_back(
+          "net.core.rmem_max is only " + std::to_string(rmem_max_bytes) +
+          " bytes: 640x480 frames and depth maps will lose UDP fragments even compressed "
+          "(measured: 1 MiB needed); raise it, e.g. sysctl -w net.core.rmem_max=4194304");
+    } else if (size < kMinRawRecvBufBytes) {
       d.compress = true;
       d.warnings.push_back("net.core.rmem_max is only " + std::to_string(rmem_max_bytes) +
                            " bytes: raw frames would lose UDP fragments, so images and depth "
