@@ -39,8 +39,7 @@ class BusMonitor {
     lcm_.subscribe(pplvo::channels::kStream, &BusMonitor::onStream, this);
     lcm_.subscribe(pplvo::channels::kPose, &BusMonitor::onPose, this);
   }
-  void onStatus(const lcm::ReceiveBuffer*, const std::string&,
-                const pplvo_msgs::node_status_t* m) {
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::node_status_t* m) {
     NodeCounts& c = status_[m->node];
     c.frames_in = m->frames_in;
     c.frames_out = m->frames_out;
@@ -108,7 +107,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (!parsed.errors.empty()) {
-    for (const std::string& e : parsed.errors) std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
+    for (const std::string& e : parsed.errors)
+      std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
     std::fprintf(stderr, "pplvo-launch: see --help\n");
     return 2;
   }
@@ -126,9 +126,10 @@ int main(int argc, char** argv) {
     }
     say("isolated: " + iso.detail);
   }
-  const UrlDecision url = decideLcmUrl(parsed.options, std::getenv("LCM_DEFAULT_URL"),
-                                       readRmemMax());
-  for (const std::string& w : url.warnings) std::fprintf(stderr, "pplvo-launch: warning: %s\n", w.c_str());
+  const UrlDecision url =
+      decideLcmUrl(parsed.options, std::getenv("LCM_DEFAULT_URL"), readRmemMax());
+  for (const std::string& w : url.warnings)
+    std::fprintf(stderr, "pplvo-launch: warning: %s\n", w.c_str());
   if (!url.errors.empty()) {
     for (const std::string& e : url.errors) std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
     return 2;
@@ -222,8 +223,8 @@ int main(int argc, char** argv) {
         return false;
       }
       if (Clock::now() > deadline) {
-        failures.push_back("timeout: --timeout " + std::to_string(o.timeout_s) + " s reached during " +
-                           phase);
+        failures.push_back("timeout: --timeout " + std::to_string(o.timeout_s) +
+                           " s reached during " + phase);
         return false;
       }
       return true;
@@ -245,7 +246,8 @@ int main(int argc, char** argv) {
         const size_t i = sup.spawn(specs[k]);
         say("started " + specs[k].name + " (pid " + std::to_string(sup.child(i).pid) + ")");
       }
-      const auto startup_deadline = Clock::now() + std::chrono::duration<double>(o.startup_timeout_s);
+      const auto startup_deadline =
+          Clock::now() + std::chrono::duration<double>(o.startup_timeout_s);
       bool ready = false;
       while (!ready && checkChildren(false) && checkLimits("start-up")) {
         bus.handle(20);
@@ -293,8 +295,10 @@ int main(int argc, char** argv) {
             }
             if (drain.drained(seconds(), bus.poses(), published)) break;
           }
-          say("drained at " + std::to_string(seconds()) + " s: " + std::to_string(bus.poses()) +
-              " poses seen");
+          if (failures.empty()) {
+            say("drained at " + std::to_string(seconds()) + " s: " +
+                std::to_string(bus.poses()) + " poses seen");
+          }
         }
       }
     } catch (const SpawnError& e) {
@@ -310,6 +314,12 @@ int main(int argc, char** argv) {
     }
     sup.stop(nodes, o.stop_grace_s, [&] { bus.handle(10); });
     bus.handle(300);
+    // The logger writes each pose as it comes; give it (bounded) time to catch up with every
+    // pose the launcher saw before it is stopped, so that no late pose is cut off.
+    const auto logger_deadline = Clock::now() + std::chrono::seconds(3);
+    while (countTrajectoryLines(o.output) < bus.poses() && Clock::now() < logger_deadline) {
+      bus.handle(20);
+    }
     if (auto i = sup.find(kLogger)) sup.stop({*i}, o.stop_grace_s, [&] { bus.handle(10); });
     bus.handle(50);
     if (test_killed) {

@@ -123,22 +123,34 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
       std::string t;
       if (!next(&t)) return;
       double v = 0;
-      if (!toDouble(t, &v)) p.errors.push_back(key + ": expected a number, not '" + t + "'");
-      else if (v < min_value) p.errors.push_back(key + ": must be >= " + fmtDouble(min_value));
-      else *out = v;
+      if (!toDouble(t, &v))
+        p.errors.push_back(key + ": expected a number, not '" + t + "'");
+      else if (v < min_value)
+        p.errors.push_back(key + ": must be >= " + fmtDouble(min_value));
+      else
+        *out = v;
     };
     auto flag = [&](bool* out) {
       if (has_inline) p.errors.push_back(key + " takes no value");
       *out = true;
     };
-    if (key == "--help" || key == "-h") p.help = true;
-    else if (key == "--dataset") next(&o.dataset_dir);
-    else if (key == "--output") next(&o.output);
-    else if (key == "--lockstep") flag(&o.lockstep);
-    else if (key == "--rate") { number(&o.rate, 0.0); rate_given = true; }
-    else if (key == "--lockstep-timeout") number(&o.lockstep_timeout_s, 0.1);
-    else if (key == "--config") next(&o.config);
-    else if (key == "--features") next(&o.features);
+    if (key == "--help" || key == "-h")
+      p.help = true;
+    else if (key == "--dataset")
+      next(&o.dataset_dir);
+    else if (key == "--output")
+      next(&o.output);
+    else if (key == "--lockstep")
+      flag(&o.lockstep);
+    else if (key == "--rate") {
+      number(&o.rate, 0.0);
+      rate_given = true;
+    } else if (key == "--lockstep-timeout")
+      number(&o.lockstep_timeout_s, 0.1);
+    else if (key == "--config")
+      next(&o.config);
+    else if (key == "--features")
+      next(&o.features);
     else if (key == "--depth-model") {
       if (next(&o.depth_model) && o.depth_model != "sensor" && o.depth_model != "cgm" &&
           o.depth_model != "ogm") {
@@ -149,17 +161,28 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
       if (next(&t) && (!toInt(t, &o.max_frames) || o.max_frames < 0)) {
         p.errors.push_back("--max-frames: expected an integer >= 0, not '" + t + "'");
       }
-    } else if (key == "--fps") number(&o.fps, 0.0);
-    else if (key == "--log") next(&o.log);
-    else if (key == "--summary") next(&o.summary);
-    else if (key == "--lcm-url") next(&o.lcm_url);
-    else if (key == "--isolated") flag(&o.isolated);
-    else if (key == "--bin-dir") next(&o.bin_dir);
-    else if (key == "--node-logs") next(&o.node_log_dir);
-    else if (key == "--timeout") number(&o.timeout_s, 1.0);
-    else if (key == "--startup-timeout") number(&o.startup_timeout_s, 1.0);
-    else if (key == "--drain-idle") number(&o.drain_idle_s, 0.1);
-    else if (key == "--stop-grace") number(&o.stop_grace_s, 0.1);
+    } else if (key == "--fps")
+      number(&o.fps, 0.0);
+    else if (key == "--log")
+      next(&o.log);
+    else if (key == "--summary")
+      next(&o.summary);
+    else if (key == "--lcm-url")
+      next(&o.lcm_url);
+    else if (key == "--isolated")
+      flag(&o.isolated);
+    else if (key == "--bin-dir")
+      next(&o.bin_dir);
+    else if (key == "--node-logs")
+      next(&o.node_log_dir);
+    else if (key == "--timeout")
+      number(&o.timeout_s, 1.0);
+    else if (key == "--startup-timeout")
+      number(&o.startup_timeout_s, 1.0);
+    else if (key == "--drain-idle")
+      number(&o.drain_idle_s, 0.1);
+    else if (key == "--stop-grace")
+      number(&o.stop_grace_s, 0.1);
     else if (key == "--test-kill") {
       if (next(&o.test_kill)) {
         static const std::regex re("(pplvo-[a-z-]+):([0-9]+)");
@@ -170,9 +193,12 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
         }
         if (!known) p.errors.push_back("--test-kill: NODE:POSES with NODE one of the programs");
       }
-    } else if (key == "--quiet") flag(&o.quiet);
-    else if (key == "--compress") flag(&o.compress);
-    else p.errors.push_back("unknown option " + args[i]);
+    } else if (key == "--quiet")
+      flag(&o.quiet);
+    else if (key == "--compress")
+      flag(&o.compress);
+    else
+      p.errors.push_back("unknown option " + args[i]);
   }
   if (p.help) return p;
   if (!rate_given && o.lockstep) o.rate = 0.0;
@@ -297,8 +323,7 @@ UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url
 }
 
 std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::string& url,
-                                           const std::string& bin_dir,
-                                           const std::string& log_dir) {
+                                           const std::string& bin_dir, const std::string& log_dir) {
   auto make = [&](const std::string& name) {
     ProcessSpec s;
     s.name = name;
@@ -325,13 +350,14 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::st
   if (!o.summary.empty()) lg.args.insert(lg.args.end(), {"--summary", o.summary});
   specs.push_back(lg);
   ProcessSpec pl = make(kPlayer);
-  pl.args.insert(pl.args.end(), {"--dataset", o.dataset_dir, "--rate", fmtDouble(o.rate),
-                                 "--no-progress"});
+  pl.args.insert(pl.args.end(),
+                 {"--dataset", o.dataset_dir, "--rate", fmtDouble(o.rate), "--no-progress"});
   if (o.lockstep) {
     pl.args.insert(pl.args.end(),
                    {"--lockstep", "--lockstep-timeout", fmtDouble(o.lockstep_timeout_s)});
   }
-  if (o.max_frames > 0) pl.args.insert(pl.args.end(), {"--max-frames", std::to_string(o.max_frames)});
+  if (o.max_frames > 0)
+    pl.args.insert(pl.args.end(), {"--max-frames", std::to_string(o.max_frames)});
   if (o.fps > 0) pl.args.insert(pl.args.end(), {"--fps", fmtDouble(o.fps)});
   if (o.compress) {
     pl.args.insert(pl.args.end(), {"--rgb-encoding", "png", "--depth-encoding", "zlib"});
@@ -397,13 +423,15 @@ std::string LaunchReport::text() const {
   std::snprintf(buf, sizeof buf, "pplvo-launch report (%s, %s, %.2f s wall)\n",
                 lockstep ? "lockstep" : "free-running", url.c_str(), wall_s);
   out << buf;
-  std::snprintf(buf, sizeof buf, "  %-20s %-34s %7s %7s %8s %8s %7s\n", "process", "ended",
-                "in", "out", "dropped", "skipped", "errors");
+  std::snprintf(buf, sizeof buf, "  %-20s %-34s %7s %7s %8s %8s %7s\n", "process", "ended", "in",
+                "out", "dropped", "skipped", "errors");
   out << buf;
   for (const Process& p : processes) {
     std::string ended = p.exit ? p.exit->text() : "still running";
-    if (p.killed) ended += " after SIGKILL";
-    else if (p.stop_requested && p.exit) ended += " (stopped)";
+    if (p.killed)
+      ended += " after SIGKILL";
+    else if (p.stop_requested && p.exit)
+      ended += " (stopped)";
     if (p.has_counts && p.counts.known) {
       std::snprintf(buf, sizeof buf, "  %-20s %-34s %7lld %7lld %8lld %8lld %7lld\n",
                     p.name.c_str(), ended.c_str(), static_cast<long long>(p.counts.frames_in),
@@ -439,7 +467,8 @@ std::string LaunchReport::text() const {
       << "  # sum of frames_dropped over nodes (a frame dropped upstream may count again "
          "downstream)\n";
   if (frames_published >= 0 && trajectory_poses >= 0) {
-    out << "launch.frames_without_pose: " << std::max<int64_t>(0, frames_published - trajectory_poses)
+    out << "launch.frames_without_pose: "
+        << std::max<int64_t>(0, frames_published - trajectory_poses)
         << "  # published minus trajectory poses\n";
   }
   if (transport_known) {

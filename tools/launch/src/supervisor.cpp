@@ -19,7 +19,8 @@ std::string signalName(int sig) {
   const char* abbrev = sigabbrev_np(sig);
   const char* desc = strsignal(sig);
   std::string s = "signal " + std::to_string(sig);
-  if (abbrev != nullptr) s += std::string(" (SIG") + abbrev + (desc ? std::string(", ") + desc : "") + ")";
+  if (abbrev != nullptr)
+    s += std::string(" (SIG") + abbrev + (desc ? std::string(", ") + desc : "") + ")";
   return s;
 }
 
@@ -57,7 +58,8 @@ std::string ExitInfo::text() const {
 
 std::string checkExecutable(const std::string& path) {
   struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return std::string("not found (") + std::strerror(errno) + ")";
+  if (::stat(path.c_str(), &st) != 0)
+    return std::string("not found (") + std::strerror(errno) + ")";
   if (!S_ISREG(st.st_mode)) return "not a regular file";
   if (::access(path.c_str(), X_OK) != 0) return "not executable";
   return {};

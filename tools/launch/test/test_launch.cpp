@@ -36,8 +36,8 @@ std::string readAll(const std::string& path) {
 }
 
 fs::path tempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() /
-                     ("pplvo_test_launch_" + name + "_" + std::to_string(::getpid()));
+  const fs::path d =
+      fs::temp_directory_path() / ("pplvo_test_launch_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
@@ -334,7 +334,8 @@ TEST(Supervisor, SpawnErrorsNameTheProgram) {
   const fs::path bad = dir / "bad";
   {
     std::ofstream f(bad);
-    f << "\x7f" "ELF garbage";
+    f << "\x7f"
+         "ELF garbage";
   }
   fs::permissions(bad, fs::perms::owner_all);
   s.path = bad.string();
@@ -494,7 +495,8 @@ std::pair<double, double> maxDifference(const fs::path& a_path, const fs::path& 
     const auto& pa = a.poses[k];
     const auto& pb = b.poses[k];
     EXPECT_EQ(pa.stamp_text, pb.stamp_text);
-    max_t = std::max(max_t, (pa.T_w_c.translation() - pb.T_w_c.translation()).cwiseAbs().maxCoeff());
+    max_t =
+        std::max(max_t, (pa.T_w_c.translation() - pb.T_w_c.translation()).cwiseAbs().maxCoeff());
     const Eigen::Quaterniond qa(pa.T_w_c.rotation()), qb(pb.T_w_c.rotation());
     max_q = std::max(max_q, (qa.coeffs() - qb.coeffs()).cwiseAbs().maxCoeff());
   }
@@ -511,13 +513,14 @@ class LaunchProgram : public ::testing::Test {
     std::string size;
     if (rmem < kMinRawRecvBufBytes) {
       size = " --width 160 --height 120";
-      std::printf("note: net.core.rmem_max = %lld bytes is too small for 640x480 frames over "
-                  "UDP; the program tests use 160x120 frames (raise it to test full size)\n",
-                  static_cast<long long>(rmem));
+      std::printf(
+          "note: net.core.rmem_max = %lld bytes is too small for 640x480 frames over "
+          "UDP; the program tests use 160x120 frames (raise it to test full size)\n",
+          static_cast<long long>(rmem));
     }
-    CommandRun r = runCommand(binDir() + "/pplvo-synth --output " + (*dir_ / "seq").string() +
-                                  " --frames 30" + size,
-                              *dir_, "synth");
+    CommandRun r = runCommand(
+        binDir() + "/pplvo-synth --output " + (*dir_ / "seq").string() + " --frames 30" + size,
+        *dir_, "synth");
     synth_ok_ = r.code == 0;
     if (!synth_ok_) std::fprintf(stderr, "pplvo-synth failed:\n%s\n", r.err.c_str());
     r = runCommand(binDir() + "/pplvo-synth --output " + (*dir_ / "small").string() +
@@ -549,14 +552,14 @@ bool LaunchProgram::synth_ok_ = false;
 
 TEST_F(LaunchProgram, LockstepEqualsPplvoRun) {
   const fs::path ref = *dir_ / "run_traj.txt";
-  const CommandRun run = runCommand(binDir() + "/pplvo-run --quiet --dataset " + seq().string() +
-                                 " --output " + ref.string(),
-                             *dir_, "run");
+  const CommandRun run = runCommand(
+      binDir() + "/pplvo-run --quiet --dataset " + seq().string() + " --output " + ref.string(),
+      *dir_, "run");
   ASSERT_EQ(run.code, 0) << run.err;
   const fs::path traj = *dir_ / "launch_traj.txt";
-  const CommandRun l = runCommand(launch("lockstep") + "--lockstep --dataset " + seq().string() + " --output " +
-                               traj.string(),
-                           *dir_, "lockstep");
+  const CommandRun l = runCommand(
+      launch("lockstep") + "--lockstep --dataset " + seq().string() + " --output " + traj.string(),
+      *dir_, "lockstep");
   std::printf("pplvo-launch --isolated --lockstep: %.1f s wall\n%s", l.seconds, l.out.c_str());
   ASSERT_EQ(l.code, 0) << l.out << l.err;
   EXPECT_NE(l.out.find("launch.result: ok"), std::string::npos);
@@ -584,16 +587,18 @@ TEST_F(LaunchProgram, LockstepEqualsPplvoRun) {
 TEST_F(LaunchProgram, StockKernelReceiveBufferSmallFrames) {
   const fs::path small = *dir_ / "small";
   const fs::path ref = *dir_ / "small_run.txt";
-  const CommandRun run = runCommand(binDir() + "/pplvo-run --quiet --dataset " + small.string() +
-                                        " --output " + ref.string(),
-                                    *dir_, "small_run");
+  const CommandRun run = runCommand(
+      binDir() + "/pplvo-run --quiet --dataset " + small.string() + " --output " + ref.string(),
+      *dir_, "small_run");
   ASSERT_EQ(run.code, 0) << run.err;
   const fs::path traj = *dir_ / "small_launch.txt";
-  const CommandRun l = runCommand(
-      launch("small") + "--lockstep --compress "
-                        "--lcm-url 'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=212992' "
-                        "--dataset " + small.string() + " --output " + traj.string(),
-      *dir_, "small_launch");
+  const CommandRun l =
+      runCommand(launch("small") +
+                     "--lockstep --compress "
+                     "--lcm-url 'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=212992' "
+                     "--dataset " +
+                     small.string() + " --output " + traj.string(),
+                 *dir_, "small_launch");
   std::printf("pplvo-launch, 208 KiB receive buffers, 160x120: %.1f s wall\n%s", l.seconds,
               l.out.c_str());
   ASSERT_EQ(l.code, 0) << l.out << l.err;
@@ -606,9 +611,9 @@ TEST_F(LaunchProgram, StockKernelReceiveBufferSmallFrames) {
 
 TEST_F(LaunchProgram, FreeRunningAtRealTimeCompletes) {
   const fs::path traj = *dir_ / "free_traj.txt";
-  const CommandRun l = runCommand(launch("free") + "--rate 1 --dataset " + seq().string() + " --output " +
-                               traj.string(),
-                           *dir_, "free");
+  const CommandRun l = runCommand(
+      launch("free") + "--rate 1 --dataset " + seq().string() + " --output " + traj.string(), *dir_,
+      "free");
   std::printf("pplvo-launch --isolated --rate 1: %.1f s wall\n%s", l.seconds, l.out.c_str());
   ASSERT_EQ(l.code, 0) << l.out << l.err;
   EXPECT_EQ(reportValue(l.out, "launch.frames_published"), 30);
@@ -624,8 +629,8 @@ TEST_F(LaunchProgram, MissingProgramIsNamed) {
     if (n != kFrontend) fs::create_symlink(fs::absolute(binDir() + "/" + n), bins / n);
   }
   const CommandRun l = runCommand(launch("missing") + "--bin-dir " + bins.string() + " --dataset " +
-                               seq().string() + " --output " + (*dir_ / "x.txt").string(),
-                           *dir_, "missing");
+                                      seq().string() + " --output " + (*dir_ / "x.txt").string(),
+                                  *dir_, "missing");
   EXPECT_EQ(l.code, 1);
   EXPECT_NE(l.err.find("missing node program " + (bins / kFrontend).string()), std::string::npos)
       << l.err;
@@ -633,9 +638,10 @@ TEST_F(LaunchProgram, MissingProgramIsNamed) {
 }
 
 TEST_F(LaunchProgram, KilledNodeIsReportedAndStopsTheLaunch) {
-  const CommandRun l = runCommand(launch("kill") + "--lockstep --test-kill pplvo-estimator:5 --dataset " +
-                               seq().string() + " --output " + (*dir_ / "killed.txt").string(),
-                           *dir_, "kill");
+  const CommandRun l =
+      runCommand(launch("kill") + "--lockstep --test-kill pplvo-estimator:5 --dataset " +
+                     seq().string() + " --output " + (*dir_ / "killed.txt").string(),
+                 *dir_, "kill");
   std::printf("killed estimator: exit %d after %.1f s\n%s", l.code, l.seconds, l.out.c_str());
   EXPECT_EQ(l.code, 1);
   EXPECT_LT(l.seconds, 60.0);  // well within --timeout 80: detected, not timed out

@@ -27,29 +27,29 @@ const std::vector<std::string>& statusNodes();
 const std::vector<std::string>& allPrograms();
 
 struct LaunchOptions {
-  std::string dataset_dir;      ///< --dataset (required)
-  std::string output;           ///< --output: TUM trajectory written by the logger (required)
-  bool lockstep = false;        ///< --lockstep: player waits for pose k before frame k+1
-  double rate = 1.0;            ///< --rate: player speed (1 real time, 0 as fast as possible)
+  std::string dataset_dir;           ///< --dataset (required)
+  std::string output;                ///< --output: TUM trajectory written by the logger (required)
+  bool lockstep = false;             ///< --lockstep: player waits for pose k before frame k+1
+  double rate = 1.0;                 ///< --rate: player speed (1 real time, 0 as fast as possible)
   double lockstep_timeout_s = 10.0;  ///< --lockstep-timeout: player's wait per pose
-  std::string config;           ///< --config: pipeline YAML for frontend and estimator
-  std::string features;         ///< --features: points,lines,planes subset
-  std::string depth_model;      ///< --depth-model: sensor | cgm | ogm (depth filter)
-  int64_t max_frames = 0;       ///< --max-frames (0: all)
-  double fps = 0.0;             ///< --fps: frame rate of integer-stamped datasets
-  std::string log;              ///< --log: LCM event log of every PPLVO_ channel (logger)
-  std::string summary;          ///< --summary: logger's YAML run summary
-  std::string lcm_url;          ///< --lcm-url (empty: $LCM_DEFAULT_URL, or kIsolatedUrl)
-  bool isolated = false;        ///< --isolated: private user+network namespace
-  std::string bin_dir;          ///< --bin-dir (empty: the directory of pplvo-launch)
-  std::string node_log_dir;     ///< --node-logs: per-process stdout/stderr (empty: temp dir)
-  double timeout_s = 3600.0;    ///< --timeout: whole launch, seconds (always bounded)
-  double startup_timeout_s = 20.0;  ///< --startup-timeout: wait for each node's first status
-  double drain_idle_s = 2.0;    ///< --drain-idle: no new pose for this long ends the drain
-  double stop_grace_s = 5.0;    ///< --stop-grace: SIGINT -> SIGKILL delay
-  std::string test_kill;        ///< --test-kill NODE:POSES: SIGKILL NODE after POSES poses
-  bool compress = false;        ///< --compress: lossless compressed images and depth maps
-  bool quiet = false;           ///< --quiet: report only
+  std::string config;                ///< --config: pipeline YAML for frontend and estimator
+  std::string features;              ///< --features: points,lines,planes subset
+  std::string depth_model;           ///< --depth-model: sensor | cgm | ogm (depth filter)
+  int64_t max_frames = 0;            ///< --max-frames (0: all)
+  double fps = 0.0;                  ///< --fps: frame rate of integer-stamped datasets
+  std::string log;                   ///< --log: LCM event log of every PPLVO_ channel (logger)
+  std::string summary;               ///< --summary: logger's YAML run summary
+  std::string lcm_url;               ///< --lcm-url (empty: $LCM_DEFAULT_URL, or kIsolatedUrl)
+  bool isolated = false;             ///< --isolated: private user+network namespace
+  std::string bin_dir;               ///< --bin-dir (empty: the directory of pplvo-launch)
+  std::string node_log_dir;          ///< --node-logs: per-process stdout/stderr (empty: temp dir)
+  double timeout_s = 3600.0;         ///< --timeout: whole launch, seconds (always bounded)
+  double startup_timeout_s = 20.0;   ///< --startup-timeout: wait for each node's first status
+  double drain_idle_s = 2.0;         ///< --drain-idle: no new pose for this long ends the drain
+  double stop_grace_s = 5.0;         ///< --stop-grace: SIGINT -> SIGKILL delay
+  std::string test_kill;             ///< --test-kill NODE:POSES: SIGKILL NODE after POSES poses
+  bool compress = false;             ///< --compress: lossless compressed images and depth maps
+  bool quiet = false;                ///< --quiet: report only
 };
 
 struct ParsedArgs {
@@ -62,10 +62,10 @@ std::string launchUsage();
 
 /// An LCM provider URL taken apart (only what the policy needs).
 struct LcmUrl {
-  std::string provider;         ///< "udpm", "memq", "file", ...
-  std::string address;          ///< udpm: multicast group, e.g. 239.255.76.67
-  int port = 0;                 ///< udpm: port (LCM's default 7667)
-  int ttl = 0;                  ///< udpm: ttl option (LCM's default 0)
+  std::string provider;  ///< "udpm", "memq", "file", ...
+  std::string address;   ///< udpm: multicast group, e.g. 239.255.76.67
+  int port = 0;          ///< udpm: port (LCM's default 7667)
+  int ttl = 0;           ///< udpm: ttl option (LCM's default 0)
   bool valid = false;
   std::string error;
 };
@@ -97,8 +97,7 @@ inline constexpr int64_t kMinCompressedRecvBufBytes = 1 << 20;
 /// Builds the five process specs (binaries in `bin_dir`, logs in `log_dir`), start order:
 /// depth filter, frontend, estimator, logger, player.
 std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::string& url,
-                                           const std::string& bin_dir,
-                                           const std::string& log_dir);
+                                           const std::string& bin_dir, const std::string& log_dir);
 
 /// Counters of one node: its final node_status_t or its "done:" line.
 struct NodeCounts {

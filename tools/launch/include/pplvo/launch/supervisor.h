@@ -17,10 +17,10 @@ namespace pplvo::launch {
 
 /// How a process ended (from waitpid's status).
 struct ExitInfo {
-  bool exited = false;     ///< returned from main / called exit()
-  int code = 0;            ///< exit code when `exited`
-  bool signaled = false;   ///< killed by a signal
-  int signal = 0;          ///< the signal when `signaled`
+  bool exited = false;    ///< returned from main / called exit()
+  int code = 0;           ///< exit code when `exited`
+  bool signaled = false;  ///< killed by a signal
+  int signal = 0;         ///< the signal when `signaled`
 
   static ExitInfo fromWaitStatus(int status);
   /// 0 exit, or death by the signal the launcher itself sent to stop the process (SIGINT) is
@@ -32,11 +32,11 @@ struct ExitInfo {
 
 /// One program to start.
 struct ProcessSpec {
-  std::string name;                ///< short name for reports, e.g. "pplvo-estimator"
-  std::string path;                ///< executable (absolute or relative path; no PATH search)
-  std::vector<std::string> args;   ///< arguments after argv[0] (argv[0] = path)
+  std::string name;               ///< short name for reports, e.g. "pplvo-estimator"
+  std::string path;               ///< executable (absolute or relative path; no PATH search)
+  std::vector<std::string> args;  ///< arguments after argv[0] (argv[0] = path)
   std::map<std::string, std::string> env;  ///< variables set (or replaced) in the child
-  std::string log_path;            ///< stdout+stderr of the child go here (empty: inherited)
+  std::string log_path;  ///< stdout+stderr of the child go here (empty: inherited)
 };
 
 /// A started process and what became of it.
@@ -44,9 +44,9 @@ struct ChildState {
   ProcessSpec spec;
   pid_t pid = -1;  ///< also its process group id (each child leads its own group)
   std::chrono::steady_clock::time_point started;
-  std::optional<ExitInfo> exit;   ///< set once reaped
-  bool stop_requested = false;    ///< SIGINT sent by stop()/stopAll()
-  bool killed = false;            ///< SIGKILL sent after the grace period
+  std::optional<ExitInfo> exit;  ///< set once reaped
+  bool stop_requested = false;   ///< SIGINT sent by stop()/stopAll()
+  bool killed = false;           ///< SIGKILL sent after the grace period
 
   bool running() const { return pid > 0 && !exit.has_value(); }
 };
