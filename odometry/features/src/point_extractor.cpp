@@ -159,6 +159,65 @@ std::vector<int> selectSpread(const std::vector<cv::KeyPoint>& keypoints, int wi
   return out;
 }
 
+namespace {
+
+/// Smallest eigenvalue of the structure tensor over a (2w+1)^2 window centred at (u, v)
+/// (central differences); -1 too close to the border.
+double minEigenResponse(const cv::Mat& gray, int u, int v, int w) {
+  if (u - w - 1 < 0 || v - w - 1 < 0 || u + w + 1 >= gray.cols || v + w + 1 >= gray.rows) return -1;
+  double a = 0, b = 0, c = 0;
+  for (int y = v - w; y <= v + w; ++y) {
+    const uint8_t* r0 = gray.ptr<uint8_t>(y - 1);
+    const uint8_t* r1 = gray.ptr<uint8_t>(y);
+    const uint8_t* r2 = gray.ptr<uint8_t>(y + 1);
+    for (int x = u - w; x <= u + w; ++x) {
+      const double ix = 0.5 * (r1[x + 1] - r1[x - 1]);
+      const double iy = 0.5 * (r2[x] - r0[x]);
+      a += ix * ix;
+      b += ix * iy;
+      c += iy * iy;
+    }
+  }
+  return 0.5 * (a + c - std::sqrt((a - c) * (a - c) + 4 * b * b));
+}
+
+/// Peak of the corner response near `pt`, at sub-pixel precision: the best of the pixels
+/// within `radius` of the detection, then a separable quadratic fit through its neighbours.
+/// Returns `pt` unchanged when the fit is degenerate (no strict maximum, image border).
+cv::Point2f refineCorner(const cv::Mat& gray, const cv::Point2f& pt, int radius, int w) {
+  const int u0 = static_cast<int>(std::lround(pt.x)), v0 = static_cast<int>(std::lround(pt.y));
+  const int r = radius + 1;  // responses one pixel beyond the search area for the fit
+  const int n = 2 * r + 1;
+  std::vector<double> resp(n * n);
+  for (int dv = -r; dv <= r; ++dv) {
+    for (int du = -r; du <= r; ++du) {
+      resp[(dv + r) * n + du + r] = minEigenResponse(gray, u0 + du, v0 + dv, w);
+    }
+  }
+  auto at = [&](int du, int dv) { return resp[(dv + r) * n + du + r]; };
+  int bu = 0, bv = 0;
+  double best = -1;
+  for (int dv = -radius; dv <= radius; ++dv) {
+    for (int du = -radius; du <= radius; ++du) {
+      if (at(du, dv) > best) {
+        best = at(du, dv);
+        bu = du;
+        bv = dv;
+      }
+    }
+  }
+  if (best <= 0) return pt;
+  const double l = at(bu - 1, bv), rr = at(bu + 1, bv), t = at(bu, bv - 1), d = at(bu, bv + 1);
+  if (l < 0 || rr < 0 || t < 0 || d < 0) return pt;
+  const double cx = l - 2 * best + rr, cy = t - 2 * best + d;
+  if (!(cx < 0 && cy < 0)) return pt;  // not a strict maximum
+  const double ox = std::clamp(0.5 * (l - rr) / cx, -0.5, 0.5);
+  const double oy = std::clamp(0.5 * (t - d) / cy, -0.5, 0.5);
+  return {static_cast<float>(u0 + bu + ox), static_cast<float>(v0 + bv + oy)};
+}
+
+}  // namespace
+
 PointExtraction PointExtractor::extract(const cv::Mat& image, const PinholeCamera& camera) const {
   PointExtraction result;
   if (image.empty() || image.depth() != CV_8U || image.cols < options_.min_image_side_px ||
@@ -198,7 +257,15 @@ PointExtraction PointExtractor::extract(const cv::Mat& image, const PinholeCamer
     }
     const bool undistort = camera.valid() && camera.hasDistortion();
     result.points.reserve(selected.size());
-    for (const auto& kp : selected) {
+    for (auto& kp : selected) {
+      if (options_.subpixel_refinement) {
+        // Search as far as the detection's own rounding reaches: half a pixel of its level.
+        const double level_px = std::pow(options_.orb_scale_factor, std::max(0, kp.octave));
+        const int radius = options_.detector == PointDetector::kOrb
+                               ? static_cast<int>(std::ceil(0.5 * level_px - 1e-9))
+                               : 0;
+        kp.pt = refineCorner(gray, kp.pt, std::max(radius, 1), options_.subpixel_window_px);
+      }
       PointFeature f;
       const Eigen::Vector2d raw(kp.pt.x, kp.pt.y);
       f.px = undistort ? camera.undistortPixel(raw) : raw;

@@ -479,3 +479,48 @@ TEST(LineExtractor, ReducedScaleKeepsSubpixelEdgePosition) {
     }
   }
 }
+
+// Sub-pixel keypoints: the test texture translated by known fractions of a pixel (cubic
+// resampling). Refined keypoints follow the shift better than integer FAST keypoints.
+TEST(SubpixelRefinement, FollowsSubPixelShifts) {
+  const PinholeCamera cam = vgaCamera();
+  cv::Mat texture;
+  cv::GaussianBlur(scene().texture, texture, cv::Size(0, 0), 1.0);  // band-limit before shifting
+  auto render = [&](double shift_px) {
+    const cv::Mat A = (cv::Mat_<double>(2, 3) << 1, 0, 100 + shift_px, 0, 1, 100 + 0.5 * shift_px);
+    cv::Mat img;
+    cv::warpAffine(texture, img, A, cv::Size(cam.width, cam.height), cv::INTER_CUBIC);
+    if (img.channels() == 3) cv::cvtColor(img, img, cv::COLOR_BGR2GRAY);
+    return img;
+  };
+  auto meanShiftError = [&](bool refine, double shift) {
+    PointExtractorOptions o;
+    o.subpixel_refinement = refine;
+    o.orb_levels = 1;
+    const PointExtractor ex(o);
+    const PointExtraction a = ex.extract(render(0.0), cam), b = ex.extract(render(shift), cam);
+    // Pair each keypoint of b with the nearest of a moved by the shift.
+    double sum = 0;
+    int n = 0;
+    for (const PointFeature& q : b.points) {
+      double best = 1e9;
+      for (const PointFeature& p : a.points) {
+        best = std::min(best, (q.px - (p.px + Eigen::Vector2d(shift, 0.5 * shift))).norm());
+      }
+      if (best < 1.0) {
+        sum += best;
+        ++n;
+      }
+    }
+    EXPECT_GT(n, 100);
+    return n > 0 ? sum / n : 1e9;
+  };
+  double refined = 0, integer = 0;
+  for (double shift : {0.3, 0.5, 0.7}) {
+    refined += meanShiftError(true, shift) / 3;
+    integer += meanShiftError(false, shift) / 3;
+  }
+  std::printf("mean keypoint error under sub-pixel shifts: refined %.3f px, integer %.3f px\n",
+              refined, integer);
+  EXPECT_LT(refined, 0.8 * integer);
+}

@@ -29,29 +29,38 @@ bool NodeArgs::take(const std::string& key, bool needs_value, std::string* text)
     if (a.used) continue;
     if (a.text == key) {
       a.used = true;
-      found = true;
       if (!needs_value) {
         *text = "true";
-      } else if (i + 1 < args_.size() && !args_[i + 1].used) {
-        args_[i + 1].used = true;
-        *text = args_[++i].text;
-      } else {
-        errors_.push_back(key + " needs a value");
-        return false;
+        return true;
       }
-    } else if (a.text.rfind(key + "=", 0) == 0) {
+      if (i + 1 < args_.size() && !args_[i + 1].used) {
+        args_[i + 1].used = true;
+        *text = args_[i + 1].text;
+        return true;
+      }
+      errors_.push_back(key + " needs a value");
+      return false;
+    }
+    if (a.text.rfind(key + "=", 0) == 0) {
       a.used = true;
-      found = true;
       *text = a.text.substr(key.size() + 1);
+      return true;
     }
   }
-  return found;
+  return false;
+}
+
+std::vector<std::string> NodeArgs::values(const std::string& key) {
+  std::vector<std::string> out;
+  std::string t;
+  while (take(key, true, &t)) out.push_back(t);
+  return out;
 }
 
 bool NodeArgs::value(const std::string& key, std::string* out) {
-  std::string t;
-  if (!take(key, true, &t)) return false;
-  *out = t;
+  const std::vector<std::string> all = values(key);
+  if (all.empty()) return false;
+  *out = all.back();  // the last occurrence wins
   return true;
 }
 
@@ -64,7 +73,7 @@ bool NodeArgs::value(const std::string& key, int* out) {
 
 bool NodeArgs::value(const std::string& key, long long* out) {
   std::string t;
-  if (!take(key, true, &t)) return false;
+  if (!value(key, &t)) return false;
   try {
     size_t end = 0;
     const long long v = std::stoll(t, &end);
@@ -79,7 +88,7 @@ bool NodeArgs::value(const std::string& key, long long* out) {
 
 bool NodeArgs::value(const std::string& key, double* out) {
   std::string t;
-  if (!take(key, true, &t)) return false;
+  if (!value(key, &t)) return false;
   try {
     size_t end = 0;
     const double v = std::stod(t, &end);
@@ -110,7 +119,15 @@ void NodeArgs::pipeline(pipeline::PipelineOptions* options) {
       errors_.push_back(e.what());
     }
   }
+  const std::vector<std::string> overrides = values("--set");
   std::string text;
+  if (!overrides.empty()) {
+    try {
+      *options = pipeline::applyPipelineOverrides(overrides, *options);
+    } catch (const std::exception& e) {
+      errors_.push_back(e.what());
+    }
+  }
   if (value("--features", &text)) {
     pipeline::FeatureFamilies f;
     if (pipeline::parseFeatureFamilies(text, &f)) options->setFamilies(f);

@@ -1,8 +1,8 @@
 // The LCM-free pipeline (OdometryPipeline) on a TUM-layout folder: trajectory, per-stage
 // timing and the ATE/RPE against groundtruth.txt when present. For quick experiments with
 // the algorithm; evaluations of the system use pplvo-run (the processes over memq://).
-//   bench_pipeline DATASET [--features points,lines,planes] [--depth-model ogm] [--output TRAJ]
-//                  [--max-frames N]
+//   bench_pipeline DATASET [--config FILE] [--features points,lines,planes] [--depth-model ogm]
+//                  [--set dotted.key=value]... [--output TRAJ] [--max-frames N]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -12,37 +12,40 @@
 #include "pplvo/core/trajectory.h"
 #include "pplvo/dataset/dataset.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
+#include "pplvo/pipeline/pipeline_config.h"
 
 int main(int argc, char** argv) {
   using namespace pplvo;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_pipeline DATASET [--features LIST] [--depth-model M] "
-                         "[--output TRAJ] [--max-frames N]\n");
+    std::fprintf(stderr, "usage: bench_pipeline DATASET [--config FILE] [--features LIST] "
+                         "[--depth-model M] [--set key=value]... [--output TRAJ] [--max-frames N]\n");
     return 2;
   }
   const std::string dir = argv[1];
   pipeline::PipelineOptions options;
   std::string output;
   long max_frames = 0;
+  std::vector<std::string> overrides;
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--features") {
-      pipeline::FeatureFamilies f;
-      if (!pipeline::parseFeatureFamilies(v, &f)) return 2;
-      options.setFamilies(f);
+    if (k == "--config") {
+      options = pipeline::loadPipelineConfig(v, options);
+    } else if (k == "--features") {
+      overrides.push_back("features=" + v);
     } else if (k == "--depth-model") {
-      if (!depth_filter::parseDepthModel(v, &options.depth_filter.model)) return 2;
+      overrides.push_back("depth_filter.model=" + v);
+    } else if (k == "--set") {
+      overrides.push_back(v);
     } else if (k == "--output") {
       output = v;
     } else if (k == "--max-frames") {
       max_frames = std::stol(v);
-    } else if (k == "--alpha") {
-      options.odometry.tracker.estimator.plane_scale_alpha = std::stod(v);
     } else {
       std::fprintf(stderr, "unknown option %s\n", k.c_str());
       return 2;
     }
   }
+  options = pipeline::applyPipelineOverrides(overrides, options);
   const dataset::Dataset ds = dataset::Dataset::open(dir);
   pipeline::OdometryPipeline pipe(options);
   Trajectory traj;

@@ -25,6 +25,9 @@ void usage() {
       "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
       "  --skip-bad              skip (and count) corrupt frames instead of stopping\n"
       "  --summary FILE          write the run summary as YAML\n"
+      "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
+      "  --set KEY=VALUE         override one configuration value (repeatable), e.g.\n"
+      "                          --set odometry.tracker.estimator.plane_scale_alpha=1\n"
       "  --quiet                 no summary on stdout\n");
 }
 
@@ -42,6 +45,7 @@ int main(int argc, char** argv) {
   args.value("--dataset", &o.dataset_dir);
   args.value("--output", &o.output);
   args.value("--summary", &o.summary);
+  args.value("--log", &o.log);
   long long n = 0;
   if (args.value("--max-frames", &n)) o.max_frames = n;
   if (args.value("--start", &n)) o.start = n;

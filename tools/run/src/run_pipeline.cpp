@@ -1,10 +1,12 @@
 #include "pplvo/run/run_pipeline.h"
 
 #include <cstdio>
+#include <memory>
 #include <lcm/lcm-cpp.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <sstream>
 
+#include "pplvo/logging/event_log.h"
 #include "pplvo/msgs/convert_pose.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/depth_filter_node.h"
@@ -44,6 +46,28 @@ class PoseCollector {
  private:
   lcm::LCM& lcm_;
   RunResult& result_;
+  lcm::Subscription* sub_ = nullptr;
+  msgs::NodeCounters counters_;
+};
+
+/// Writes every message of the run to an LCM event log (what pplvo-logger does on a network),
+/// so that any stage can be replayed from it (pplvo-replay).
+class EventRecorder {
+ public:
+  EventRecorder(lcm::LCM& lcm, const std::string& path) : lcm_(lcm), writer_(path) {
+    sub_ = lcm_.subscribe(".*", &EventRecorder::onMessage, this);
+  }
+  ~EventRecorder() { lcm_.unsubscribe(sub_); }
+  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    msgs::guarded(counters_, "pplvo-run", [&] {
+      writer_.write(channel, rbuf->recv_utime, rbuf->data, static_cast<int32_t>(rbuf->data_size));
+    });
+  }
+  const msgs::NodeCounters& counters() const { return counters_; }
+
+ private:
+  lcm::LCM& lcm_;
+  logging::EventLogWriter writer_;
   lcm::Subscription* sub_ = nullptr;
   msgs::NodeCounters counters_;
 };
@@ -145,6 +169,8 @@ RunResult runPipeline(const RunOptions& options) {
     nodes::EstimatorNode estimator(es, lcm);
 
     PoseCollector collector(lcm, result);
+    std::unique_ptr<EventRecorder> recorder;
+    if (!options.log.empty()) recorder = std::make_unique<EventRecorder>(lcm, options.log);
 
     player::PlayerOptions po;
     po.dataset_dir = options.dataset_dir;
@@ -171,6 +197,10 @@ RunResult runPipeline(const RunOptions& options) {
     result.nodes.push_back({nodes::FrontendNode::kName, frontend.counters(), frontend.allTimings()});
     result.nodes.push_back(
         {nodes::EstimatorNode::kName, estimator.counters(), estimator.allTimings()});
+    if (recorder && recorder->counters().errors > 0) {
+      result.failed = true;
+      result.error = "event log: " + recorder->counters().last_warning;
+    }
     if (collector.counters().frames_skipped + collector.counters().errors > 0) {
       result.failed = true;
       result.error = "invalid pose messages: " + collector.counters().last_warning;

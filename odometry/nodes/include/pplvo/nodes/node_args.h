@@ -20,14 +20,18 @@ class NodeArgs {
   explicit NodeArgs(std::vector<std::string> args);
 
   bool help() const;
-  /// Reads --key's value into *out if present (last occurrence wins). Returns true if present.
+  /// Reads --key's value into *out if present (the last occurrence wins). Returns true if so.
   bool value(const std::string& key, std::string* out);
+  /// Every value of a repeatable option, in order.
+  std::vector<std::string> values(const std::string& key);
   bool value(const std::string& key, int* out);
   bool value(const std::string& key, long long* out);
   bool value(const std::string& key, double* out);
   /// A flag without value (--key), or --key=true/false.
   bool flag(const std::string& key, bool* out);
-  /// --config FILE (loaded first), then --features LIST and --depth-model MODEL override it.
+  /// --config FILE (loaded first), then every --set dotted.key=value (repeatable, e.g.
+  /// --set odometry.tracker.estimator.plane_scale_alpha=1), then --features LIST and
+  /// --depth-model MODEL.
   void pipeline(pipeline::PipelineOptions* options);
   void error(const std::string& message) { errors_.push_back(message); }
 

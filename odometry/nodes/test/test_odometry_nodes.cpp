@@ -1,0 +1,284 @@
+// pplvo-frontend and pplvo-estimator nodes on one memq:// LCM: message pairing in any order,
+// bounded queues, the reference hand-over between the two stages, restarts when a reference
+// never comes, counted skips for bad messages; and the shared command-line parser.
+#include <gtest/gtest.h>
+
+#include <limits>
+
+#include <lcm/lcm-cpp.hpp>
+#include <pplvo_msgs/features_t.hpp>
+#include <pplvo_msgs/pose_t.hpp>
+
+#include "pplvo/depth_filter/cgm_filter.h"
+#include "pplvo/msgs/convert_features.h"
+#include "pplvo/msgs/convert_pose.h"
+#include "pplvo/nodes/estimator_node.h"
+#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/nodes/node_args.h"
+#include "pplvo/synth/synthetic_sequence.h"
+
+namespace pplvo::nodes {
+namespace {
+
+const std::vector<synth::SynthFrame>& frames() {
+  static const std::vector<synth::SynthFrame> f = [] {
+    synth::SynthOptions o;
+    o.frames = 6;
+    o.seed = 5;
+    synth::SyntheticSequence seq(o);
+    std::vector<synth::SynthFrame> out;
+    for (int i = 0; i < seq.size(); ++i) out.push_back(seq.render(i));
+    return out;
+  }();
+  return f;
+}
+
+void drain(lcm::LCM& lcm) {
+  while (lcm.handleTimeout(0) > 0) {
+  }
+}
+
+/// Records every message of one type on one channel.
+template <typename Msg>
+struct Recorder {
+  Recorder(lcm::LCM& lcm, const std::string& channel) : lcm_(lcm) {
+    sub_ = lcm_.subscribe(channel, &Recorder::on, this);
+  }
+  ~Recorder() { lcm_.unsubscribe(sub_); }
+  void on(const lcm::ReceiveBuffer*, const std::string&, const Msg* m) { msgs.push_back(*m); }
+  lcm::LCM& lcm_;
+  lcm::Subscription* sub_;
+  std::vector<Msg> msgs;
+};
+
+pplvo_msgs::rgbd_frame_t frameMsg(int i) {
+  return msgs::toMsg(frames()[i].frame, 5000.0, pplvo_msgs::image_t::ENCODING_RAW_BGR8,
+                     pplvo_msgs::image_t::ENCODING_RAW_U16);
+}
+
+pplvo_msgs::depth_map_t cgmMsg(int i, int8_t stage = pplvo_msgs::depth_map_t::STAGE_CGM) {
+  const RgbdFrame& f = frames()[i].frame;
+  depth_filter::CgmFilter cgm;
+  return msgs::toMsg(cgm.apply(f.depth_m), f.camera, f.utime, f.seq, f.stamp, stage);
+}
+
+TEST(FrontendNode, PairsColourAndDepthInAnyOrderAndLiftsOnFusedDepth) {
+  lcm::LCM lcm("memq://");
+  FrontendNode node({}, lcm);
+  Recorder<pplvo_msgs::features_t> f2d(lcm, channels::kFeatures), f3d(lcm, channels::kFeatures3d);
+  // Frame 0: depth first; frame 1: colour first, and its depth after the next colour.
+  auto m0 = frameMsg(0), m1 = frameMsg(1), m2 = frameMsg(2);
+  auto d0 = cgmMsg(0), d1 = cgmMsg(1);
+  lcm.publish(channels::kDepthCgm, &d0);
+  lcm.publish(channels::kRgbd, &m0);
+  lcm.publish(channels::kRgbd, &m1);
+  lcm.publish(channels::kRgbd, &m2);
+  lcm.publish(channels::kDepthCgm, &d1);
+  drain(lcm);
+  ASSERT_EQ(f2d.msgs.size(), 2u);
+  EXPECT_EQ(f2d.msgs[0].seq, m0.seq);
+  EXPECT_EQ(f2d.msgs[1].seq, m1.seq);
+  for (const auto& m : f2d.msgs) {
+    EXPECT_EQ(m.stage, pplvo_msgs::features_t::STAGE_2D);
+    EXPECT_GT(m.n_points, 200);
+    EXPECT_GT(m.n_lines, 10);
+    EXPECT_GE(m.n_planes, 2);
+  }
+  EXPECT_TRUE(f3d.msgs.empty());
+  // Fused depth of frame 1 arrives: frame 0 never gets one and is dropped (counted).
+  auto fused1 = cgmMsg(1, pplvo_msgs::depth_map_t::STAGE_OGM);
+  lcm.publish(channels::kDepthFused, &fused1);
+  drain(lcm);
+  ASSERT_EQ(f3d.msgs.size(), 1u);
+  EXPECT_EQ(f3d.msgs[0].seq, m1.seq);
+  const FrameFeatures lifted = msgs::fromMsg(f3d.msgs[0]);
+  int with_3d = 0;
+  for (const auto& p : lifted.points) with_3d += p.has_3d;
+  EXPECT_GT(with_3d, 200);
+  EXPECT_EQ(node.counters().frames_dropped, 1);
+  EXPECT_EQ(node.counters().frames_out, 1);
+}
+
+TEST(FrontendNode, BadMessagesAreCountedAndQueuesStayBounded) {
+  lcm::LCM lcm("memq://");
+  FrontendNodeOptions o;
+  o.max_pending = 3;
+  FrontendNode node(o, lcm);
+  Recorder<pplvo_msgs::features_t> f2d(lcm, channels::kFeatures);
+  // Colour whose size disagrees with its camera: counted skip, not a crash.
+  auto bad = frameMsg(0);
+  bad.camera.width = 320;
+  lcm.publish(channels::kRgbd, &bad);
+  // A depth map whose byte count disagrees with its size.
+  auto bad_depth = cgmMsg(0);
+  bad_depth.depth.data.resize(10);
+  bad_depth.depth.size = 10;
+  lcm.publish(channels::kDepthCgm, &bad_depth);
+  drain(lcm);
+  EXPECT_EQ(node.counters().frames_skipped, 2);
+  // Colour without its depth: the queue never holds more than max_pending.
+  for (int i = 0; i < 6; ++i) {
+    auto m = frameMsg(i);
+    lcm.publish(channels::kRgbd, &m);
+  }
+  drain(lcm);
+  EXPECT_TRUE(f2d.msgs.empty());
+  EXPECT_EQ(node.counters().frames_dropped, 3);
+}
+
+/// Stage-2D and stage-3D features of the synthetic frames, computed once by a frontend.
+struct FeatureSet {
+  std::vector<pplvo_msgs::features_t> f2d, f3d;
+};
+const FeatureSet& featureSet() {
+  static const FeatureSet s = [] {
+    lcm::LCM lcm("memq://");
+    FrontendNode node({}, lcm);
+    Recorder<pplvo_msgs::features_t> a(lcm, channels::kFeatures), b(lcm, channels::kFeatures3d);
+    for (int i = 0; i < static_cast<int>(frames().size()); ++i) {
+      auto m = frameMsg(i);
+      auto d = cgmMsg(i);
+      auto f = cgmMsg(i, pplvo_msgs::depth_map_t::STAGE_OGM);
+      lcm.publish(channels::kRgbd, &m);
+      lcm.publish(channels::kDepthCgm, &d);
+      lcm.publish(channels::kDepthFused, &f);
+      drain(lcm);
+    }
+    return FeatureSet{a.msgs, b.msgs};
+  }();
+  return s;
+}
+
+TEST(EstimatorNode, TracksEachFrameOnceItsReferenceArrives) {
+  const FeatureSet& fs = featureSet();
+  ASSERT_EQ(fs.f2d.size(), frames().size());
+  lcm::LCM lcm("memq://");
+  EstimatorNode node({}, lcm);
+  Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
+  lcm.publish(channels::kFeatures, &fs.f2d[0]);
+  drain(lcm);
+  ASSERT_EQ(poses.msgs.size(), 1u);
+  EXPECT_EQ(poses.msgs[0].status, pplvo_msgs::pose_t::STATUS_FIRST_FRAME);
+  // Frame 1 waits for frame 0's 3D features.
+  lcm.publish(channels::kFeatures, &fs.f2d[1]);
+  drain(lcm);
+  EXPECT_EQ(poses.msgs.size(), 1u);
+  // The 3D features of a frame that is not the reference are ignored (counted).
+  lcm.publish(channels::kFeatures3d, &fs.f3d[2]);
+  drain(lcm);
+  EXPECT_EQ(poses.msgs.size(), 1u);
+  EXPECT_EQ(node.counters().frames_skipped, 1);
+  lcm.publish(channels::kFeatures3d, &fs.f3d[0]);
+  drain(lcm);
+  ASSERT_EQ(poses.msgs.size(), 2u);
+  for (int i = 2; i < static_cast<int>(fs.f2d.size()); ++i) {
+    lcm.publish(channels::kFeatures3d, &fs.f3d[i - 1]);
+    lcm.publish(channels::kFeatures, &fs.f2d[i]);
+    drain(lcm);
+  }
+  ASSERT_EQ(poses.msgs.size(), fs.f2d.size());
+  for (size_t i = 1; i < poses.msgs.size(); ++i) {
+    const FramePose p = msgs::fromMsg(poses.msgs[i]);
+    EXPECT_EQ(p.seq, frames()[i].frame.seq);
+    EXPECT_EQ(p.stamp, frames()[i].frame.stamp);
+    EXPECT_EQ(p.status, TrackingStatus::kTracking) << i;
+    const Pose3 truth = frames()[0].T_w_c.inverse() * frames()[i].T_w_c;
+    EXPECT_LT((truth.translation() - p.T_w_c.translation()).norm(), 0.01) << i;
+    EXPECT_FALSE(p.window.empty());
+  }
+  EXPECT_EQ(node.counts().tracking, static_cast<int64_t>(fs.f2d.size()) - 1);
+}
+
+TEST(EstimatorNode, RestartsHoldingThePoseWhenTheReferenceNeverComes) {
+  const FeatureSet& fs = featureSet();
+  lcm::LCM lcm("memq://");
+  EstimatorNodeOptions o;
+  o.max_waiting = 1;
+  o.max_drops_without_reference = 1;
+  EstimatorNode node(o, lcm);
+  Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
+  lcm.publish(channels::kFeatures, &fs.f2d[0]);
+  lcm.publish(channels::kFeatures3d, &fs.f3d[0]);
+  lcm.publish(channels::kFeatures, &fs.f2d[1]);
+  drain(lcm);
+  ASSERT_EQ(poses.msgs.size(), 2u);
+  // Frame 1's 3D features are lost: frames 2, 3, 4 arrive without a reference.
+  for (int i = 2; i <= 4; ++i) {
+    lcm.publish(channels::kFeatures, &fs.f2d[i]);
+    drain(lcm);
+  }
+  ASSERT_EQ(poses.msgs.size(), 3u);
+  const FramePose restart = msgs::fromMsg(poses.msgs[2]);
+  EXPECT_EQ(restart.status, TrackingStatus::kReinitialised);
+  EXPECT_EQ(restart.seq, frames()[4].frame.seq);
+  // The last pose is held, not reset to the origin.
+  const FramePose before = msgs::fromMsg(poses.msgs[1]);
+  EXPECT_TRUE(restart.T_w_c.isApprox(before.T_w_c, 1e-12));
+  EXPECT_EQ(node.counts().restarts_missing_reference, 1);
+  EXPECT_GE(node.counters().frames_dropped, 2);
+  // Tracking continues from the restart frame.
+  lcm.publish(channels::kFeatures3d, &fs.f3d[4]);
+  lcm.publish(channels::kFeatures, &fs.f2d[5]);
+  drain(lcm);
+  ASSERT_EQ(poses.msgs.size(), 4u);
+  EXPECT_EQ(poses.msgs[3].status, pplvo_msgs::pose_t::STATUS_TRACKING);
+}
+
+TEST(EstimatorNode, InconsistentMessagesAreCountedNotFatal) {
+  const FeatureSet& fs = featureSet();
+  lcm::LCM lcm("memq://");
+  EstimatorNode node({}, lcm);
+  Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
+  pplvo_msgs::features_t bad = fs.f2d[0];
+  bad.points[3].u = std::numeric_limits<float>::quiet_NaN();  // decodes, but is garbage
+  lcm.publish(channels::kFeatures, &bad);
+  pplvo_msgs::features_t wrong_stage = fs.f2d[0];
+  wrong_stage.stage = pplvo_msgs::features_t::STAGE_3D;
+  lcm.publish(channels::kFeatures, &wrong_stage);
+  drain(lcm);
+  EXPECT_TRUE(poses.msgs.empty());
+  EXPECT_EQ(node.counters().frames_skipped, 2);
+  lcm.publish(channels::kFeatures, &fs.f2d[0]);
+  drain(lcm);
+  EXPECT_EQ(poses.msgs.size(), 1u);
+}
+
+TEST(NodeArgs, ParsesTypedValuesFlagsAndRepeatedOptions) {
+  NodeArgs a({"--max-frames", "12", "--rate=0.5", "--quiet", "--set", "features=[points]",
+              "--set=depth_filter.model=cgm", "--name", "x", "--name", "y"});
+  long long n = 0;
+  double r = 0;
+  bool quiet = false;
+  std::string name;
+  EXPECT_TRUE(a.value("--max-frames", &n));
+  EXPECT_TRUE(a.value("--rate", &r));
+  EXPECT_TRUE(a.flag("--quiet", &quiet));
+  EXPECT_TRUE(a.value("--name", &name));
+  pipeline::PipelineOptions o;
+  a.pipeline(&o);
+  EXPECT_TRUE(a.finish("test"));
+  EXPECT_EQ(n, 12);
+  EXPECT_DOUBLE_EQ(r, 0.5);
+  EXPECT_TRUE(quiet);
+  EXPECT_EQ(name, "y");
+  EXPECT_TRUE(o.frontend.families.points);
+  EXPECT_FALSE(o.frontend.families.lines);
+  EXPECT_FALSE(o.odometry.tracker.estimator.use_lines);
+  EXPECT_EQ(o.depth_filter.model, depth_filter::DepthModel::kCgm);
+}
+
+TEST(NodeArgs, ReportsEveryProblem) {
+  NodeArgs a({"--max-frames", "twelve", "--features", "points,surf", "--unknown", "--config",
+              "/nonexistent/pplvo.yaml", "--lcm-url"});
+  long long n = 0;
+  std::string url;
+  a.value("--max-frames", &n);
+  a.value("--lcm-url", &url);
+  pipeline::PipelineOptions o;
+  a.pipeline(&o);
+  EXPECT_FALSE(a.finish("test"));
+  EXPECT_EQ(a.errors().size(), 5u);  // integer, needs a value, config file, features, unknown
+}
+
+}  // namespace
+}  // namespace pplvo::nodes

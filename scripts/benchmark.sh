@@ -1,0 +1,170 @@
+#!/usr/bin/env bash
+# Accuracy and speed benchmark of the pipeline (issue 6), in the shape of the paper's tables:
+# RPE (m/s, deg/s) and ATE (m) for points / points+lines / points+planes / all, for the sensor
+# model / C-GM / O-GM depth, per-stage ms/frame, end-to-end frames/s of pplvo-run, and OpenCV's
+# cv::rgbd::RgbdOdometry measured in the same run on the same frames (pplvo-peer-odometry).
+#
+#   scripts/benchmark.sh [--build DIR] [--out DIR] [--docs FILE] [--frames N] [--quick]
+#
+# Sequences: every folder of ../shared/data (or $PPLVO_SHARED_DATA) with a groundtruth.txt, plus
+# a synthetic one generated here (pplvo-synth, room scene, 150 frames, seed 1).
+# --docs FILE writes the tables as Markdown (with the machine and the commit) to FILE and the
+# trajectory plots next to it (images/benchmark_<sequence>.png).
+set -euo pipefail
+here="$(cd "$(dirname "$0")/.." && pwd)"
+build="$here/build"
+out=""
+docs=""
+synth_frames=150
+quick=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --build) build="$2"; shift 2 ;;
+    --out) out="$2"; shift 2 ;;
+    --docs) docs="$2"; shift 2 ;;
+    --frames) synth_frames="$2"; shift 2 ;;
+    --quick) quick=1; shift ;;
+    -h|--help) sed -n 2,12p "$0"; exit 0 ;;
+    *) echo "benchmark.sh: unknown option $1" >&2; exit 2 ;;
+  esac
+done
+bin="$build/bin"
+for tool in pplvo-run pplvo-eval pplvo-synth pplvo-peer-odometry pplvo-plot; do
+  [ -x "$bin/$tool" ] || { echo "benchmark.sh: $bin/$tool missing (build first: cmake --build build)" >&2; exit 1; }
+done
+shared="${PPLVO_SHARED_DATA:-$here/../shared/data}"
+out="${out:-$build/benchmark}"
+mkdir -p "$out"
+
+# Sequences: name -> folder; ICL-NUIM stamps are frame indices (30 Hz).
+declare -a names dirs fpss
+if [ ! -f "$out/synth_room/groundtruth.txt" ]; then
+  "$bin/pplvo-synth" --output "$out/synth_room" --frames "$synth_frames" --seed 1 >/dev/null
+fi
+names+=(synth_room); dirs+=("$out/synth_room"); fpss+=(0)
+for d in "$shared"/*/; do
+  [ -f "$d/groundtruth.txt" ] || continue
+  n="$(basename "$d")"
+  fps=0
+  # Integer stamps in the first data line of groundtruth.txt: frame indices at 30 Hz.
+  if grep -v '^#' "$d/groundtruth.txt" | head -1 | awk '{exit !($1 ~ /^[0-9]+$/)}'; then fps=30; fi
+  names+=("$n"); dirs+=("${d%/}"); fpss+=("$fps")
+done
+
+# Configurations: label | pplvo-run arguments (the peer rows are handled separately).
+configs=(
+  "points|--features points"
+  "points+lines|--features points,lines"
+  "points+planes|--features points,planes"
+  "all|--features points,lines,planes"
+  "all, sensor model|--depth-model sensor"
+  "all, C-GM|--depth-model cgm"
+  "all, alpha=1|--set odometry.tracker.estimator.plane_scale_alpha=1"
+)
+[ "$quick" = 1 ] && configs=("points|--features points" "all|--features points,lines,planes")
+
+eval_line() {  # eval_line GT EST FPS -> "rpe_t rpe_r ate pairs"
+  local fpsarg=()
+  [ "$3" != 0 ] && fpsarg=(--fps "$3")
+  "$bin/pplvo-eval" "$1" "$2" "${fpsarg[@]}" | awk '
+    /^ate.rmse_m /{a=$2} /^rpe.trans_rmse_m_per_s /{t=$2} /^rpe.rot_rmse_deg_per_s /{r=$2}
+    /^ate.pairs /{p=$2} END{printf "%.4f %.3f %.4f %d\n", t, r, a, p}'
+}
+yaml_value() { awk -v k="$2:" '$1==k{print $2; exit}' "$1"; }
+
+table="$out/table.md"
+stages="$out/stages.md"
+{
+  echo "| sequence | configuration | RPE (m/s) | RPE (deg/s) | ATE (m) | tracked | frames/s |"
+  echo "|---|---|---|---|---|---|---|"
+} > "$table"
+{
+  echo "| sequence | depth filter decode+cgm+ogm | points | lines | planes (C-GM + fused) | lift | matching | pose | node I/O | pipeline ms/frame | pplvo-run frames/s |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|"
+} > "$stages"
+
+for i in "${!names[@]}"; do
+  n="${names[$i]}"; d="${dirs[$i]}"; fps="${fpss[$i]}"
+  fpsarg=()
+  [ "$fps" != 0 ] && fpsarg=(--fps "$fps")
+  ests=(); labels=()
+  for c in "${configs[@]}"; do
+    label="${c%%|*}"; args="${c#*|}"
+    tag="$(echo "$label" | tr -c 'a-zA-Z0-9\n' '_')"
+    est="$out/$n.$tag.txt"
+    # shellcheck disable=SC2086
+    "$bin/pplvo-run" --dataset "$d" --output "$est" --summary "$out/$n.$tag.yaml" --quiet $args \
+      "${fpsarg[@]}" 2>"$out/$n.$tag.log"
+    read -r t r a p < <(eval_line "$d/groundtruth.txt" "$est" "$fps")
+    tracked="$(awk '/^status:/{gsub(/[{},]/," "); for(i=1;i<=NF;i++) if($i=="tracking:") print $(i+1)}' "$out/$n.$tag.yaml")"
+    poses="$(yaml_value "$out/$n.$tag.yaml" poses)"
+    f="$(yaml_value "$out/$n.$tag.yaml" frames_per_s)"
+    printf "| %s | %s | %s | %s | %s | %s/%s | %.1f |\n" "$n" "$label" "$t" "$r" "$a" "$tracked" "$poses" "$f" >> "$table"
+    echo "$n / $label: RPE $t m/s $r deg/s, ATE $a m, $f frames/s" >&2
+    if [ "$label" = "all" ]; then
+      ests+=("$est"); labels+=("pplvo (all)")
+      # Per-stage means from the summary (ms per call; planes run twice per frame).
+      awk -v seq="$n" -v fps="$f" '
+        /^  pplvo-/{node=$1} /stages_mean_ms:/{s=1; next}
+        s && $1 ~ /:$/ && NF==2 {k=node $1; v[k]=$2}
+        /^  pplvo-/{s=0}
+        END{
+          df=v["pplvo-depth-filter:decode:"]+v["pplvo-depth-filter:cgm:"]+v["pplvo-depth-filter:ogm:"];
+          io=3*v["pplvo-frontend:decode:"]+2*v["pplvo-frontend:encode:"]+2*v["pplvo-estimator:decode:"]+v["pplvo-estimator:encode:"];
+          m=v["pplvo-estimator:match_points:"]+v["pplvo-estimator:match_lines:"]+v["pplvo-estimator:match_planes:"];
+          tot=df+v["pplvo-frontend:points:"]+v["pplvo-frontend:lines:"]+2*v["pplvo-frontend:planes:"]+v["pplvo-frontend:lift:"]+m+v["pplvo-estimator:pose:"]+io;
+          printf "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n", seq, df,
+            v["pplvo-frontend:points:"], v["pplvo-frontend:lines:"], 2*v["pplvo-frontend:planes:"],
+            v["pplvo-frontend:lift:"], m, v["pplvo-estimator:pose:"], io, tot, fps}' "$out/$n.$tag.yaml" >> "$stages"
+    elif [ "$label" = "points" ]; then
+      ests+=("$est"); labels+=("pplvo (points)")
+    fi
+  done
+  # The peer, on the same frames.
+  peer="$out/$n.opencv_rgbd.txt"
+  "$bin/pplvo-peer-odometry" --dataset "$d" --output "$peer" --method rgbd >"$out/$n.opencv_rgbd.log" 2>&1
+  read -r t r a p < <(eval_line "$d/groundtruth.txt" "$peer" "$fps")
+  pf="$(grep -Eo '[0-9.]+ frames/s' "$out/$n.opencv_rgbd.log" | tail -1 | awk '{print $1}')"
+  printf "| %s | OpenCV RgbdOdometry | %s | %s | %s | - | %s |\n" "$n" "$t" "$r" "$a" "${pf:--}" >> "$table"
+  echo "$n / OpenCV RgbdOdometry: RPE $t m/s $r deg/s, ATE $a m" >&2
+  ests+=("$peer"); labels+=("OpenCV RgbdOdometry")
+  if [ -n "$docs" ]; then
+    mkdir -p "$(dirname "$docs")/images"
+    "$bin/pplvo-plot" "$d/groundtruth.txt" "${ests[@]}" --labels "$(IFS=,; echo "${labels[*]}")" \
+      "${fpsarg[@]}" --title "$n" --output "$(dirname "$docs")/images/benchmark_$n.png" >/dev/null 2>&1 || \
+      echo "benchmark.sh: plot of $n failed" >&2
+  fi
+done
+
+cat "$table"
+echo
+cat "$stages"
+if [ -n "$docs" ]; then
+  {
+    echo "# Benchmark"
+    echo
+    echo "Generated by \`scripts/benchmark.sh --docs docs/benchmark.md\` on $(date -u +%Y-%m-%d),"
+    echo "commit $(git -C "$here" rev-parse --short HEAD 2>/dev/null || echo unknown), on this machine:"
+    echo "$(nproc) cores of $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'),"
+    echo "$(awk '/MemTotal/{printf "%.0f GiB", $2/1048576}' /proc/meminfo), $(uname -sr). The machine is shared and"
+    echo "virtualised: timings vary by up to 2x between runs."
+    echo
+    echo "Every pplvo row is one \`pplvo-run\` (all processes over memq://, every frame, deterministic);"
+    echo "errors by \`pplvo-eval\` (TUM definitions: ATE RMSE after SE(3) alignment, RPE RMSE over 1 s)."
+    echo "The peer is OpenCV 4.6's \`cv::rgbd::RgbdOdometry\` run by \`pplvo-peer-odometry\` on the same frames."
+    echo "frames/s is end to end (reading and decoding the PNGs included)."
+    echo
+    echo "## Accuracy"
+    echo
+    cat "$table"
+    echo
+    echo "## Per-stage time (ms/frame, configuration 'all', O-GM_10)"
+    echo
+    cat "$stages"
+    echo
+    echo "## Trajectories"
+    echo
+    for n in "${names[@]}"; do echo "![$n](images/benchmark_$n.png)"; echo; done
+  } > "$docs"
+  echo "wrote $docs" >&2
+fi

@@ -1,0 +1,364 @@
+#include "pplvo/peer/peer_odometry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/rgbd/depth.hpp>
+#include <utility>
+
+#include "pplvo/core/stage_timer.h"
+
+namespace pplvo::peer {
+
+const char* methodName(PeerMethod method) {
+  switch (method) {
+    case PeerMethod::kRgbd:
+      return "rgbd";
+    case PeerMethod::kIcp:
+      return "icp";
+    case PeerMethod::kRgbdIcp:
+      return "rgbd_icp";
+  }
+  return "?";
+}
+
+bool parseMethod(const std::string& text, PeerMethod* method) {
+  for (PeerMethod m : {PeerMethod::kRgbd, PeerMethod::kIcp, PeerMethod::kRgbdIcp}) {
+    if (text == methodName(m)) {
+      *method = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* statusName(PeerStatus status) {
+  switch (status) {
+    case PeerStatus::kFirst:
+      return "first";
+    case PeerStatus::kOk:
+      return "ok";
+    case PeerStatus::kNoDepth:
+      return "no_depth";
+    case PeerStatus::kNotConverged:
+      return "not_converged";
+    case PeerStatus::kBadInput:
+      return "bad_input";
+    case PeerStatus::kOpenCvError:
+      return "opencv_error";
+  }
+  return "?";
+}
+
+PinholeCamera unmirroredCamera(const PinholeCamera& camera, int* flip_code) {
+  PinholeCamera c = camera;
+  const bool flip_x = camera.fx < 0;
+  const bool flip_y = camera.fy < 0;
+  if (flip_x) {
+    c.fx = -camera.fx;
+    c.cx = (camera.width - 1) - camera.cx;
+  }
+  if (flip_y) {
+    c.fy = -camera.fy;
+    c.cy = (camera.height - 1) - camera.cy;
+  }
+  if (flip_code) *flip_code = flip_x && flip_y ? -1 : flip_y ? 0 : flip_x ? 1 : 2;
+  return c;
+}
+
+namespace {
+
+/// Relative motion `T` raised to a real power `s` (s = frames elapsed), via angle-axis.
+Pose3 scaledMotion(const Pose3& T, double s) {
+  Pose3 out = Pose3::Identity();
+  const Eigen::AngleAxisd aa(T.linear());
+  out.linear() = Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix();
+  out.translation() = T.translation() * s;
+  return out;
+}
+
+Pose3 matToPose(const cv::Mat& Rt) {
+  Eigen::Matrix4d M;
+  cv::cv2eigen(Rt, M);
+  Pose3 T = Pose3::Identity();
+  T.linear() = M.topLeftCorner<3, 3>();
+  T.translation() = M.topRightCorner<3, 1>();
+  return T;
+}
+
+cv::Mat poseToMat(const Pose3& T) {
+  cv::Mat Rt;
+  const Eigen::Matrix4d M = T.matrix();
+  cv::eigen2cv(M, Rt);
+  return Rt;
+}
+
+}  // namespace
+
+struct PeerOdometry::Impl {
+  cv::Ptr<cv::rgbd::Odometry> odometry;
+  PinholeCamera camera;  ///< the camera the odometry was built for (as given)
+  int flip_code = 2;     ///< cv::flip code applied to the images, 2 = none
+
+  bool has_reference = false;
+  cv::Ptr<cv::rgbd::OdometryFrame> reference;  ///< keeps OpenCV's pyramids between frames
+  int64_t reference_seq = -1;
+  Pose3 T_w_ref = Pose3::Identity();
+  int frames_since_reference = 0;  ///< frames processed since the reference (incl. failures)
+  int consecutive_failures = 0;
+
+  bool has_motion = false;
+  Pose3 T_prev_curr = Pose3::Identity();  ///< last estimated motion per frame (T_{k-1}_k)
+  Pose3 T_w_last = Pose3::Identity();     ///< pose output for the last frame
+
+  void build(const PeerOdometryOptions& o, const PinholeCamera& cam) {
+    camera = cam;
+    PinholeCamera used = cam;
+    if (o.mirror_handling == MirrorHandling::kFlipImage) {
+      used = unmirroredCamera(cam, &flip_code);
+    } else {
+      flip_code = 2;
+    }
+    cv::Mat K = (cv::Mat_<double>(3, 3) << used.fx, 0, used.cx, 0, used.fy, used.cy, 0, 0, 1);
+    const std::vector<int> iters = o.iter_counts;
+    const std::vector<float> grads = o.min_gradient_magnitudes;
+    switch (o.method) {
+      case PeerMethod::kRgbd: {
+        auto odo = cv::rgbd::RgbdOdometry::create(
+            K, o.min_depth_m, o.max_depth_m, o.max_depth_diff_m, iters, grads, o.max_points_part);
+        odo->setMaxTranslation(o.max_translation_m);
+        odo->setMaxRotation(o.max_rotation_deg);
+        odometry = odo;
+        break;
+      }
+      case PeerMethod::kIcp: {
+        auto odo = cv::rgbd::ICPOdometry::create(K, o.min_depth_m, o.max_depth_m,
+                                                 o.max_depth_diff_m, o.max_points_part, iters);
+        odo->setMaxTranslation(o.max_translation_m);
+        odo->setMaxRotation(o.max_rotation_deg);
+        odometry = odo;
+        break;
+      }
+      case PeerMethod::kRgbdIcp: {
+        auto odo = cv::rgbd::RgbdICPOdometry::create(
+            K, o.min_depth_m, o.max_depth_m, o.max_depth_diff_m, o.max_points_part, iters, grads);
+        odo->setMaxTranslation(o.max_translation_m);
+        odo->setMaxRotation(o.max_rotation_deg);
+        odometry = odo;
+        break;
+      }
+    }
+  }
+
+  void forgetReference() {
+    has_reference = false;
+    reference.release();
+    reference_seq = -1;
+    frames_since_reference = 0;
+    consecutive_failures = 0;
+  }
+};
+
+PeerOdometry::PeerOdometry(const PeerOdometryOptions& options)
+    : options_(options), impl_(std::make_unique<Impl>()) {}
+PeerOdometry::~PeerOdometry() = default;
+PeerOdometry::PeerOdometry(PeerOdometry&&) noexcept = default;
+PeerOdometry& PeerOdometry::operator=(PeerOdometry&&) noexcept = default;
+
+void PeerOdometry::reset() {
+  impl_ = std::make_unique<Impl>();
+  stats_ = PeerStats{};
+}
+
+namespace {
+
+/// Checks the frame; returns an empty string when it can be used.
+std::string checkFrame(const RgbdFrame& f) {
+  if (!f.camera.valid()) return "invalid camera";
+  if (f.bgr.empty()) return "empty colour image";
+  if (f.depth_m.empty()) return "empty depth image";
+  if (f.bgr.type() != CV_8UC3 && f.bgr.type() != CV_8UC1)
+    return "colour image is not CV_8UC3/CV_8UC1";
+  if (f.depth_m.type() != CV_32FC1) return "depth is not CV_32FC1 metres";
+  if (f.bgr.size() != f.depth_m.size()) return "colour and depth sizes disagree";
+  if (f.bgr.cols != f.camera.width || f.bgr.rows != f.camera.height)
+    return "image size differs from the camera's";
+  return {};
+}
+
+}  // namespace
+
+PeerFrameResult PeerOdometry::process(const RgbdFrame& frame) {
+  Stopwatch watch;
+  Impl& s = *impl_;
+  const PeerOdometryOptions& o = options_;
+  PeerFrameResult r;
+
+  // Pose predicted for this frame if it cannot be tracked.
+  auto predictedPose = [&]() {
+    if (!s.has_reference) return s.T_w_last;
+    if (o.failure_policy == FailurePolicy::kConstantVelocity && s.has_motion)
+      return s.T_w_last * s.T_prev_curr;
+    return s.T_w_last;
+  };
+  auto finish = [&](PeerFrameResult& res) -> PeerFrameResult {
+    res.compute_ms = watch.elapsedMs();
+    ++stats_.frames;
+    stats_.total_ms += res.compute_ms;
+    stats_.max_ms = std::max(stats_.max_ms, res.compute_ms);
+    switch (res.status) {
+      case PeerStatus::kFirst:
+        break;
+      case PeerStatus::kOk:
+        ++stats_.tracked;
+        break;
+      case PeerStatus::kNoDepth:
+        ++stats_.no_depth;
+        break;
+      case PeerStatus::kNotConverged:
+        ++stats_.not_converged;
+        break;
+      case PeerStatus::kBadInput:
+        ++stats_.bad_input;
+        break;
+      case PeerStatus::kOpenCvError:
+        ++stats_.opencv_errors;
+        break;
+    }
+    if (!res.ok()) {
+      ++stats_.failures;
+      res.T_w_c = predictedPose();
+      res.T_ref_c = Pose3::Identity();
+      if (s.has_reference) {
+        ++s.frames_since_reference;
+        ++s.consecutive_failures;
+      }
+    }
+    s.T_w_last = res.T_w_c;
+    return res;
+  };
+
+  const std::string bad = checkFrame(frame);
+  if (!bad.empty()) {
+    r.status = PeerStatus::kBadInput;
+    r.message = bad;
+    r.reference_seq = s.reference_seq;
+    return finish(r);
+  }
+
+  try {
+    if (!s.odometry || frame.camera != s.camera) {
+      // New camera: rebuild OpenCV's odometry; the old reference cannot be reused.
+      const bool had_reference = s.has_reference;
+      s.build(o, frame.camera);
+      if (had_reference) {
+        s.forgetReference();
+        ++stats_.reference_resets;
+      }
+    }
+
+    // Grey image and metric depth as OpenCV expects (CV_8UC1, CV_32FC1 metres), flipped for
+    // mirrored cameras.
+    cv::Mat grey;
+    if (frame.bgr.type() == CV_8UC3) {
+      cv::cvtColor(frame.bgr, grey, cv::COLOR_BGR2GRAY);
+    } else {
+      grey = frame.bgr.clone();
+    }
+    cv::Mat depth = frame.depth_m.clone();
+    // Valid depth: finite and inside (min, max); everything else becomes 0 (missing), and the
+    // mask tells OpenCV the same.
+    cv::Mat valid = (depth == depth) & (depth > o.min_depth_m) & (depth < o.max_depth_m);
+    depth.setTo(0.0f, ~valid);
+    if (s.flip_code != 2) {
+      cv::flip(grey, grey, s.flip_code);
+      cv::flip(depth, depth, s.flip_code);
+      cv::flip(valid, valid, s.flip_code);
+    }
+    r.valid_depth_pixels = cv::countNonZero(valid);
+
+    const bool enough_depth = r.valid_depth_pixels >= o.min_valid_depth_pixels;
+    auto current =
+        cv::rgbd::OdometryFrame::create(grey, depth, valid, cv::Mat(), static_cast<int>(frame.seq));
+
+    if (!s.has_reference) {
+      if (!enough_depth) {
+        r.status = PeerStatus::kNoDepth;
+        r.message = "too few valid depth pixels for a first frame";
+        return finish(r);
+      }
+      s.has_reference = true;
+      s.reference = current;
+      s.reference_seq = frame.seq;
+      s.T_w_ref = stats_.frames == 0 ? Pose3::Identity() : s.T_w_last;
+      s.frames_since_reference = 0;
+      s.consecutive_failures = 0;
+      r.status = PeerStatus::kFirst;
+      r.T_w_c = s.T_w_ref;
+      r.reference_seq = frame.seq;
+      return finish(r);
+    }
+
+    r.reference_seq = s.reference_seq;
+    bool ok = false;
+    Pose3 T_ref_c = Pose3::Identity();
+    if (!enough_depth) {
+      r.status = PeerStatus::kNoDepth;
+      r.message = "too few valid depth pixels";
+    } else {
+      const int steps = s.frames_since_reference + 1;
+      cv::Mat init;
+      if (o.use_motion_prior && s.has_motion) {
+        // OpenCV's Rt maps reference points into the current frame: Rt = T_c_ref.
+        init = poseToMat(scaledMotion(s.T_prev_curr, steps).inverse());
+      }
+      cv::Mat Rt;
+      ok = s.odometry->compute(s.reference, current, Rt, init);
+      if (ok) {
+        const Pose3 T_c_ref = matToPose(Rt);
+        T_ref_c = T_c_ref.inverse();
+        if (!T_ref_c.matrix().allFinite()) {
+          ok = false;
+          r.status = PeerStatus::kNotConverged;
+          r.message = "non-finite motion";
+        }
+      } else {
+        r.status = PeerStatus::kNotConverged;
+        r.message = "OpenCV odometry did not converge or the motion exceeded its limits";
+      }
+      if (ok) {
+        r.status = PeerStatus::kOk;
+        r.T_ref_c = T_ref_c;
+        r.T_w_c = s.T_w_ref * T_ref_c;
+        s.T_prev_curr = scaledMotion(T_ref_c, 1.0 / steps);
+        s.has_motion = true;
+        s.reference = current;
+        s.reference_seq = frame.seq;
+        s.T_w_ref = r.T_w_c;
+        s.frames_since_reference = 0;
+        s.consecutive_failures = 0;
+        return finish(r);
+      }
+    }
+    // Failure: keep the reference unless it has failed too often.
+    PeerFrameResult res = finish(r);
+    if (s.consecutive_failures >= o.max_consecutive_failures && enough_depth) {
+      s.reference = current;
+      s.reference_seq = frame.seq;
+      s.T_w_ref = res.T_w_c;
+      s.frames_since_reference = 0;
+      s.consecutive_failures = 0;
+      ++stats_.reference_resets;
+    }
+    return res;
+  } catch (const cv::Exception& e) {
+    r.status = PeerStatus::kOpenCvError;
+    r.message = e.what();
+    r.reference_seq = s.reference_seq;
+    return finish(r);
+  }
+}
+
+}  // namespace pplvo::peer

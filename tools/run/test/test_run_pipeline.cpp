@@ -1,0 +1,147 @@
+// pplvo-run: the processes on one memq:// LCM give exactly the trajectory of the LCM-free
+// OdometryPipeline, with the dataset's stamps verbatim; bad input is a clear error or a
+// counted skip.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "pplvo/dataset/dataset.h"
+#include "pplvo/pipeline/odometry_pipeline.h"
+#include "pplvo/run/run_pipeline.h"
+#include "pplvo/synth/synthetic_sequence.h"
+
+namespace fs = std::filesystem;
+
+namespace pplvo::run {
+namespace {
+
+constexpr int kFrames = 24;
+
+/// A synthetic TUM folder, written once per test program.
+const std::string& sequenceDir() {
+  static const std::string dir = [] {
+    const fs::path d = fs::temp_directory_path() / ("pplvo_run_test_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    synth::SynthOptions o;
+    o.frames = kFrames;
+    o.seed = 11;
+    synth::writeTumFolder(synth::SyntheticSequence(o), d.string());
+    return d.string();
+  }();
+  return dir;
+}
+
+class RunPipelineTest : public ::testing::Test {
+ protected:
+  static void TearDownTestSuite() { fs::remove_all(sequenceDir()); }
+};
+
+TEST_F(RunPipelineTest, EqualsTheLcmFreePipelineWithVerbatimStamps) {
+  RunOptions o;
+  o.dataset_dir = sequenceDir();
+  const RunResult r = runPipeline(o);
+  ASSERT_FALSE(r.failed) << r.error;
+  EXPECT_EQ(r.frames_published, kFrames);
+  ASSERT_EQ(r.poses, kFrames);
+  EXPECT_EQ(r.tracking, kFrames - 1);
+  for (const NodeReport& n : r.nodes) {
+    EXPECT_EQ(n.counters.frames_dropped, 0) << n.name;
+    EXPECT_EQ(n.counters.frames_skipped, 0) << n.name;
+    EXPECT_EQ(n.counters.errors, 0) << n.name;
+  }
+
+  const dataset::Dataset ds = dataset::Dataset::open(sequenceDir());
+  pipeline::OdometryPipeline direct;
+  ASSERT_EQ(ds.size(), static_cast<size_t>(kFrames));
+  for (size_t i = 0; i < ds.size(); ++i) {
+    const RgbdFrame f = ds.loadFrame(i);
+    const pipeline::PipelineFrameResult d = direct.process(f);
+    EXPECT_EQ(r.trajectory[i].stamp_text, f.stamp);
+    // Messages carry doubles for poses and floats for feature geometry: equal up to that.
+    EXPECT_LT((r.trajectory[i].T_w_c.matrix() - d.pose.T_w_c.matrix()).cwiseAbs().maxCoeff(), 1e-6)
+        << "frame " << i;
+  }
+}
+
+TEST_F(RunPipelineTest, TracksTheSyntheticSequenceWithBoundedDrift) {
+  RunOptions o;
+  o.dataset_dir = sequenceDir();
+  const RunResult r = runPipeline(o);
+  ASSERT_FALSE(r.failed) << r.error;
+  synth::SynthOptions so;
+  so.frames = kFrames;
+  so.seed = 11;
+  const synth::SyntheticSequence seq(so);
+  double max_t = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    const Pose3 truth = seq.pose(0).inverse() * seq.pose(i);
+    max_t = std::max(max_t, (truth.translation() - r.trajectory[i].T_w_c.translation()).norm());
+  }
+  std::printf("pplvo-run synthetic %d frames: max drift %.2f mm\n%s", kFrames, 1e3 * max_t,
+              r.text().c_str());
+  EXPECT_LT(max_t, 0.03);  // observed < 1 cm
+  // The summary names every node and is valid-looking YAML.
+  const std::string y = r.yaml();
+  for (const char* node : {"pplvo-player", "pplvo-depth-filter", "pplvo-frontend", "pplvo-estimator"}) {
+    EXPECT_NE(y.find(node), std::string::npos) << node;
+  }
+}
+
+TEST_F(RunPipelineTest, CorruptFrameIsACountedSkipWithSkipBad) {
+  const fs::path copy = fs::path(sequenceDir() + "_corrupt");
+  fs::remove_all(copy);
+  fs::copy(sequenceDir(), copy, fs::copy_options::recursive);
+  // Overwrite one colour image with garbage.
+  std::vector<fs::path> rgb;
+  for (const auto& e : fs::directory_iterator(copy / "rgb")) rgb.push_back(e.path());
+  std::sort(rgb.begin(), rgb.end());
+  ASSERT_GT(rgb.size(), 10u);
+  std::ofstream(rgb[10], std::ios::binary | std::ios::trunc) << "not a png";
+
+  RunOptions o;
+  o.dataset_dir = copy.string();
+  const RunResult stop = runPipeline(o);
+  EXPECT_TRUE(stop.failed);
+  EXPECT_NE(stop.error.find(rgb[10].filename().string()), std::string::npos) << stop.error;
+
+  o.skip_bad = true;
+  const RunResult skip = runPipeline(o);
+  EXPECT_FALSE(skip.failed) << skip.error;
+  EXPECT_EQ(skip.frames_skipped, 1);
+  EXPECT_EQ(skip.poses, kFrames - 1);
+  EXPECT_GE(skip.tracking, kFrames - 3);
+  fs::remove_all(copy);
+}
+
+TEST_F(RunPipelineTest, MissingDatasetIsAClearError) {
+  RunOptions o;
+  o.dataset_dir = "/nonexistent/pplvo_dataset";
+  const RunResult r = runPipeline(o);
+  EXPECT_TRUE(r.failed);
+  EXPECT_NE(r.error.find("/nonexistent/pplvo_dataset"), std::string::npos) << r.error;
+  EXPECT_TRUE(r.trajectory.empty());
+}
+
+TEST_F(RunPipelineTest, CommandLineWritesTrajectoryAndSummary) {
+  const std::string bin = std::string(std::getenv("PPLVO_BINARY_DIR")) + "/bin/pplvo-run";
+  const fs::path out = fs::path(sequenceDir() + "_out");
+  fs::create_directories(out);
+  const std::string cmd = bin + " --dataset " + sequenceDir() + " --max-frames 8 --features points,planes --output " +
+                          (out / "traj.txt").string() + " --summary " + (out / "summary.yaml").string() +
+                          " --quiet 2>/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const TrajectoryReadResult t = readTumTrajectory((out / "traj.txt").string());
+  EXPECT_EQ(t.poses.size(), 8u);
+  std::ifstream s(out / "summary.yaml");
+  const std::string summary((std::istreambuf_iterator<char>(s)), {});
+  EXPECT_NE(summary.find("poses: 8"), std::string::npos) << summary;
+  // Bad options: exit status 2, nothing run.
+  EXPECT_EQ(WEXITSTATUS(std::system((bin + " --dataset x --features surf 2>/dev/null").c_str())), 2);
+  EXPECT_EQ(WEXITSTATUS(std::system((bin + " --output y 2>/dev/null >/dev/null").c_str())), 2);
+  fs::remove_all(out);
+}
+
+}  // namespace
+}  // namespace pplvo::run
