@@ -34,6 +34,7 @@ std::string launchUsage() {
          "  --lockstep-timeout S    player's wait for each pose in lockstep mode (10)\n"
          "  --config FILE           pipeline YAML (frontend and estimator)\n"
          "  --features LIST         points,lines,planes (frontend and estimator)\n"
+         "  --set KEY=VALUE         configuration override (repeatable; frontend and estimator)\n"
          "  --depth-model M         sensor | cgm | ogm (depth filter)\n"
          "  --max-frames N          player stops after N frames (0 = all)\n"
          "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
@@ -149,7 +150,16 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
       number(&o.lockstep_timeout_s, 0.1);
     else if (key == "--config")
       next(&o.config);
-    else if (key == "--features")
+    else if (key == "--set") {
+      std::string kv;
+      if (next(&kv)) {
+        if (kv.find('=') == std::string::npos || kv.front() == '=') {
+          p.errors.push_back("--set: KEY=VALUE, not '" + kv + "'");
+        } else {
+          o.set.push_back(kv);
+        }
+      }
+    } else if (key == "--features")
       next(&o.features);
     else if (key == "--depth-model") {
       if (next(&o.depth_model) && o.depth_model != "sensor" && o.depth_model != "cgm" &&
@@ -342,6 +352,7 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::st
     ProcessSpec s = make(name);
     if (!o.config.empty()) s.args.insert(s.args.end(), {"--config", o.config});
     if (!o.features.empty()) s.args.insert(s.args.end(), {"--features", o.features});
+    for (const std::string& kv : o.set) s.args.insert(s.args.end(), {"--set", kv});
     specs.push_back(s);
   }
   ProcessSpec lg = make(kLogger);

@@ -83,6 +83,10 @@ TEST(LaunchArgs, LockstepDefaultsToFullSpeedAndValuesParse) {
   EXPECT_GT(p.options.timeout_s, 0.0);  // always bounded
   p = parseLaunchArgs({"--dataset", "D", "--output", "T", "--test-kill", "nobody:3"});
   EXPECT_EQ(p.errors.size(), 1u);
+  p = parseLaunchArgs(
+      {"--dataset", "D", "--output", "T", "--set", "a.b=1", "--set=c=2", "--set", "nokey"});
+  EXPECT_EQ(p.errors.size(), 1u);
+  EXPECT_EQ(p.options.set, (std::vector<std::string>{"a.b=1", "c=2"}));
 }
 
 TEST(LaunchUrl, Parse) {
@@ -169,6 +173,7 @@ TEST(LaunchSpecs, CommandLines) {
   o.rate = 0;
   o.config = "c.yaml";
   o.features = "points,planes";
+  o.set = {"frontend.points.max_points=500"};
   o.depth_model = "cgm";
   o.max_frames = 7;
   o.fps = 30;
@@ -184,7 +189,8 @@ TEST(LaunchSpecs, CommandLines) {
   EXPECT_EQ(joined(specs[0]),
             std::string("/B/pplvo-depth-filter --lcm-url ") + kIsolatedUrl + " --depth-model cgm");
   EXPECT_EQ(joined(specs[2]), std::string("/B/pplvo-estimator --lcm-url ") + kIsolatedUrl +
-                                  " --config c.yaml --features points,planes");
+                                  " --config c.yaml --features points,planes --set "
+                                  "frontend.points.max_points=500");
   EXPECT_NE(joined(specs[3]).find("--trajectory traj.txt"), std::string::npos);
   EXPECT_NE(joined(specs[3]).find("--output run.lcmlog"), std::string::npos);
   const std::string player = joined(specs[4]);

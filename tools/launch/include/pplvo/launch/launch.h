@@ -34,6 +34,7 @@ struct LaunchOptions {
   double lockstep_timeout_s = 10.0;  ///< --lockstep-timeout: player's wait per pose
   std::string config;                ///< --config: pipeline YAML for frontend and estimator
   std::string features;              ///< --features: points,lines,planes subset
+  std::vector<std::string> set;      ///< --set KEY=VALUE (repeatable): frontend and estimator
   std::string depth_model;           ///< --depth-model: sensor | cgm | ogm (depth filter)
   int64_t max_frames = 0;            ///< --max-frames (0: all)
   double fps = 0.0;                  ///< --fps: frame rate of integer-stamped datasets
