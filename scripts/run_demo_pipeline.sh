@@ -3,7 +3,9 @@
 # ATE and RPE: pplvo-launch --isolated --lockstep (player, depth filter, frontend, estimator and
 # logger in a private network namespace, nothing on the host network), then pplvo-eval.
 # Usage: scripts/run_demo_pipeline.sh DATASET_DIR OUTDIR [extra pplvo-launch args...]
-# Writes OUTDIR/trajectory.txt, OUTDIR/launch_report.txt, OUTDIR/eval.txt.
+# Writes OUTDIR/trajectory.txt, OUTDIR/launch_report.txt, OUTDIR/eval.txt. Where the kernel
+# refuses private namespaces (pplvo-launch exit 4) it says so and runs pplvo-run (one process,
+# memq://) instead; it never uses the host network.
 # Programs are taken from $PPLVO_BIN_DIR (default: build/bin of this repository).
 set -euo pipefail
 if [ $# -lt 2 ]; then
@@ -32,8 +34,22 @@ fi
 traj=$outdir/trajectory.txt
 rm -f "$traj"
 echo "== pplvo-launch --isolated --lockstep on $dataset" >&2
+set +e
 "$bin/pplvo-launch" --isolated --lockstep --dataset "$dataset" --output "$traj" ${fps[@]+"${fps[@]}"} "$@" \
   | tee "$outdir/launch_report.txt"
+rc=${PIPESTATUS[0]}
+set -e
+if [ "$rc" -eq 4 ]; then
+  # No private network namespace on this machine (unprivileged user namespaces disabled): never
+  # fall back to the host network; run the same nodes in one process over memq:// instead.
+  echo "note: private network namespaces are unavailable here (see above), so the pipeline runs" \
+       "in one process (pplvo-run, memq://) instead of separate processes" >&2
+  [ -x "$bin/pplvo-run" ] || { echo "$0: $bin/pplvo-run is missing" >&2; exit 1; }
+  "$bin/pplvo-run" --dataset "$dataset" --output "$traj" ${fps[@]+"${fps[@]}"} \
+    | tee "$outdir/launch_report.txt"
+elif [ "$rc" -ne 0 ]; then
+  exit "$rc"
+fi
 # RPE uses the TUM benchmark's fixed 1 s delta; a sequence shorter than 2 s gets a third of its
 # length instead (said on stderr), so that short test sequences still give an RPE figure.
 div=1
