@@ -1,0 +1,524 @@
+#include "pplvo/launch/launch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace pplvo::launch {
+
+const std::vector<std::string>& statusNodes() {
+  static const std::vector<std::string> names = {kDepthFilter, kFrontend, kEstimator};
+  return names;
+}
+
+const std::vector<std::string>& allPrograms() {
+  static const std::vector<std::string> names = {kDepthFilter, kFrontend, kEstimator, kLogger,
+                                                 kPlayer};
+  return names;
+}
+
+std::string launchUsage() {
+  return "usage: pplvo-launch --dataset DIR --output TRAJ [options]\n"
+         "Starts pplvo-depth-filter, pplvo-frontend, pplvo-estimator, pplvo-logger and then\n"
+         "pplvo-player as separate processes on one LCM URL, waits for the end of the sequence,\n"
+         "lets the pipeline drain, stops them (SIGINT, SIGKILL after --stop-grace) and reports\n"
+         "frames in/out/dropped/skipped per stage. Exit 0 only if every process ended cleanly.\n"
+         "  --dataset DIR           TUM-layout folder (player)\n"
+         "  --output TRAJ           TUM trajectory written by the logger from PPLVO_POSE\n"
+         "  --lockstep              player publishes frame k+1 only after the pose of frame k\n"
+         "                          (trajectory equal to pplvo-run's); default --rate 0 then\n"
+         "  --rate R                player speed: 1 real time (default), 0 as fast as possible\n"
+         "  --lockstep-timeout S    player's wait for each pose in lockstep mode (10)\n"
+         "  --config FILE           pipeline YAML (frontend and estimator)\n"
+         "  --features LIST         points,lines,planes (frontend and estimator)\n"
+         "  --set KEY=VALUE         configuration override (repeatable; frontend and estimator)\n"
+         "  --depth-model M         sensor | cgm | ogm (depth filter)\n"
+         "  --max-frames N          player stops after N frames (0 = all)\n"
+         "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
+         "  --log LOG               logger also writes an LCM event log of PPLVO_.* channels\n"
+         "  --summary FILE          logger's YAML run summary\n"
+         "  --lcm-url URL           udpm URL (default $LCM_DEFAULT_URL; with --isolated\n"
+         "                          udpm://239.255.76.67:7667?ttl=0)\n"
+         "  --isolated              run everything in a private network namespace (only lo);\n"
+         "                          a URL with ttl > 0 is refused\n"
+         "  --bin-dir DIR           where the node programs are (default: next to pplvo-launch)\n"
+         "  --node-logs DIR         stdout/stderr of each process as DIR/NAME.log (default: a\n"
+         "                          temporary directory, kept and named only on failure)\n"
+         "  --timeout S             bound on the whole launch (3600)\n"
+         "  --startup-timeout S     wait for each node's first status message (20)\n"
+         "  --drain-idle S          after the player ends, stop once no pose came for S s (2)\n"
+         "  --stop-grace S          SIGINT -> SIGKILL delay when stopping (5)\n"
+         "  --test-kill NODE:N      (tests) SIGKILL NODE once N poses were seen\n"
+         "  --compress              lossless compressed frames (player png/zlib) and depth\n"
+         "                          maps (depth filter zlib); automatic when the kernel's\n"
+         "                          net.core.rmem_max is below 2 MiB\n"
+         "  --quiet                 only the report\n";
+}
+
+namespace {
+
+bool toDouble(const std::string& t, double* out) {
+  try {
+    size_t end = 0;
+    const double v = std::stod(t, &end);
+    if (end != t.size() || !std::isfinite(v)) return false;
+    *out = v;
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+bool toInt(const std::string& t, int64_t* out) {
+  try {
+    size_t end = 0;
+    const long long v = std::stoll(t, &end);
+    if (end != t.size()) return false;
+    *out = v;
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+std::string fmtDouble(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+}  // namespace
+
+ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
+  ParsedArgs p;
+  LaunchOptions& o = p.options;
+  bool rate_given = false;
+  for (size_t i = 0; i < args.size(); ++i) {
+    std::string key = args[i];
+    std::string value;
+    bool has_inline = false;
+    if (key.rfind("--", 0) == 0) {
+      const size_t eq = key.find('=');
+      if (eq != std::string::npos) {
+        value = key.substr(eq + 1);
+        key = key.substr(0, eq);
+        has_inline = true;
+      }
+    }
+    auto next = [&](std::string* out) {
+      if (has_inline) {
+        *out = value;
+        return true;
+      }
+      if (i + 1 >= args.size()) {
+        p.errors.push_back(key + " needs a value");
+        return false;
+      }
+      *out = args[++i];
+      return true;
+    };
+    auto number = [&](double* out, double min_value) {
+      std::string t;
+      if (!next(&t)) return;
+      double v = 0;
+      if (!toDouble(t, &v))
+        p.errors.push_back(key + ": expected a number, not '" + t + "'");
+      else if (v < min_value)
+        p.errors.push_back(key + ": must be >= " + fmtDouble(min_value));
+      else
+        *out = v;
+    };
+    auto flag = [&](bool* out) {
+      if (has_inline) p.errors.push_back(key + " takes no value");
+      *out = true;
+    };
+    if (key == "--help" || key == "-h")
+      p.help = true;
+    else if (key == "--dataset")
+      next(&o.dataset_dir);
+    else if (key == "--output")
+      next(&o.output);
+    else if (key == "--lockstep")
+      flag(&o.lockstep);
+    else if (key == "--rate") {
+      number(&o.rate, 0.0);
+      rate_given = true;
+    } else if (key == "--lockstep-timeout")
+      number(&o.lockstep_timeout_s, 0.1);
+    else if (key == "--config")
+      next(&o.config);
+    else if (key == "--set") {
+      std::string kv;
+      if (next(&kv)) {
+        if (kv.find('=') == std::string::npos || kv.front() == '=') {
+          p.errors.push_back("--set: KEY=VALUE, not '" + kv + "'");
+        } else {
+          o.set.push_back(kv);
+        }
+      }
+    } else if (key == "--features")
+      next(&o.features);
+    else if (key == "--depth-model") {
+      if (next(&o.depth_model) && o.depth_model != "sensor" && o.depth_model != "cgm" &&
+          o.depth_model != "ogm") {
+        p.errors.push_back("--depth-model: sensor, cgm or ogm, not '" + o.depth_model + "'");
+      }
+    } else if (key == "--max-frames") {
+      std::string t;
+      if (next(&t) && (!toInt(t, &o.max_frames) || o.max_frames < 0)) {
+        p.errors.push_back("--max-frames: expected an integer >= 0, not '" + t + "'");
+      }
+    } else if (key == "--fps")
+      number(&o.fps, 0.0);
+    else if (key == "--log")
+      next(&o.log);
+    else if (key == "--summary")
+      next(&o.summary);
+    else if (key == "--lcm-url")
+      next(&o.lcm_url);
+    else if (key == "--isolated")
+      flag(&o.isolated);
+    else if (key == "--bin-dir")
+      next(&o.bin_dir);
+    else if (key == "--node-logs")
+      next(&o.node_log_dir);
+    else if (key == "--timeout")
+      number(&o.timeout_s, 1.0);
+    else if (key == "--startup-timeout")
+      number(&o.startup_timeout_s, 1.0);
+    else if (key == "--drain-idle")
+      number(&o.drain_idle_s, 0.1);
+    else if (key == "--stop-grace")
+      number(&o.stop_grace_s, 0.1);
+    else if (key == "--test-kill") {
+      if (next(&o.test_kill)) {
+        static const std::regex re("(pplvo-[a-z-]+):([0-9]+)");
+        std::smatch m;
+        bool known = false;
+        if (std::regex_match(o.test_kill, m, re)) {
+          for (const std::string& n : allPrograms()) known = known || n == m[1].str();
+        }
+        if (!known) p.errors.push_back("--test-kill: NODE:POSES with NODE one of the programs");
+      }
+    } else if (key == "--quiet")
+      flag(&o.quiet);
+    else if (key == "--compress")
+      flag(&o.compress);
+    else
+      p.errors.push_back("unknown option " + args[i]);
+  }
+  if (p.help) return p;
+  if (!rate_given && o.lockstep) o.rate = 0.0;
+  if (o.dataset_dir.empty()) p.errors.push_back("--dataset is required");
+  if (o.output.empty()) p.errors.push_back("--output is required");
+  return p;
+}
+
+LcmUrl parseLcmUrl(const std::string& url) {
+  LcmUrl u;
+  const size_t sep = url.find("://");
+  if (sep == std::string::npos || sep == 0) {
+    u.error = "'" + url + "' is not an LCM URL (provider://address?options)";
+    return u;
+  }
+  u.provider = url.substr(0, sep);
+  std::string rest = url.substr(sep + 3);
+  std::string query;
+  if (const size_t q = rest.find('?'); q != std::string::npos) {
+    query = rest.substr(q + 1);
+    rest = rest.substr(0, q);
+  }
+  if (u.provider == "udpm") {
+    u.address = "239.255.76.67";
+    u.port = 7667;
+    if (!rest.empty()) {
+      const size_t colon = rest.find(':');
+      u.address = rest.substr(0, colon);
+      if (colon != std::string::npos) {
+        int64_t port = 0;
+        if (!toInt(rest.substr(colon + 1), &port) || port <= 0 || port > 65535) {
+          u.error = "bad port in '" + url + "'";
+          return u;
+        }
+        u.port = static_cast<int>(port);
+      }
+    }
+    // Multicast group: 224.0.0.0/4.
+    static const std::regex ip("([0-9]{1,3})\\.([0-9]{1,3})\\.([0-9]{1,3})\\.([0-9]{1,3})");
+    std::smatch m;
+    if (!std::regex_match(u.address, m, ip) || std::stoi(m[1].str()) < 224 ||
+        std::stoi(m[1].str()) > 239) {
+      u.error = "'" + u.address + "' in '" + url + "' is not an IPv4 multicast group";
+      return u;
+    }
+  }
+  std::istringstream qs(query);
+  for (std::string kv; std::getline(qs, kv, '&');) {
+    const size_t eq = kv.find('=');
+    if (eq == std::string::npos) continue;
+    if (kv.substr(0, eq) == "ttl") {
+      int64_t ttl = 0;
+      if (!toInt(kv.substr(eq + 1), &ttl) || ttl < 0 || ttl > 255) {
+        u.error = "bad ttl in '" + url + "'";
+        return u;
+      }
+      u.ttl = static_cast<int>(ttl);
+    }
+  }
+  u.valid = true;
+  return u;
+}
+
+int64_t readRmemMax() {
+  std::ifstream in("/proc/sys/net/core/rmem_max");
+  int64_t v = -1;
+  if (!(in >> v)) return -1;
+  return v;
+}
+
+UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url,
+                         int64_t rmem_max_bytes) {
+  UrlDecision d;
+  if (!o.lcm_url.empty()) {
+    d.url = o.lcm_url;
+  } else if (o.isolated) {
+    d.url = kIsolatedUrl;  // $LCM_DEFAULT_URL is for the host; the namespace has its own
+  } else if (env_lcm_default_url != nullptr && *env_lcm_default_url != '\0') {
+    d.url = env_lcm_default_url;
+  } else {
+    d.url = kIsolatedUrl;  // LCM's own default
+    d.warnings.push_back("no --lcm-url and no $LCM_DEFAULT_URL: using LCM's default " + d.url +
+                         " on the host network (use --isolated for tests and demos)");
+  }
+  const LcmUrl u = parseLcmUrl(d.url);
+  if (!u.valid) {
+    d.errors.push_back("LCM URL: " + u.error);
+    return d;
+  }
+  if (u.provider != "udpm") {
+    d.errors.push_back("LCM URL '" + d.url + "': separate processes need udpm:// (" +
+                       (u.provider == "memq" ? std::string("memq:// only connects one process; "
+                                                           "use pplvo-run")
+                                             : u.provider + ":// is not a shared bus") +
+                       ")");
+    return d;
+  }
+  if (rmem_max_bytes >= 0 && d.url.find("recv_buf_size=") == std::string::npos) {
+    const int64_t size = std::min<int64_t>(rmem_max_bytes, 16 << 20);
+    d.url += (d.url.find('?') == std::string::npos ? "?" : "&");
+    d.url += "recv_buf_size=" + std::to_string(size);
+    if (size < kMinCompressedRecvBufBytes) {
+      d.compress = true;
+      d.warnings.push_back(
+          "net.core.rmem_max is only " + std::to_string(rmem_max_bytes) +
+          " bytes: 640x480 frames and depth maps will lose UDP fragments even compressed "
+          "(measured: 1 MiB needed); raise it, e.g. sysctl -w net.core.rmem_max=4194304");
+    } else if (size < kMinRawRecvBufBytes) {
+      d.compress = true;
+      d.warnings.push_back("net.core.rmem_max is only " + std::to_string(rmem_max_bytes) +
+                           " bytes: raw frames would lose UDP fragments, so images and depth "
+                           "maps are sent compressed (lossless; raise rmem_max to avoid this)");
+    }
+  }
+  if (o.isolated && u.ttl > 0) {
+    d.errors.push_back("--isolated needs a loopback URL (udpm with ttl=0), not '" + d.url + "'");
+  } else if (!o.isolated && u.ttl > 0) {
+    d.warnings.push_back("LCM URL '" + d.url + "' has ttl=" + std::to_string(u.ttl) +
+                         ": traffic leaves this host (use --isolated for tests and demos)");
+  }
+  return d;
+}
+
+std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::string& url,
+                                           const std::string& bin_dir, const std::string& log_dir) {
+  auto make = [&](const std::string& name) {
+    ProcessSpec s;
+    s.name = name;
+    s.path = bin_dir + "/" + name;
+    s.args = {"--lcm-url", url};
+    s.env["LCM_DEFAULT_URL"] = url;
+    if (!log_dir.empty()) s.log_path = log_dir + "/" + name + ".log";
+    return s;
+  };
+  std::vector<ProcessSpec> specs;
+  ProcessSpec df = make(kDepthFilter);
+  if (!o.depth_model.empty()) df.args.insert(df.args.end(), {"--depth-model", o.depth_model});
+  if (o.compress) df.args.push_back("--compress");
+  specs.push_back(df);
+  for (const char* name : {kFrontend, kEstimator}) {
+    ProcessSpec s = make(name);
+    if (!o.config.empty()) s.args.insert(s.args.end(), {"--config", o.config});
+    if (!o.features.empty()) s.args.insert(s.args.end(), {"--features", o.features});
+    for (const std::string& kv : o.set) s.args.insert(s.args.end(), {"--set", kv});
+    specs.push_back(s);
+  }
+  ProcessSpec lg = make(kLogger);
+  lg.args.insert(lg.args.end(), {"--trajectory", o.output, "--no-progress"});
+  if (!o.log.empty()) lg.args.insert(lg.args.end(), {"--output", o.log, "--force"});
+  if (!o.summary.empty()) lg.args.insert(lg.args.end(), {"--summary", o.summary});
+  specs.push_back(lg);
+  ProcessSpec pl = make(kPlayer);
+  pl.args.insert(pl.args.end(),
+                 {"--dataset", o.dataset_dir, "--rate", fmtDouble(o.rate), "--no-progress"});
+  if (o.lockstep) {
+    pl.args.insert(pl.args.end(),
+                   {"--lockstep", "--lockstep-timeout", fmtDouble(o.lockstep_timeout_s)});
+  }
+  if (o.max_frames > 0)
+    pl.args.insert(pl.args.end(), {"--max-frames", std::to_string(o.max_frames)});
+  if (o.fps > 0) pl.args.insert(pl.args.end(), {"--fps", fmtDouble(o.fps)});
+  if (o.compress) {
+    pl.args.insert(pl.args.end(), {"--rgb-encoding", "png", "--depth-encoding", "zlib"});
+  }
+  specs.push_back(pl);
+  return specs;
+}
+
+std::optional<NodeCounts> parseDoneLine(const std::string& log_text, const std::string& node) {
+  std::optional<NodeCounts> found;
+  std::istringstream in(log_text);
+  const std::regex done("\\[" + node +
+                        "\\] done: in (-?[0-9]+) out (-?[0-9]+) dropped (-?[0-9]+) skipped "
+                        "(-?[0-9]+).*");
+  const std::regex player(node + ": published ([0-9]+) frames, skipped ([0-9]+).*");
+  for (std::string line; std::getline(in, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, done)) {
+      NodeCounts c;
+      c.frames_in = std::stoll(m[1].str());
+      c.frames_out = std::stoll(m[2].str());
+      c.frames_dropped = std::stoll(m[3].str());
+      c.frames_skipped = std::stoll(m[4].str());
+      c.known = true;
+      c.source = "done line";
+      found = c;
+    } else if (std::regex_match(line, m, player)) {
+      NodeCounts c;
+      c.frames_out = std::stoll(m[1].str());
+      c.frames_skipped = std::stoll(m[2].str());
+      c.frames_in = c.frames_out + c.frames_skipped;
+      c.known = true;
+      c.source = "done line";
+      found = c;
+    }
+  }
+  return found;
+}
+
+bool DrainMonitor::drained(double now_s, int64_t poses, int64_t published) {
+  if (poses != last_poses_) {
+    last_poses_ = poses;
+    last_change_s_ = now_s;
+  }
+  if (published >= 0 && poses >= published) {
+    all_posed_ = true;
+    return true;
+  }
+  return now_s - last_change_s_ >= idle_s_;
+}
+
+int64_t LaunchReport::droppedTotal() const {
+  int64_t n = 0;
+  for (const Process& p : processes) {
+    if (p.has_counts && p.counts.known) n += p.counts.frames_dropped;
+  }
+  return n;
+}
+
+std::string LaunchReport::text() const {
+  std::ostringstream out;
+  char buf[512];
+  std::snprintf(buf, sizeof buf, "pplvo-launch report (%s, %s, %.2f s wall)\n",
+                lockstep ? "lockstep" : "free-running", url.c_str(), wall_s);
+  out << buf;
+  std::snprintf(buf, sizeof buf, "  %-20s %-34s %7s %7s %8s %8s %7s\n", "process", "ended", "in",
+                "out", "dropped", "skipped", "errors");
+  out << buf;
+  for (const Process& p : processes) {
+    std::string ended = p.exit ? p.exit->text() : "still running";
+    if (p.killed)
+      ended += " after SIGKILL";
+    else if (p.stop_requested && p.exit)
+      ended += " (stopped)";
+    if (p.has_counts && p.counts.known) {
+      std::snprintf(buf, sizeof buf, "  %-20s %-34s %7lld %7lld %8lld %8lld %7lld\n",
+                    p.name.c_str(), ended.c_str(), static_cast<long long>(p.counts.frames_in),
+                    static_cast<long long>(p.counts.frames_out),
+                    static_cast<long long>(p.counts.frames_dropped),
+                    static_cast<long long>(p.counts.frames_skipped),
+                    static_cast<long long>(p.counts.errors));
+    } else {
+      std::snprintf(buf, sizeof buf, "  %-20s %-34s %7s %7s %8s %8s %7s\n", p.name.c_str(),
+                    ended.c_str(), "-", "-", "-", "-", "-");
+    }
+    out << buf;
+  }
+  // Frames the RGB-D subscribers never received (lost in transport or not yet published).
+  const Process* player = nullptr;
+  for (const Process& p : processes) {
+    if (p.name == kPlayer) player = &p;
+  }
+  int64_t not_received = 0;
+  bool transport_known = false;
+  if (player && player->counts.known) {
+    for (const Process& p : processes) {
+      if ((p.name == kDepthFilter || p.name == kFrontend) && p.counts.known) {
+        not_received += std::max<int64_t>(0, player->counts.frames_out - p.counts.frames_in);
+        transport_known = true;
+      }
+    }
+  }
+  out << "launch.frames_published: " << frames_published << "\n";
+  out << "launch.poses_seen: " << poses_seen << "\n";
+  out << "launch.trajectory_poses: " << trajectory_poses << "  # " << trajectory_path << "\n";
+  out << "launch.dropped_total: " << droppedTotal()
+      << "  # sum of frames_dropped over nodes (a frame dropped upstream may count again "
+         "downstream)\n";
+  if (frames_published >= 0 && trajectory_poses >= 0) {
+    out << "launch.frames_without_pose: "
+        << std::max<int64_t>(0, frames_published - trajectory_poses)
+        << "  # published minus trajectory poses\n";
+  }
+  if (transport_known) {
+    out << "launch.frames_not_received: " << not_received
+        << "  # player out minus depth-filter/frontend in\n";
+  }
+  if (lockstep && player && player->counts.known) {
+    out << "launch.lockstep_timeouts: " << player->counts.errors
+        << "  # poses the player gave up waiting for (player errors)\n";
+  }
+  out << "launch.wall_s: " << wall_s << "\n";
+  out << "launch.result: " << (ok() ? "ok" : "FAILED") << "\n";
+  for (const std::string& f : failures) out << "launch.failure: " << f << "\n";
+  return out.str();
+}
+
+int64_t countTrajectoryLines(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return -1;
+  int64_t n = 0;
+  for (std::string line; std::getline(in, line);) {
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    ++n;
+  }
+  return n;
+}
+
+std::string tailOfFile(const std::string& path, int max_lines) {
+  std::ifstream in(path);
+  if (!in) return {};
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) {
+    lines.push_back(line);
+    if (static_cast<int>(lines.size()) > max_lines) lines.erase(lines.begin());
+  }
+  std::string s;
+  for (const std::string& l : lines) s += l + "\n";
+  return s;
+}
+
+}  // namespace pplvo::launch
