@@ -15,7 +15,7 @@ packages=(
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev python3 python3-numpy
   # private network namespaces for multi-process tests (ip, unshare)
-  iproute2 util-linux
+  iproute2 util-linux procps
   # headless viewer checks
   xvfb xauth
 )
@@ -30,12 +30,28 @@ for p in "${packages[@]}"; do
   fi
 done
 
+# LCM over UDP multicast (pplvo-launch, processes on a network) drops full VGA frames when
+# the kernel's socket receive buffer limit is the usual 208 KiB: LCM's own advice is to raise
+# net.core.rmem_max (docs/launch.md). Raise it to 4 MiB if lower, now and at boot.
+raise_rmem_max() {
+  local want=4194304 have
+  have=$(cat /proc/sys/net/core/rmem_max 2>/dev/null || echo "$want")
+  if [ "$have" -ge "$want" ]; then return 0; fi
+  if $SUDO sysctl -q -w net.core.rmem_max=$want net.core.rmem_default=$want 2>/dev/null; then
+    echo "net.core.rmem_max=$want" | $SUDO tee /etc/sysctl.d/60-pplvo-lcm.conf >/dev/null || true
+    echo "install_deps: net.core.rmem_max raised from $have to $want (LCM over UDP)"
+  else
+    echo "install_deps: warning: cannot raise net.core.rmem_max ($have): pplvo-launch falls back" \
+         "to compressed frames (docs/launch.md)" >&2
+  fi
+}
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install_deps: all ${#packages[@]} packages already installed"
-  exit 0
+else
+  echo "install_deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
-
-echo "install_deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+raise_rmem_max

@@ -7,6 +7,7 @@
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/depth_filter_node.h"
+#include "pplvo/pipeline/pipeline_args.h"
 
 namespace {
 
@@ -23,7 +24,10 @@ void usage() {
       "  --depth-model MODEL      sensor | cgm | ogm (ogm)\n"
       "  --max-translation-variance M2  window eviction threshold, m^2 (1e-4)\n"
       "  --max-pending N          frames waiting for their pose (30)\n"
-      "  --compress               zlib-compress published maps\n");
+      "  --compress               zlib-compress published maps\n"
+      "  --config FILE            pipeline YAML (config/pplvo.yaml): its depth_filter section\n"
+      "  --set KEY=VALUE          one configuration value (repeatable), e.g.\n"
+      "                           --set depth_filter.ogm.k_consistency=1\n");
 }
 
 }  // namespace
@@ -31,14 +35,18 @@ void usage() {
 int main(int argc, char** argv) {
   using namespace pplvo;
   nodes::DepthFilterNodeOptions o;
+  pipeline::PipelineArgs pa;
+  int window = 0;
+  double max_translation_variance_m2 = 0;
   ArgParser p;
+  pipeline::addPipelineOptions(p, &pa);  // --config, --set, --features (unused), --depth-model
   p.option("--lcm-url", &o.lcm_url)
       .option("--rgbd-channel", &o.rgbd_channel)
       .option("--pose-channel", &o.pose_channel)
       .option("--cgm-channel", &o.cgm_channel)
       .option("--fused-channel", &o.fused_channel)
       .option("--status-channel", &o.status_channel)
-      .option("--window", &o.ogm.max_window, 1, 100)
+      .option("--window", &window, 1, 100)
       .option("--max-pending", &o.max_pending, 1)
       .option("--max-translation-variance",
               [&](const std::string& v) -> std::string {
@@ -46,13 +54,8 @@ int main(int argc, char** argv) {
                 if (!parseDouble(v, &m2) || !(m2 > 0)) {
                   return "--max-translation-variance: expected a number > 0, got '" + v + "'";
                 }
-                o.ogm.max_translation_variance_m2 = m2;
+                max_translation_variance_m2 = m2;
                 return "";
-              })
-      .option("--depth-model",
-              [&](const std::string& v) -> std::string {
-                if (nodes::parseDepthModel(v, &o.model)) return "";
-                return "--depth-model: sensor, cgm or ogm, not '" + v + "'";
               })
       .flag("--compress", &o.compress);
   p.parse(argsFromArgv(argc, argv));
@@ -60,6 +63,15 @@ int main(int argc, char** argv) {
     usage();
     return 0;
   }
+  // The configuration's depth_filter section, then the explicit options on top.
+  pipeline::PipelineOptions pl;
+  pipeline::applyPipelineArgs(pa, &pl, &p);
+  o.model = pl.depth_filter.model;
+  o.sensor = pl.depth_filter.sensor;
+  o.cgm = pl.depth_filter.cgm;
+  o.ogm = pl.depth_filter.ogm;
+  if (window > 0) o.ogm.max_window = window;
+  if (max_translation_variance_m2 > 0) o.ogm.max_translation_variance_m2 = max_translation_variance_m2;
   const std::vector<std::string>& errors = p.errors();
   if (!errors.empty()) {
     for (const std::string& e : errors) std::fprintf(stderr, "pplvo-depth-filter: %s\n", e.c_str());

@@ -32,9 +32,9 @@ std::string launchUsage() {
          "                          (trajectory equal to pplvo-run's); default --rate 0 then\n"
          "  --rate R                player speed: 1 real time (default), 0 as fast as possible\n"
          "  --lockstep-timeout S    player's wait for each pose in lockstep mode (10)\n"
-         "  --config FILE           pipeline YAML (frontend and estimator)\n"
+         "  --config FILE           pipeline YAML (depth filter, frontend and estimator)\n"
          "  --features LIST         points,lines,planes (frontend and estimator)\n"
-         "  --set KEY=VALUE         configuration override (repeatable; frontend and estimator)\n"
+         "  --set KEY=VALUE         configuration override (repeatable; every pipeline process)\n"
          "  --depth-model M         sensor | cgm | ogm (depth filter)\n"
          "  --max-frames N          player stops after N frames (0 = all)\n"
          "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
@@ -347,6 +347,8 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::st
   ProcessSpec df = make(kDepthFilter);
   if (!o.depth_model.empty()) df.args.insert(df.args.end(), {"--depth-model", o.depth_model});
   if (o.compress) df.args.push_back("--compress");
+  if (!o.config.empty()) df.args.insert(df.args.end(), {"--config", o.config});
+  for (const std::string& kv : o.set) df.args.insert(df.args.end(), {"--set", kv});
   specs.push_back(df);
   for (const char* name : {kFrontend, kEstimator}) {
     ProcessSpec s = make(name);

@@ -187,7 +187,8 @@ TEST(LaunchSpecs, CommandLines) {
     return j;
   };
   EXPECT_EQ(joined(specs[0]),
-            std::string("/B/pplvo-depth-filter --lcm-url ") + kIsolatedUrl + " --depth-model cgm");
+            std::string("/B/pplvo-depth-filter --lcm-url ") + kIsolatedUrl +
+                " --depth-model cgm --config c.yaml --set frontend.points.max_points=500");
   EXPECT_EQ(joined(specs[2]), std::string("/B/pplvo-estimator --lcm-url ") + kIsolatedUrl +
                                   " --config c.yaml --features points,planes --set "
                                   "frontend.points.max_points=500");
