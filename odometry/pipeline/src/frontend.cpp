@@ -1,5 +1,6 @@
 #include "pplvo/pipeline/frontend.h"
 
+#include <future>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -51,24 +52,42 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
   f.camera = frame.camera;
   if (frame.bgr.empty()) {
     s.warning = "frame without colour image: no points or lines";
+    if (options_.families.planes && !cgm.depth_m.empty()) extractPlanesTimed(f, cgm, &s);
   } else {
     // Both extractors work on grey: convert once.
     cv::Mat gray;
     if (frame.bgr.channels() == 3) cv::cvtColor(frame.bgr, gray, cv::COLOR_BGR2GRAY);
     else if (frame.bgr.channels() == 4) cv::cvtColor(frame.bgr, gray, cv::COLOR_BGRA2GRAY);
     else gray = frame.bgr;
+    // Lines (the longest stage) run on a second thread while points and planes run here;
+    // each writes its own members of `f`, and the results do not depend on the threading.
+    FrameFeatures line_part;
+    double lines_ms = 0;
+    features::LineExtractionStats ls;
+    std::future<void> lines_job;
+    auto extractLines = [&] {
+      Stopwatch w;
+      ls = line_extractor_.extractInto(gray, frame.camera, line_part);
+      lines_ms = w.elapsedMs();
+    };
+    if (options_.families.lines) {
+      if (options_.parallel) lines_job = std::async(std::launch::async, extractLines);
+      else extractLines();
+    }
     if (options_.families.points) {
       ScopedStageTimer t(timings_, "points");
       const auto ps = point_extractor_.extractInto(gray, frame.camera, f);
       if (!ps.error.empty()) s.warning = "points: " + ps.error;
     }
+    if (options_.families.planes && !cgm.depth_m.empty()) extractPlanesTimed(f, cgm, &s);
+    if (lines_job.valid()) lines_job.get();
     if (options_.families.lines) {
-      ScopedStageTimer t(timings_, "lines");
-      const auto ls = line_extractor_.extractInto(gray, frame.camera, f);
+      timings_.add("lines", lines_ms);
       if (!ls.error.empty()) s.warning = "lines: " + ls.error;
+      f.lines = std::move(line_part.lines);
+      f.line_descriptors = line_part.line_descriptors;
     }
   }
-  if (options_.families.planes && !cgm.depth_m.empty()) extractPlanes(f, cgm, &s);
   s.points = static_cast<int>(f.points.size());
   s.lines = static_cast<int>(f.lines.size());
   s.planes = static_cast<int>(f.planes.size());
@@ -86,17 +105,47 @@ void Frontend::lift3d(FrameFeatures& features, const DepthWithVariance& fused,
     for (auto& l : features.lines) l.has_3d = false;
     return;
   }
+  // Planes of the fused depth on a second thread while points and lines are lifted here
+  // (disjoint members of `features`).
+  const bool planes = options_.families.planes && options_.planes_from_fused_depth;
+  FrontendStats plane_stats;
+  double planes_ms = 0;
+  std::vector<PlaneFeature> fused_planes;
+  cv::Mat fused_labels;
+  auto extractFusedPlanes = [&] {
+    Stopwatch w;
+    FrameFeatures tmp;
+    tmp.camera = features.camera;
+    extractPlanes(tmp, fused, &plane_stats);
+    fused_planes = std::move(tmp.planes);
+    fused_labels = tmp.plane_labels;
+    planes_ms = w.elapsedMs();
+  };
+  std::future<void> planes_job;
+  if (planes && options_.parallel) planes_job = std::async(std::launch::async, extractFusedPlanes);
   {
     ScopedStageTimer t(timings_, "lift");
     if (!features.points.empty()) s.points_3d = geometry::liftPoints(features, fused, options_.lift).points_lifted;
     if (!features.lines.empty()) s.lines_3d = geometry::liftLines(features, fused, options_.lift).lines_lifted;
   }
-  if (options_.families.planes && options_.planes_from_fused_depth) {
-    extractPlanes(features, fused, &s);
+  if (planes) {
+    if (planes_job.valid()) planes_job.get();
+    else extractFusedPlanes();
+    timings_.add("planes", planes_ms);
+    if (!plane_stats.warning.empty()) s.warning = plane_stats.warning;
+    features.planes = std::move(fused_planes);
+    features.plane_labels = fused_labels;
   }
   s.points = static_cast<int>(features.points.size());
   s.lines = static_cast<int>(features.lines.size());
   s.planes = static_cast<int>(features.planes.size());
+}
+
+void Frontend::extractPlanesTimed(FrameFeatures& features, const DepthWithVariance& depth,
+                                  FrontendStats* stats) {
+  Stopwatch w;
+  extractPlanes(features, depth, stats);
+  timings_.add("planes", w.elapsedMs());
 }
 
 void Frontend::extractPlanes(FrameFeatures& features, const DepthWithVariance& depth,
@@ -108,7 +157,6 @@ void Frontend::extractPlanes(FrameFeatures& features, const DepthWithVariance& d
     features.plane_labels = cv::Mat();
     return;
   }
-  ScopedStageTimer t(timings_, "planes");
   // The extractor holds buffers sized for one camera: rebuild only when the camera changes.
   if (!plane_extractor_ || plane_camera_ != features.camera) {
     plane_extractor_ = std::make_unique<geometry::PlaneExtractor>(features.camera, options_.planes);

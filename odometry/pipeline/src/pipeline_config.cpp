@@ -424,6 +424,9 @@ void listFields(V& v, FrontendOptions& o) {
   v.field("planes_from_fused_depth", o.planes_from_fused_depth,
           "extract the planes again on the fused depth once the pose is known (Sec. 5.3: "
           "\"plane extraction must be called once more after the depth fusion\")");
+  v.field("parallel", o.parallel,
+          "lines on a second thread during points and planes, fused-depth planes during "
+          "lifting (same results)");
 }
 
 template <class V>

@@ -141,6 +141,28 @@ TEST(OdometryPipeline, ReferenceFeaturesCarry3dEstimates) {
   EXPECT_EQ(ref.seq, frames()[0].frame.seq);
 }
 
+TEST(OdometryPipeline, ParallelFrontendGivesTheSameResults) {
+  PipelineOptions seq_opts, par_opts;
+  seq_opts.frontend.parallel = false;
+  par_opts.frontend.parallel = true;
+  OdometryPipeline a(seq_opts), b(par_opts);
+  for (int i = 0; i < 6; ++i) {
+    const PipelineFrameResult ra = a.process(frames()[i].frame);
+    const PipelineFrameResult rb = b.process(frames()[i].frame);
+    EXPECT_EQ(ra.pose.T_w_c.matrix(), rb.pose.T_w_c.matrix()) << i;
+    EXPECT_EQ(ra.frontend.lines, rb.frontend.lines) << i;
+    EXPECT_EQ(ra.frontend.planes, rb.frontend.planes) << i;
+  }
+  const FrameFeatures& fa = *a.reference();
+  const FrameFeatures& fb = *b.reference();
+  ASSERT_EQ(fa.lines.size(), fb.lines.size());
+  for (size_t i = 0; i < fa.lines.size(); ++i) {
+    EXPECT_EQ(fa.lines[i].px1, fb.lines[i].px1);
+    EXPECT_EQ(fa.lines[i].line.p1, fb.lines[i].line.p1);
+  }
+  EXPECT_EQ(cv::norm(fa.plane_labels, fb.plane_labels, cv::NORM_INF), 0.0);
+}
+
 TEST(FeatureFamilies, ParsesListsAndRejectsUnknownNames) {
   FeatureFamilies f;
   ASSERT_TRUE(parseFeatureFamilies("points,planes", &f));

@@ -37,6 +37,9 @@ struct FrontendOptions {
   geometry::LiftOptions lift;
   /// Stage 3D extracts the planes again on the fused depth (paper); false keeps the C-GM ones.
   bool planes_from_fused_depth = true;
+  /// Lines on a second thread during points and planes (stage 2D), fused-depth planes during
+  /// lifting (stage 3D). The results are the same either way.
+  bool parallel = true;
 };
 
 /// What the frontend did with one frame (for counters and the run summary).
@@ -66,8 +69,11 @@ class Frontend {
   const StageTimings& timings() const { return timings_; }
 
  private:
+  /// Planes of `depth` into `features` (no timing: may run on a second thread).
   void extractPlanes(FrameFeatures& features, const DepthWithVariance& depth,
                      FrontendStats* stats);
+  void extractPlanesTimed(FrameFeatures& features, const DepthWithVariance& depth,
+                          FrontendStats* stats);
 
   FrontendOptions options_;
   features::PointExtractor point_extractor_;
