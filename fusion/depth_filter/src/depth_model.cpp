@@ -3,18 +3,25 @@
 namespace pplvo::depth_filter {
 
 bool parseDepthModel(const std::string& text, DepthModel* model) {
-  if (text == "sensor") *model = DepthModel::kSensor;
-  else if (text == "cgm") *model = DepthModel::kCgm;
-  else if (text == "ogm") *model = DepthModel::kOgm;
-  else return false;
+  if (text == "sensor")
+    *model = DepthModel::kSensor;
+  else if (text == "cgm")
+    *model = DepthModel::kCgm;
+  else if (text == "ogm")
+    *model = DepthModel::kOgm;
+  else
+    return false;
   return true;
 }
 
 const char* toString(DepthModel model) {
   switch (model) {
-    case DepthModel::kSensor: return "sensor";
-    case DepthModel::kCgm: return "cgm";
-    case DepthModel::kOgm: return "ogm";
+    case DepthModel::kSensor:
+      return "sensor";
+    case DepthModel::kCgm:
+      return "cgm";
+    case DepthModel::kOgm:
+      return "ogm";
   }
   return "?";
 }

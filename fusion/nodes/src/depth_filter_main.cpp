@@ -71,7 +71,8 @@ int main(int argc, char** argv) {
   o.cgm = pl.depth_filter.cgm;
   o.ogm = pl.depth_filter.ogm;
   if (window > 0) o.ogm.max_window = window;
-  if (max_translation_variance_m2 > 0) o.ogm.max_translation_variance_m2 = max_translation_variance_m2;
+  if (max_translation_variance_m2 > 0)
+    o.ogm.max_translation_variance_m2 = max_translation_variance_m2;
   const std::vector<std::string>& errors = p.errors();
   if (!errors.empty()) {
     for (const std::string& e : errors) std::fprintf(stderr, "pplvo-depth-filter: %s\n", e.c_str());

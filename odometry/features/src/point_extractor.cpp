@@ -4,7 +4,6 @@
 #include <cctype>
 #include <cmath>
 #include <numeric>
-
 #include <opencv2/imgproc.hpp>
 
 namespace pplvo::features {
@@ -12,20 +11,29 @@ namespace pplvo::features {
 bool parsePointDetector(const std::string& name, PointDetector* out) {
   std::string n = name;
   for (auto& ch : n) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  if (n == "orb") *out = PointDetector::kOrb;
-  else if (n == "akaze") *out = PointDetector::kAkaze;
-  else if (n == "sift") *out = PointDetector::kSift;
-  else if (n == "brisk") *out = PointDetector::kBrisk;
-  else return false;
+  if (n == "orb")
+    *out = PointDetector::kOrb;
+  else if (n == "akaze")
+    *out = PointDetector::kAkaze;
+  else if (n == "sift")
+    *out = PointDetector::kSift;
+  else if (n == "brisk")
+    *out = PointDetector::kBrisk;
+  else
+    return false;
   return true;
 }
 
 const char* pointDetectorName(PointDetector d) {
   switch (d) {
-    case PointDetector::kOrb: return "orb";
-    case PointDetector::kAkaze: return "akaze";
-    case PointDetector::kSift: return "sift";
-    case PointDetector::kBrisk: return "brisk";
+    case PointDetector::kOrb:
+      return "orb";
+    case PointDetector::kAkaze:
+      return "akaze";
+    case PointDetector::kSift:
+      return "sift";
+    case PointDetector::kBrisk:
+      return "brisk";
   }
   return "?";
 }
@@ -40,8 +48,10 @@ int candidateCount(const PointExtractorOptions& o) {
 cv::Mat toGray(const cv::Mat& image) {
   if (image.channels() == 1) return image;
   cv::Mat gray;
-  if (image.channels() == 3) cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
-  else if (image.channels() == 4) cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+  if (image.channels() == 3)
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  else if (image.channels() == 4)
+    cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
   return gray;
 }
 
@@ -78,7 +88,8 @@ namespace {
 class SeparationIndex {
  public:
   SeparationIndex(int width, int height, double r)
-      : r_(r), cols_(r > 0 ? static_cast<int>(width / r) + 1 : 0),
+      : r_(r),
+        cols_(r > 0 ? static_cast<int>(width / r) + 1 : 0),
         rows_(r > 0 ? static_cast<int>(height / r) + 1 : 0),
         cells_(static_cast<size_t>(cols_) * rows_) {}
   bool free(const cv::Point2f& p) const {
@@ -113,9 +124,8 @@ std::vector<int> selectSpread(const std::vector<cv::KeyPoint>& keypoints, int wi
                               double min_separation_px) {
   std::vector<int> order(keypoints.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return keypoints[a].response > keypoints[b].response;
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return keypoints[a].response > keypoints[b].response; });
   if (max_keep <= 0) return {};
   SeparationIndex sep(std::max(1, width), std::max(1, height), min_separation_px);
   if (min_separation_px > 0) {
@@ -139,10 +149,10 @@ std::vector<int> selectSpread(const std::vector<cv::KeyPoint>& keypoints, int wi
   out.reserve(max_keep);
   for (int idx : order) {
     const auto& kp = keypoints[idx];
-    const int cx = std::clamp(static_cast<int>(kp.pt.x * grid_cols / std::max(1, width)), 0,
-                              grid_cols - 1);
-    const int cy = std::clamp(static_cast<int>(kp.pt.y * grid_rows / std::max(1, height)), 0,
-                              grid_rows - 1);
+    const int cx =
+        std::clamp(static_cast<int>(kp.pt.x * grid_cols / std::max(1, width)), 0, grid_cols - 1);
+    const int cy =
+        std::clamp(static_cast<int>(kp.pt.y * grid_rows / std::max(1, height)), 0, grid_rows - 1);
     int& count = per_cell[cy * grid_cols + cx];
     if (count < quota) {
       ++count;
@@ -236,9 +246,9 @@ PointExtraction PointExtractor::extract(const cv::Mat& image, const PinholeCamer
     result.stats.candidates = static_cast<int>(candidates.size());
     std::vector<cv::KeyPoint> selected;
     if (options_.grid_bucketing) {
-      const auto idx = selectSpread(candidates, gray.cols, gray.rows, options_.max_points,
-                                    options_.grid_cols, options_.grid_rows,
-                                    options_.min_separation_px);
+      const auto idx =
+          selectSpread(candidates, gray.cols, gray.rows, options_.max_points, options_.grid_cols,
+                       options_.grid_rows, options_.min_separation_px);
       selected.reserve(idx.size());
       for (int i : idx) selected.push_back(candidates[i]);
     } else {

@@ -3,10 +3,10 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/args.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/estimator_node.h"
-#include "pplvo/core/args.h"
 #include "pplvo/pipeline/pipeline_args.h"
 
 namespace {
@@ -47,7 +47,8 @@ int main(int argc, char** argv) {
   pipeline::applyPipelineArgs(pa, &pipeline_options, &p);
   o.odometry = pipeline_options.odometry;
   if (!p.ok()) {
-    for (const std::string& e : p.errors()) std::fprintf(stderr, "pplvo-estimator: %s\n", e.c_str());
+    for (const std::string& e : p.errors())
+      std::fprintf(stderr, "pplvo-estimator: %s\n", e.c_str());
     usage();
     return 2;
   }

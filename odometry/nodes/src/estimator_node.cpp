@@ -83,8 +83,7 @@ void EstimatorNode::handleFeatures3d(const pplvo_msgs::features_t& msg) {
     // Only the last posed frame can serve as a reference.
     ++counters_.frames_skipped;
     counters_.last_warning = "3D features of frame " + std::to_string(msg.seq) +
-                             " are not the reference (" + std::to_string(odometry_.lastSeq()) +
-                             ")";
+                             " are not the reference (" + std::to_string(odometry_.lastSeq()) + ")";
     return;
   }
   {
@@ -115,11 +114,21 @@ void EstimatorNode::publish(const TrackerOutput& out, const FrameFeatures& frame
   pose.stamp = frame.stamp;
   (void)stats;  // pose_t carries the inliers the estimate used (toFramePose)
   switch (pose.status) {
-    case TrackingStatus::kFirstFrame: ++counts_.first; break;
-    case TrackingStatus::kTracking: ++counts_.tracking; break;
-    case TrackingStatus::kVelocityModel: ++counts_.velocity_model; break;
-    case TrackingStatus::kLost: ++counts_.lost; break;
-    case TrackingStatus::kReinitialised: ++counts_.reinitialised; break;
+    case TrackingStatus::kFirstFrame:
+      ++counts_.first;
+      break;
+    case TrackingStatus::kTracking:
+      ++counts_.tracking;
+      break;
+    case TrackingStatus::kVelocityModel:
+      ++counts_.velocity_model;
+      break;
+    case TrackingStatus::kLost:
+      ++counts_.lost;
+      break;
+    case TrackingStatus::kReinitialised:
+      ++counts_.reinitialised;
+      break;
   }
   {
     ScopedStageTimer t(timings_, "encode");

@@ -3,10 +3,10 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/args.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/nodes/frontend_node.h"
-#include "pplvo/core/args.h"
 #include "pplvo/pipeline/pipeline_args.h"
 
 namespace {

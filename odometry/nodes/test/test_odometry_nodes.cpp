@@ -4,18 +4,17 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
-#include <limits>
-
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <pplvo_msgs/features_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 
+#include "pplvo/core/args.h"
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/convert_pose.h"
 #include "pplvo/nodes/estimator_node.h"
 #include "pplvo/nodes/frontend_node.h"
-#include "pplvo/core/args.h"
 #include "pplvo/pipeline/pipeline_args.h"
 #include "pplvo/synth/synthetic_sequence.h"
 
@@ -250,9 +249,9 @@ TEST(PipelineArgs, ConfigSetFeaturesAndDepthModel) {
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   const std::string config = std::string(std::getenv("PPLVO_SOURCE_DIR")) + "/config/pplvo.yaml";
-  ASSERT_TRUE(p.parse({"--config", config, "--set", "features=[points, lines]",
-                       "--set=odometry.tracker.estimator.plane_scale_alpha=1",
-                       "--depth-model", "cgm"}));
+  ASSERT_TRUE(
+      p.parse({"--config", config, "--set", "features=[points, lines]",
+               "--set=odometry.tracker.estimator.plane_scale_alpha=1", "--depth-model", "cgm"}));
   pipeline::PipelineOptions o;
   pipeline::applyPipelineArgs(pa, &o, &p);
   EXPECT_TRUE(p.ok());

@@ -3,10 +3,10 @@
 // the algorithm; evaluations of the system use pplvo-run (the processes over memq://).
 //   bench_pipeline DATASET [--config FILE] [--features points,lines,planes] [--depth-model ogm]
 //                  [--set dotted.key=value]... [--output TRAJ] [--max-frames N]
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <algorithm>
 #include <string>
 
 #include "pplvo/core/trajectory.h"
@@ -17,8 +17,9 @@
 int main(int argc, char** argv) {
   using namespace pplvo;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_pipeline DATASET [--config FILE] [--features LIST] "
-                         "[--depth-model M] [--set key=value]... [--output TRAJ] [--max-frames N]\n");
+    std::fprintf(stderr,
+                 "usage: bench_pipeline DATASET [--config FILE] [--features LIST] "
+                 "[--depth-model M] [--set key=value]... [--output TRAJ] [--max-frames N]\n");
     return 2;
   }
   const std::string dir = argv[1];
@@ -62,16 +63,17 @@ int main(int argc, char** argv) {
     sum_pl += r.odometry.plane_matches;
     traj.push_back({f.stamp, 0.0, r.pose.T_w_c});
     if (std::getenv("PPLVO_DEBUG"))
-      std::printf("%zu %s pts %d/%d lines %d/%d planes %d/%d win %d\n", i,
-                  toString(r.pose.status), r.odometry.point_matches, r.frontend.points,
-                  r.odometry.line_matches, r.frontend.lines, r.odometry.plane_matches,
-                  r.frontend.planes, r.fused_window_length);
+      std::printf("%zu %s pts %d/%d lines %d/%d planes %d/%d win %d\n", i, toString(r.pose.status),
+                  r.odometry.point_matches, r.frontend.points, r.odometry.line_matches,
+                  r.frontend.lines, r.odometry.plane_matches, r.frontend.planes,
+                  r.fused_window_length);
   }
   const double secs = wall.elapsedMs() / 1000.0;
   std::printf("%zu frames in %.2f s (%.1f frames/s incl. loading)\n", n, secs, n / secs);
   std::printf("status: first %d tracking %d velocity %d lost %d reinit %d\n", counts[0], counts[1],
               counts[2], counts[3], counts[4]);
-  std::printf("mean matches: points %.1f lines %.1f planes %.2f\n", sum_p / n, sum_l / n, sum_pl / n);
+  std::printf("mean matches: points %.1f lines %.1f planes %.2f\n", sum_p / n, sum_l / n,
+              sum_pl / n);
   std::printf("%s", pipe.timings().table().c_str());
   if (!output.empty()) writeTumTrajectory(output, traj);
   return 0;

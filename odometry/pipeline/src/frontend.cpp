@@ -12,11 +12,16 @@ bool parseFeatureFamilies(const std::string& text, FeatureFamilies* out) {
   std::string item;
   bool any = false;
   while (std::getline(ss, item, ',')) {
-    if (item == "points") f.points = true;
-    else if (item == "lines") f.lines = true;
-    else if (item == "planes") f.planes = true;
-    else if (item == "all") f = {true, true, true};
-    else return false;
+    if (item == "points")
+      f.points = true;
+    else if (item == "lines")
+      f.lines = true;
+    else if (item == "planes")
+      f.planes = true;
+    else if (item == "all")
+      f = {true, true, true};
+    else
+      return false;
     any = true;
   }
   if (!any) return false;
@@ -56,9 +61,12 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
   } else {
     // Both extractors work on grey: convert once.
     cv::Mat gray;
-    if (frame.bgr.channels() == 3) cv::cvtColor(frame.bgr, gray, cv::COLOR_BGR2GRAY);
-    else if (frame.bgr.channels() == 4) cv::cvtColor(frame.bgr, gray, cv::COLOR_BGRA2GRAY);
-    else gray = frame.bgr;
+    if (frame.bgr.channels() == 3)
+      cv::cvtColor(frame.bgr, gray, cv::COLOR_BGR2GRAY);
+    else if (frame.bgr.channels() == 4)
+      cv::cvtColor(frame.bgr, gray, cv::COLOR_BGRA2GRAY);
+    else
+      gray = frame.bgr;
     // Lines (the longest stage) run on a second thread while points and planes run here;
     // each writes its own members of `f`, and the results do not depend on the threading.
     FrameFeatures line_part;
@@ -71,8 +79,10 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
       lines_ms = w.elapsedMs();
     };
     if (options_.families.lines) {
-      if (options_.parallel) lines_job = std::async(std::launch::async, extractLines);
-      else extractLines();
+      if (options_.parallel)
+        lines_job = std::async(std::launch::async, extractLines);
+      else
+        extractLines();
     }
     if (options_.families.points) {
       ScopedStageTimer t(timings_, "points");
@@ -125,12 +135,16 @@ void Frontend::lift3d(FrameFeatures& features, const DepthWithVariance& fused,
   if (planes && options_.parallel) planes_job = std::async(std::launch::async, extractFusedPlanes);
   {
     ScopedStageTimer t(timings_, "lift");
-    if (!features.points.empty()) s.points_3d = geometry::liftPoints(features, fused, options_.lift).points_lifted;
-    if (!features.lines.empty()) s.lines_3d = geometry::liftLines(features, fused, options_.lift).lines_lifted;
+    if (!features.points.empty())
+      s.points_3d = geometry::liftPoints(features, fused, options_.lift).points_lifted;
+    if (!features.lines.empty())
+      s.lines_3d = geometry::liftLines(features, fused, options_.lift).lines_lifted;
   }
   if (planes) {
-    if (planes_job.valid()) planes_job.get();
-    else extractFusedPlanes();
+    if (planes_job.valid())
+      planes_job.get();
+    else
+      extractFusedPlanes();
     timings_.add("planes", planes_ms);
     if (!plane_stats.warning.empty()) s.warning = plane_stats.warning;
     features.planes = std::move(fused_planes);

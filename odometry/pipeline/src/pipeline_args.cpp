@@ -24,8 +24,10 @@ void applyPipelineArgs(const PipelineArgs& args, PipelineOptions* options, ArgPa
   }
   if (!args.features.empty()) {
     FeatureFamilies f;
-    if (parseFeatureFamilies(args.features, &f)) options->setFamilies(f);
-    else parser->addError("--features: a list of points, lines, planes, not '" + args.features + "'");
+    if (parseFeatureFamilies(args.features, &f))
+      options->setFamilies(f);
+    else
+      parser->addError("--features: a list of points, lines, planes, not '" + args.features + "'");
   }
   if (!args.depth_model.empty() &&
       !depth_filter::parseDepthModel(args.depth_model, &options->depth_filter.model)) {

@@ -35,7 +35,8 @@ struct RunStats {
 
 /// Runs the pipeline over the synthetic frames; errors of T_w_c against the truth expressed
 /// in the first camera (the pipeline's world frame).
-RunStats run(const PipelineOptions& options, const std::function<void(int, RgbdFrame&)>& edit = {}) {
+RunStats run(const PipelineOptions& options,
+             const std::function<void(int, RgbdFrame&)>& edit = {}) {
   OdometryPipeline pipe(options);
   const auto& f = frames();
   RunStats s;
@@ -46,10 +47,12 @@ RunStats run(const PipelineOptions& options, const std::function<void(int, RgbdF
     frame.depth_m = frame.depth_m.clone();
     if (edit) edit(i, frame);
     const PipelineFrameResult r = pipe.process(frame);
-    if (r.pose.status == TrackingStatus::kTracking) ++s.tracking;
-    else if (i > 0) ++s.other;
-    s.all_finite = s.all_finite && r.pose.T_w_c.matrix().allFinite() &&
-                   r.pose.rel_covariance.allFinite();
+    if (r.pose.status == TrackingStatus::kTracking)
+      ++s.tracking;
+    else if (i > 0)
+      ++s.other;
+    s.all_finite =
+        s.all_finite && r.pose.T_w_c.matrix().allFinite() && r.pose.rel_covariance.allFinite();
     const Pose3 truth = f[0].T_w_c.inverse() * f[i].T_w_c;
     const Pose3 err = truth.inverse() * r.pose.T_w_c;
     const double t = err.translation().norm();
@@ -107,10 +110,10 @@ TEST(OdometryPipeline, FramesWithoutDepthOrTextureFallBackAndRecover) {
     if (i == 10 || i == 11 || i == 20 || i == 21) f.depth_m.setTo(0.0f);
     if (i == 20 || i == 21) f.bgr.setTo(cv::Scalar(128, 128, 128));
   });
-  std::printf("with gaps: tracking %d/%d, other %d, drift max %.2f mm\n", s.tracking,
-              kFrames - 1, s.other, 1e3 * s.max_t_m);
+  std::printf("with gaps: tracking %d/%d, other %d, drift max %.2f mm\n", s.tracking, kFrames - 1,
+              s.other, 1e3 * s.max_t_m);
   EXPECT_TRUE(s.all_finite);
-  EXPECT_GE(s.other, 2);                  // at least the textureless frames are not "tracking"
+  EXPECT_GE(s.other, 2);                   // at least the textureless frames are not "tracking"
   EXPECT_GE(s.tracking, kFrames - 1 - 6);  // the rest, including after the gaps, is tracked
   EXPECT_LT(s.max_t_m, 0.10);
 }

@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   pipeline::applyPipelineArgs(pa, &o.pipeline, &p);
-  if (!replay::parseStage(stage, &o.stage)) p.addError("--stage: depth-filter, frontend or estimator");
+  if (!replay::parseStage(stage, &o.stage))
+    p.addError("--stage: depth-filter, frontend or estimator");
   if (o.log.empty()) p.addError("--log is required");
   if (!p.ok()) {
     for (const std::string& e : p.errors()) std::fprintf(stderr, "pplvo-replay: %s\n", e.c_str());

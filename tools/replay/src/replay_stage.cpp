@@ -16,18 +16,25 @@
 namespace pplvo::replay {
 
 bool parseStage(const std::string& text, Stage* stage) {
-  if (text == "depth-filter") *stage = Stage::kDepthFilter;
-  else if (text == "frontend") *stage = Stage::kFrontend;
-  else if (text == "estimator") *stage = Stage::kEstimator;
-  else return false;
+  if (text == "depth-filter")
+    *stage = Stage::kDepthFilter;
+  else if (text == "frontend")
+    *stage = Stage::kFrontend;
+  else if (text == "estimator")
+    *stage = Stage::kEstimator;
+  else
+    return false;
   return true;
 }
 
 const char* toString(Stage stage) {
   switch (stage) {
-    case Stage::kDepthFilter: return "depth-filter";
-    case Stage::kFrontend: return "frontend";
-    case Stage::kEstimator: return "estimator";
+    case Stage::kDepthFilter:
+      return "depth-filter";
+    case Stage::kFrontend:
+      return "frontend";
+    case Stage::kEstimator:
+      return "estimator";
   }
   return "?";
 }
@@ -43,11 +50,11 @@ bool ReplayResult::allIdentical() const {
 std::string ReplayResult::text() const {
   std::ostringstream out;
   if (failed) out << "FAILED: " << error << "\n";
-  out << "inputs fed: " << inputs_fed << (log_truncated ? " (log truncated: read up to the cut)" : "")
-      << "\n";
+  out << "inputs fed: " << inputs_fed
+      << (log_truncated ? " (log truncated: read up to the cut)" : "") << "\n";
   for (const ChannelComparison& c : outputs) {
-    out << c.channel << ": recorded " << c.recorded << ", replayed " << c.replayed
-        << ", identical " << c.identical;
+    out << c.channel << ": recorded " << c.recorded << ", replayed " << c.replayed << ", identical "
+        << c.identical;
     if (c.first_mismatch >= 0) out << ", first difference at message " << c.first_mismatch;
     out << (c.allIdentical() ? "  [same]" : "  [DIFFERENT]") << "\n";
   }
@@ -151,8 +158,10 @@ ReplayResult replayStage(const ReplayOptions& options) {
       cmp.recorded = static_cast<int64_t>(want.size());
       cmp.replayed = static_cast<int64_t>(got.size());
       for (size_t i = 0; i < std::min(want.size(), got.size()); ++i) {
-        if (want[i] == got[i]) ++cmp.identical;
-        else if (cmp.first_mismatch < 0) cmp.first_mismatch = static_cast<int64_t>(i);
+        if (want[i] == got[i])
+          ++cmp.identical;
+        else if (cmp.first_mismatch < 0)
+          cmp.first_mismatch = static_cast<int64_t>(i);
       }
       if (cmp.first_mismatch < 0 && want.size() != got.size()) {
         cmp.first_mismatch = static_cast<int64_t>(std::min(want.size(), got.size()));
@@ -161,8 +170,8 @@ ReplayResult replayStage(const ReplayOptions& options) {
     }
     if (result.inputs_fed == 0) {
       result.failed = true;
-      result.error = "the log has no message on the inputs of the " +
-                     std::string(toString(options.stage));
+      result.error =
+          "the log has no message on the inputs of the " + std::string(toString(options.stage));
     }
   } catch (const std::exception& e) {
     result.failed = true;

@@ -1,7 +1,6 @@
 // Replay of each stage from a log recorded by pplvo-run: identical output with the recording's
 // configuration, detected differences with another one, truncated and missing logs handled.
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <filesystem>

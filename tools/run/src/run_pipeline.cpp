@@ -1,8 +1,8 @@
 #include "pplvo/run/run_pipeline.h"
 
 #include <cstdio>
-#include <memory>
 #include <lcm/lcm-cpp.hpp>
+#include <memory>
 #include <pplvo_msgs/pose_t.hpp>
 #include <sstream>
 
@@ -33,11 +33,21 @@ class PoseCollector {
       result_.trajectory.push_back(s);
       ++result_.poses;
       switch (p.status) {
-        case TrackingStatus::kFirstFrame: ++result_.first; break;
-        case TrackingStatus::kTracking: ++result_.tracking; break;
-        case TrackingStatus::kVelocityModel: ++result_.velocity_model; break;
-        case TrackingStatus::kLost: ++result_.lost; break;
-        case TrackingStatus::kReinitialised: ++result_.reinitialised; break;
+        case TrackingStatus::kFirstFrame:
+          ++result_.first;
+          break;
+        case TrackingStatus::kTracking:
+          ++result_.tracking;
+          break;
+        case TrackingStatus::kVelocityModel:
+          ++result_.velocity_model;
+          break;
+        case TrackingStatus::kLost:
+          ++result_.lost;
+          break;
+        case TrackingStatus::kReinitialised:
+          ++result_.reinitialised;
+          break;
       }
     });
   }
@@ -105,7 +115,8 @@ std::string RunResult::text() const {
                   static_cast<long long>(n.counters.frames_skipped),
                   static_cast<long long>(n.counters.errors));
     out << buf;
-    if (!n.counters.last_warning.empty()) out << "  last warning: " << n.counters.last_warning << "\n";
+    if (!n.counters.last_warning.empty())
+      out << "  last warning: " << n.counters.last_warning << "\n";
     std::istringstream table(n.timings.table());
     for (std::string line; std::getline(table, line);) out << "  " << line << "\n";
   }
@@ -194,7 +205,8 @@ RunResult runPipeline(const RunOptions& options) {
     result.nodes.push_back({"pplvo-player", player.counters(), player.timings()});
     result.nodes.push_back(
         {nodes::DepthFilterNode::kName, depth_filter.counters(), depth_filter.timings()});
-    result.nodes.push_back({nodes::FrontendNode::kName, frontend.counters(), frontend.allTimings()});
+    result.nodes.push_back(
+        {nodes::FrontendNode::kName, frontend.counters(), frontend.allTimings()});
     result.nodes.push_back(
         {nodes::EstimatorNode::kName, estimator.counters(), estimator.allTimings()});
     if (recorder && recorder->counters().errors > 0) {

@@ -84,7 +84,8 @@ TEST_F(RunPipelineTest, TracksTheSyntheticSequenceWithBoundedDrift) {
   EXPECT_LT(max_t, 0.03);  // observed < 1 cm
   // The summary names every node and is valid-looking YAML.
   const std::string y = r.yaml();
-  for (const char* node : {"pplvo-player", "pplvo-depth-filter", "pplvo-frontend", "pplvo-estimator"}) {
+  for (const char* node :
+       {"pplvo-player", "pplvo-depth-filter", "pplvo-frontend", "pplvo-estimator"}) {
     EXPECT_NE(y.find(node), std::string::npos) << node;
   }
 }
@@ -128,9 +129,10 @@ TEST_F(RunPipelineTest, CommandLineWritesTrajectoryAndSummary) {
   const std::string bin = std::string(std::getenv("PPLVO_BINARY_DIR")) + "/bin/pplvo-run";
   const fs::path out = fs::path(sequenceDir() + "_out");
   fs::create_directories(out);
-  const std::string cmd = bin + " --dataset " + sequenceDir() + " --max-frames 8 --features points,planes --output " +
-                          (out / "traj.txt").string() + " --summary " + (out / "summary.yaml").string() +
-                          " --quiet 2>/dev/null";
+  const std::string cmd = bin + " --dataset " + sequenceDir() +
+                          " --max-frames 8 --features points,planes --output " +
+                          (out / "traj.txt").string() + " --summary " +
+                          (out / "summary.yaml").string() + " --quiet 2>/dev/null";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const TrajectoryReadResult t = readTumTrajectory((out / "traj.txt").string());
   EXPECT_EQ(t.poses.size(), 8u);
@@ -138,7 +140,8 @@ TEST_F(RunPipelineTest, CommandLineWritesTrajectoryAndSummary) {
   const std::string summary((std::istreambuf_iterator<char>(s)), {});
   EXPECT_NE(summary.find("poses: 8"), std::string::npos) << summary;
   // Bad options: exit status 2, nothing run.
-  EXPECT_EQ(WEXITSTATUS(std::system((bin + " --dataset x --features surf 2>/dev/null").c_str())), 2);
+  EXPECT_EQ(WEXITSTATUS(std::system((bin + " --dataset x --features surf 2>/dev/null").c_str())),
+            2);
   EXPECT_EQ(WEXITSTATUS(std::system((bin + " --output y 2>/dev/null >/dev/null").c_str())), 2);
   fs::remove_all(out);
 }

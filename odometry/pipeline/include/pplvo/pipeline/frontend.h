@@ -70,8 +70,7 @@ class Frontend {
 
  private:
   /// Planes of `depth` into `features` (no timing: may run on a second thread).
-  void extractPlanes(FrameFeatures& features, const DepthWithVariance& depth,
-                     FrontendStats* stats);
+  void extractPlanes(FrameFeatures& features, const DepthWithVariance& depth, FrontendStats* stats);
   void extractPlanesTimed(FrameFeatures& features, const DepthWithVariance& depth,
                           FrontendStats* stats);
 

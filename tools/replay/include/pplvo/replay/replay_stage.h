@@ -24,9 +24,9 @@ struct ReplayOptions {
 
 struct ChannelComparison {
   std::string channel;
-  int64_t recorded = 0;   ///< messages on this channel in the log
-  int64_t replayed = 0;   ///< messages the replayed stage published on it
-  int64_t identical = 0;  ///< byte-identical pairs (in order)
+  int64_t recorded = 0;         ///< messages on this channel in the log
+  int64_t replayed = 0;         ///< messages the replayed stage published on it
+  int64_t identical = 0;        ///< byte-identical pairs (in order)
   int64_t first_mismatch = -1;  ///< index of the first differing pair (-1: none)
   bool allIdentical() const { return recorded == replayed && identical == recorded; }
 };

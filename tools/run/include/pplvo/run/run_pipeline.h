@@ -17,15 +17,15 @@
 namespace pplvo::run {
 
 struct RunOptions {
-  std::string dataset_dir;           ///< --dataset
-  std::string output;                ///< --output: TUM trajectory (empty: not written)
-  std::string summary;               ///< --summary: YAML run summary (empty: not written)
-  std::string log;                   ///< --log: every message as an LCM event log (for replay)
-  int64_t max_frames = 0;            ///< --max-frames (0: all)
-  int64_t start = 0;                 ///< --start: first associated frame
-  double fps = 0.0;                  ///< --fps: frame rate of integer-stamped datasets
-  bool skip_bad = false;             ///< --skip-bad: skip corrupt frames (counted)
-  bool progress = false;             ///< progress line on stderr
+  std::string dataset_dir;  ///< --dataset
+  std::string output;       ///< --output: TUM trajectory (empty: not written)
+  std::string summary;      ///< --summary: YAML run summary (empty: not written)
+  std::string log;          ///< --log: every message as an LCM event log (for replay)
+  int64_t max_frames = 0;   ///< --max-frames (0: all)
+  int64_t start = 0;        ///< --start: first associated frame
+  double fps = 0.0;         ///< --fps: frame rate of integer-stamped datasets
+  bool skip_bad = false;    ///< --skip-bad: skip corrupt frames (counted)
+  bool progress = false;    ///< progress line on stderr
   pipeline::PipelineOptions pipeline;
 };
 
