@@ -44,7 +44,7 @@ void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
 
 void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   ++counters_.frames_in;
-  counters_.last_seq = msg.seq;
+  msgs::noteFrameSequence(counters_, msg.seq);
   RgbdFrame frame;
   {
     ScopedStageTimer t(timings_, "decode");

@@ -52,7 +52,7 @@ void FrontendNode::warn(const std::string& what) { counters_.last_warning = what
 
 void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   ++counters_.frames_in;
-  counters_.last_seq = msg.seq;
+  msgs::noteFrameSequence(counters_, msg.seq);
   if (msg.seq <= last_extracted_seq_) {
     ++counters_.frames_skipped;
     warn("frame " + std::to_string(msg.seq) + " is older than one already handled");

@@ -127,6 +127,26 @@ TEST(FrontendNode, BadMessagesAreCountedAndQueuesStayBounded) {
   EXPECT_EQ(node.counters().frames_dropped, 3);
 }
 
+TEST(FrontendNode, CountsFramesLostBeforeReachingIt) {
+  lcm::LCM lcm("memq://");
+  FrontendNode node({}, lcm);
+  for (int i : {0, 1, 4}) {  // frames 2 and 3 never arrive (e.g. a full socket buffer)
+    auto m = frameMsg(i);
+    auto d = cgmMsg(i);
+    lcm.publish(channels::kRgbd, &m);
+    lcm.publish(channels::kDepthCgm, &d);
+    drain(lcm);
+  }
+  EXPECT_EQ(node.counters().frames_dropped, 2);
+  EXPECT_NE(node.counters().last_warning.find("lost"), std::string::npos)
+      << node.counters().last_warning;
+  // A restarted source (seq back to 0) is not a loss.
+  auto m0 = frameMsg(0);
+  lcm.publish(channels::kRgbd, &m0);
+  drain(lcm);
+  EXPECT_EQ(node.counters().frames_dropped, 2);
+}
+
 /// Stage-2D and stage-3D features of the synthetic frames, computed once by a frontend.
 struct FeatureSet {
   std::vector<pplvo_msgs::features_t> f2d, f3d;

@@ -4,10 +4,9 @@
 /// (in LCM 1.3.1 an exception leaving a handler leaves lcm_handle's mutex locked).
 #include <cstdio>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
-
-#include <lcm/lcm-cpp.hpp>
 
 #include "pplvo/msgs/convert.h"
 
@@ -26,6 +25,24 @@ std::unique_ptr<lcm::LCM> openLcm(const std::string& url);
 /// about every `period_s` seconds. Returns the number of handled messages.
 int64_t spin(lcm::LCM& lcm, const std::function<bool()>& done,
              const std::function<void()>& periodic, double period_s = 1.0);
+
+/// Notes the arrival of frame `seq` from a source that numbers its published frames
+/// consecutively (player, camera). A jump means frames were lost on the way (the socket buffer
+/// overflowed: this node is slower than its input, or the network dropped them): they are
+/// counted as dropped, with a warning. A smaller seq (a restarted source) is not a loss.
+/// Returns the number of frames lost before this one.
+inline int64_t noteFrameSequence(NodeCounters& counters, int64_t seq) {
+  int64_t lost = 0;
+  if (counters.last_seq >= 0 && seq > counters.last_seq + 1) {
+    lost = seq - counters.last_seq - 1;
+    counters.frames_dropped += lost;
+    counters.last_warning = std::to_string(lost) + " frame(s) lost before frame " +
+                            std::to_string(seq) +
+                            " reached this node (input faster than the node, or network loss)";
+  }
+  counters.last_seq = seq;
+  return lost;
+}
 
 /// Runs `body`; any exception is counted in `counters` (as a skipped frame when it is a
 /// MessageError, as an error otherwise), remembered as the last warning and printed
