@@ -6,6 +6,7 @@
 #include <string>
 
 #include "../node/viewer_node.h"
+#include "pplvo/core/allocator.h"
 #include "pplvo/msgs/node_runtime.h"
 
 namespace {
@@ -37,6 +38,7 @@ bool parseRange(const char* s, double& lo, double& hi) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   using pplvo::viewer::ViewerOptions;
   ViewerOptions o;
   std::string url, replay;

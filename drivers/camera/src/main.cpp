@@ -8,12 +8,14 @@
 
 #include "backend.h"
 #include "camera_node.h"
+#include "pplvo/core/allocator.h"
 #include "pplvo/msgs/node_runtime.h"
 
 namespace pc = pplvo::camera;
 namespace pm = pplvo::msgs;
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   pc::NodeOptions options;
   std::string error;
   bool help = false;

@@ -1,11 +1,13 @@
 // pplvo-player: publishes a TUM-layout RGB-D folder on LCM. See docs/player.md.
 #include <cstdio>
 
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/player/player_node.h"
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   using namespace pplvo;
   const std::vector<std::string> args = argsFromArgv(argc, argv);
   player::ParseResult parsed = player::parsePlayerArgs(args);

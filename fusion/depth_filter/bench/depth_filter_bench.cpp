@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/core/trajectory.h"
@@ -190,6 +191,7 @@ void synthRmse(int frames, bool moving) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   std::string data;
   if (const char* e = std::getenv("PPLVO_SHARED_DATA")) data = e;
   if (data.empty()) data = "../shared/data";

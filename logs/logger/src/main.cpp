@@ -1,11 +1,13 @@
 // pplvo-logger: records LCM channels, the trajectory and a run summary. See docs/logger.md.
 #include <cstdio>
 
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
 #include "pplvo/logging/logger_node.h"
 #include "pplvo/msgs/node_runtime.h"
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   using namespace pplvo;
   const std::vector<std::string> args = argsFromArgv(argc, argv);
   logging::LoggerParseResult parsed = logging::parseLoggerArgs(args);

@@ -17,6 +17,7 @@
 #include <opencv2/core/utility.hpp>
 
 #include "match_judge.h"
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/features/line_extractor.h"
 #include "pplvo/features/matching.h"
@@ -85,6 +86,7 @@ void printRow(const char* kind, const std::string& cfg, const std::string& seq, 
 }  // namespace
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   std::vector<std::string> detectors = {"orb", "orb-nogrid", "akaze", "sift", "brisk"};
   std::vector<std::string> line_cfgs = {"0.4", "0.5", "0.5f", "1"};
   int max_points = 800, max_frames = 1 << 30;

@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
@@ -29,6 +30,7 @@ void usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   using namespace pplvo;
   nodes::FrontendNodeOptions o;
   pipeline::PipelineArgs pa;

@@ -9,12 +9,14 @@
 #include <cstring>
 #include <string>
 
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/trajectory.h"
 #include "pplvo/dataset/dataset.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
 #include "pplvo/pipeline/pipeline_config.h"
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   using namespace pplvo;
   if (argc < 2) {
     std::fprintf(stderr,

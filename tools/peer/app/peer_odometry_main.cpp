@@ -7,6 +7,7 @@
 #include <iostream>
 #include <string>
 
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/trajectory.h"
 #include "pplvo/dataset/dataset.h"
 #include "pplvo/peer/peer_odometry.h"
@@ -46,6 +47,7 @@ bool parseInt(const std::string& s, long* v) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   using namespace pplvo;
   std::string dataset_dir, output;
   long max_frames = -1;

@@ -2,6 +2,7 @@
 // one (see pplvo/replay/replay_stage.h, docs/replay.md).
 #include <cstdio>
 
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
 #include "pplvo/pipeline/pipeline_args.h"
 #include "pplvo/replay/replay_stage.h"
@@ -19,6 +20,7 @@ void usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   using namespace pplvo;
   replay::ReplayOptions o;
   pipeline::PipelineArgs pa;

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <string>
 
+#include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
 #include "pplvo/pipeline/pipeline_args.h"
 #include "pplvo/run/run_pipeline.h"
@@ -31,6 +32,7 @@ void usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
   using namespace pplvo;
   run::RunOptions o;
   pipeline::PipelineArgs pa;

@@ -1,0 +1,16 @@
+#pragma once
+
+namespace pplvo {
+
+/// Tunes glibc's malloc for a process that allocates and frees frame-sized buffers (images,
+/// depth maps, LCM message payloads of 0.3-5 MB) on every frame.
+///
+/// By default glibc serves such blocks with mmap and gives them back with munmap, so every
+/// frame pays a fresh page fault per 4 KiB touched; on a virtual machine that cost more than
+/// the C-GM filter itself (pplvo-run went from 11 to 24 frames/s with this, docs/benchmark.md).
+/// Here large blocks stay in the heap and freed memory is not trimmed back to the kernel, so
+/// the next frame reuses pages already mapped. Call once at the start of main(), before any
+/// thread starts. Returns false if the allocator refused a setting (other C libraries).
+bool keepFrameBuffersMapped();
+
+}  // namespace pplvo
