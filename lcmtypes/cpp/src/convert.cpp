@@ -65,6 +65,7 @@ std::string encodingName(int8_t e) {
     case Img::ENCODING_RAW_F32: return "raw_f32";
     case Img::ENCODING_ZLIB_F32: return "zlib_f32";
     case Img::ENCODING_RAW_U8: return "raw_u8";
+    case Img::ENCODING_ZLIB_U8: return "zlib_u8";
     default: return "unknown(" + std::to_string(static_cast<int>(e)) + ")";
   }
 }
@@ -119,7 +120,8 @@ pplvo_msgs::image_t encodeImage(const cv::Mat& image_in, int8_t encoding, int jp
   switch (encoding) {
     case Img::ENCODING_RAW_BGR8: require(type == CV_8UC3); break;
     case Img::ENCODING_RAW_GRAY8:
-    case Img::ENCODING_RAW_U8: require(type == CV_8UC1); break;
+    case Img::ENCODING_RAW_U8:
+    case Img::ENCODING_ZLIB_U8: require(type == CV_8UC1); break;
     case Img::ENCODING_RAW_U16:
     case Img::ENCODING_ZLIB_U16:
     case Img::ENCODING_PNG_U16: require(type == CV_16UC1); break;
@@ -131,7 +133,8 @@ pplvo_msgs::image_t encodeImage(const cv::Mat& image_in, int8_t encoding, int jp
   }
   if (bytesPerPixel(encoding) > 0) {
     setData(msg, image.ptr(), image.total() * image.elemSize());
-  } else if (encoding == Img::ENCODING_ZLIB_U16 || encoding == Img::ENCODING_ZLIB_F32) {
+  } else if (encoding == Img::ENCODING_ZLIB_U8 || encoding == Img::ENCODING_ZLIB_U16 ||
+             encoding == Img::ENCODING_ZLIB_F32) {
     msg.data = zlibCompress(image, zlib_level);
     msg.size = static_cast<int32_t>(msg.data.size());
   } else {
@@ -177,8 +180,12 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
     std::memcpy(out.ptr(), msg.data.data(), expected);
     return out;
   }
-  if (msg.encoding == Img::ENCODING_ZLIB_U16 || msg.encoding == Img::ENCODING_ZLIB_F32) {
-    cv::Mat out(msg.height, msg.width, msg.encoding == Img::ENCODING_ZLIB_U16 ? CV_16UC1 : CV_32FC1);
+  if (msg.encoding == Img::ENCODING_ZLIB_U8 || msg.encoding == Img::ENCODING_ZLIB_U16 ||
+      msg.encoding == Img::ENCODING_ZLIB_F32) {
+    const int type = msg.encoding == Img::ENCODING_ZLIB_U8    ? CV_8UC1
+                     : msg.encoding == Img::ENCODING_ZLIB_U16 ? CV_16UC1
+                                                              : CV_32FC1;
+    cv::Mat out(msg.height, msg.width, type);
     zlibDecompress(msg, out);
     return out;
   }

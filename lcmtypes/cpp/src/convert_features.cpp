@@ -109,7 +109,7 @@ pplvo_msgs::features_t toMsg(const FrameFeatures& f, int8_t stage) {
   }
   m.plane_labels = f.plane_labels.empty()
                        ? encodeImage(cv::Mat(), pplvo_msgs::image_t::ENCODING_NONE)
-                       : encodeImage(f.plane_labels, pplvo_msgs::image_t::ENCODING_PNG);
+                       : encodeImage(f.plane_labels, pplvo_msgs::image_t::ENCODING_ZLIB_U8);
   return m;
 }
 

@@ -83,6 +83,19 @@ TEST(Convert, JpegIsCloseAndRawIsExact) {
   EXPECT_EQ(cv::norm(raw, f.bgr, cv::NORM_INF), 0.0);
 }
 
+TEST(Convert, ZlibU8IsLosslessAndSmallForLabels) {
+  cv::Mat labels(48, 64, CV_8UC1, cv::Scalar(0));
+  labels(cv::Rect(5, 7, 30, 20)).setTo(3);
+  labels.at<uint8_t>(40, 60) = 255;
+  const auto m = encodeImage(labels, Img::ENCODING_ZLIB_U8);
+  EXPECT_EQ(m.encoding, Img::ENCODING_ZLIB_U8);
+  EXPECT_LT(m.data.size(), labels.total() / 4);  // label images are mostly runs
+  const cv::Mat back = decodeImage(roundTripBytes(m));
+  ASSERT_EQ(back.type(), CV_8UC1);
+  EXPECT_EQ(cv::norm(back, labels, cv::NORM_INF), 0.0);
+  EXPECT_THROW(encodeImage(cv::Mat(4, 4, CV_16UC1), Img::ENCODING_ZLIB_U8), MessageError);
+}
+
 TEST(Convert, SizeFieldDisagreeingWithDataThrows) {
   auto m = encodeImage(cv::Mat(4, 4, CV_16UC1, cv::Scalar(1000)), Img::ENCODING_RAW_U16);
   m.size = 10;

@@ -103,6 +103,15 @@ TEST_P(FeaturesRoundTrip, EverythingSurvives) {
 
 INSTANTIATE_TEST_SUITE_P(DescriptorTypes, FeaturesRoundTrip, ::testing::Values(false, true));
 
+TEST(FeaturesConvert, LabelsAreZlibAndPngLabelsOfOlderLogsStillDecode) {
+  const FrameFeatures f = makeFeatures(false);
+  pplvo_msgs::features_t m = toMsg(f, pplvo_msgs::features_t::STAGE_3D);
+  EXPECT_EQ(m.plane_labels.encoding, pplvo_msgs::image_t::ENCODING_ZLIB_U8);
+  m.plane_labels = encodeImage(f.plane_labels, pplvo_msgs::image_t::ENCODING_PNG);
+  const FrameFeatures b = fromMsg(viaBytes(m));
+  EXPECT_EQ(cv::norm(b.plane_labels, f.plane_labels, cv::NORM_INF), 0.0);
+}
+
 TEST(FeaturesConvert, InconsistentMessagesThrow) {
   auto m = toMsg(makeFeatures(false), pplvo_msgs::features_t::STAGE_2D);
   auto bad = m;

@@ -29,7 +29,7 @@ pplvo_msgs::camera_info_t toMsg(const PinholeCamera& camera);
 PinholeCamera fromMsg(const pplvo_msgs::camera_info_t& msg);
 
 /// Encodes an image. Supported: CV_8UC3/CV_8UC1 as RAW_BGR8/RAW_GRAY8/JPEG/PNG, CV_16UC1 as
-/// RAW_U16/ZLIB_U16/PNG_U16, CV_32FC1 as RAW_F32/ZLIB_F32, CV_8UC1 as RAW_U8.
+/// RAW_U16/ZLIB_U16/PNG_U16, CV_32FC1 as RAW_F32/ZLIB_F32, CV_8UC1 as RAW_U8/ZLIB_U8.
 /// jpeg_quality applies to JPEG, zlib_level (1..9) to the zlib encodings.
 pplvo_msgs::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality = 90,
                                 int zlib_level = 1);
