@@ -72,6 +72,7 @@ Fields rpeFields(const EvalReport& r) {
   for (const auto& kv : statFields(scaled(r.rpe.rot_rad, kRadToDeg * per_s), "deg_per_s")) {
     f.emplace_back("rot_" + kv.first, kv.second);
   }
+  f.emplace_back("trans_scale", r.rpe.trans_scale);
   return f;
 }
 

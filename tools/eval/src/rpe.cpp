@@ -142,6 +142,7 @@ RpeResult evaluateRpe(const TumFile& gt, const TumFile& est, const RpeOptions& o
   result.gt_max_time_difference_s = 2.0 * medianOf(intervals);
 
   std::vector<double> trans, rot;
+  double est_dot_gt = 0.0, gt_sq = 0.0;
   for (const IndexPair& p : pairs) {
     const double est0 = stamps_est[p.i], est1 = stamps_est[p.j];
     const double gt0 = stamps_gt[findClosestIndex(stamps_gt, est0 + offset)];
@@ -151,8 +152,11 @@ RpeResult evaluateRpe(const TumFile& gt, const TumFile& est, const RpeOptions& o
       ++result.skipped_gt_time;
       continue;
     }
-    const Eigen::Matrix4d error44 = ominus(ominus(traj_est.at(est1), traj_est.at(est0)),
-                                           ominus(traj_gt.at(gt1), traj_gt.at(gt0)));
+    const Eigen::Matrix4d rel_est = ominus(traj_est.at(est1), traj_est.at(est0));
+    const Eigen::Matrix4d rel_gt = ominus(traj_gt.at(gt1), traj_gt.at(gt0));
+    const Eigen::Matrix4d error44 = ominus(rel_est, rel_gt);
+    est_dot_gt += rel_est.block<3, 1>(0, 3).dot(rel_gt.block<3, 1>(0, 3));
+    gt_sq += rel_gt.block<3, 1>(0, 3).squaredNorm();
     RpePair out;
     out.est0_s = est0;
     out.est1_s = est1;
@@ -175,6 +179,7 @@ RpeResult evaluateRpe(const TumFile& gt, const TumFile& est, const RpeOptions& o
   }
   result.trans_m = computeErrorStats(trans);
   result.rot_rad = computeErrorStats(rot);
+  result.trans_scale = gt_sq > 0.0 ? est_dot_gt / gt_sq : std::numeric_limits<double>::quiet_NaN();
   result.ok = true;
   return result;
 }

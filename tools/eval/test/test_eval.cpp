@@ -259,6 +259,28 @@ TEST(Rpe, ConstantVelocityErrorAndLastPoseQuirk) {
   EXPECT_NEAR(r.gt_max_time_difference_s, 2 * dt, 1e-12);
 }
 
+TEST(Rpe, TranslationScaleExposesUnderestimatedMotion) {
+  // The estimate moves 0.8 times as far as the ground truth along a curved path, in a world
+  // frame of its own (rotated and shifted): the scale is read from relative motions only.
+  const std::vector<Stamped> gt = curvedTrajectory(60, 0.1);
+  const Eigen::Isometry3d other_world = pose({1, 2, 3}, rotZ(0.7));
+  std::vector<Stamped> est, same;
+  for (const Stamped& s : gt) {
+    Eigen::Isometry3d T = s.T_w_c;
+    T.translation() = 0.8 * T.translation();
+    est.push_back({s.stamp_s, other_world * T});
+    same.push_back({s.stamp_s, other_world * s.T_w_c});
+  }
+  const RpeResult r = evaluateRpe(fileFrom("gt", gt), fileFrom("est", est));
+  ASSERT_TRUE(r.ok) << r.error;
+  // Relative translations scale by 0.8 only where the rotation is shared; here it is, so the
+  // relative translation in the start frame is exactly 0.8 times the ground truth's.
+  EXPECT_NEAR(r.trans_scale, 0.8, 1e-9);
+  const RpeResult exact = evaluateRpe(fileFrom("gt", gt), fileFrom("est", same));
+  ASSERT_TRUE(exact.ok) << exact.error;
+  EXPECT_NEAR(exact.trans_scale, 1.0, 1e-9);
+}
+
 TEST(Rpe, RotationDriftOfKnownRate) {
   const double omega_deg_per_s = 2.5;
   std::vector<Stamped> gt, est;

@@ -42,6 +42,11 @@ struct RpeResult {
   std::vector<RpePair> pairs;
   ErrorStats trans_m;                     ///< over pairs, metres per delta
   ErrorStats rot_rad;                     ///< over pairs, radians per delta
+  /// Least-squares scale s of the estimated relative translations against the ground truth's
+  /// over the pairs (min sum |t_est - s t_gt|^2; not part of TUM's script). 1 = unbiased; < 1 =
+  /// motion under-estimated, e.g. the attenuation that depth noise causes (docs/pipeline.md).
+  /// NaN when the ground truth does not move.
+  double trans_scale = 0.0;
   int candidate_pairs = 0;                ///< (i, j) pairs before the ground-truth time check
   int skipped_gt_time = 0;                ///< pairs dropped by the gt_max_time_difference check
   double gt_max_time_difference_s = 0.0;  ///< 2 * median ground-truth stamp interval
