@@ -63,20 +63,21 @@ configs=(
 )
 [ "$quick" = 1 ] && configs=("points|--features points" "all|--features points,lines,planes")
 
-eval_line() {  # eval_line GT EST FPS -> "rpe_t rpe_r ate pairs"
+eval_line() {  # eval_line GT EST FPS -> "rpe_t rpe_r ate pairs trans_scale"
   local fpsarg=()
   [ "$3" != 0 ] && fpsarg=(--fps "$3")
   "$bin/pplvo-eval" "$1" "$2" "${fpsarg[@]}" | awk '
     /^ate.rmse_m /{a=$2} /^rpe.trans_rmse_m_per_s /{t=$2} /^rpe.rot_rmse_deg_per_s /{r=$2}
-    /^ate.pairs /{p=$2} END{printf "%.4f %.3f %.4f %d\n", t, r, a, p}'
+    /^ate.pairs /{p=$2} /^rpe.trans_scale /{s=$2}
+    END{printf "%.4f %.3f %.4f %d %.2f\n", t, r, a, p, s}'
 }
 yaml_value() { awk -v k="$2:" '$1==k{print $2; exit}' "$1"; }
 
 table="$out/table.md"
 stages="$out/stages.md"
 {
-  echo "| sequence | configuration | RPE (m/s) | RPE (deg/s) | ATE (m) | tracked | frames/s |"
-  echo "|---|---|---|---|---|---|---|"
+  echo "| sequence | configuration | RPE (m/s) | RPE (deg/s) | ATE (m) | motion scale | tracked | frames/s |"
+  echo "|---|---|---|---|---|---|---|---|"
 } > "$table"
 {
   echo "| sequence | depth filter decode+cgm+ogm | points | lines | planes (C-GM + fused) | lift | matching | pose | node I/O | pipeline ms/frame | pplvo-run frames/s |"
@@ -95,11 +96,11 @@ for i in "${!names[@]}"; do
     # shellcheck disable=SC2086
     "$bin/pplvo-run" --dataset "$d" --output "$est" --summary "$out/$n.$tag.yaml" --quiet $args \
       "${fpsarg[@]}" 2>"$out/$n.$tag.log"
-    read -r t r a p < <(eval_line "$d/groundtruth.txt" "$est" "$fps")
+    read -r t r a p sc < <(eval_line "$d/groundtruth.txt" "$est" "$fps")
     tracked="$(awk '/^status:/{gsub(/[{},]/," "); for(i=1;i<=NF;i++) if($i=="tracking:") print $(i+1)}' "$out/$n.$tag.yaml")"
     poses="$(yaml_value "$out/$n.$tag.yaml" poses)"
     f="$(yaml_value "$out/$n.$tag.yaml" frames_per_s)"
-    printf "| %s | %s | %s | %s | %s | %s/%s | %.1f |\n" "$n" "$label" "$t" "$r" "$a" "$tracked" "$poses" "$f" >> "$table"
+    printf "| %s | %s | %s | %s | %s | %s | %s/%s | %.1f |\n" "$n" "$label" "$t" "$r" "$a" "$sc" "$tracked" "$poses" "$f" >> "$table"
     echo "$n / $label: RPE $t m/s $r deg/s, ATE $a m, $f frames/s" >&2
     if [ "$label" = "all" ]; then
       ests+=("$est"); labels+=("pplvo (all)")
@@ -123,9 +124,9 @@ for i in "${!names[@]}"; do
   # The peer, on the same frames.
   peer="$out/$n.opencv_rgbd.txt"
   "$bin/pplvo-peer-odometry" --dataset "$d" --output "$peer" --method rgbd >"$out/$n.opencv_rgbd.log" 2>&1
-  read -r t r a p < <(eval_line "$d/groundtruth.txt" "$peer" "$fps")
+  read -r t r a p sc < <(eval_line "$d/groundtruth.txt" "$peer" "$fps")
   pf="$(grep -Eo '[0-9.]+ frames/s' "$out/$n.opencv_rgbd.log" | tail -1 | awk '{print $1}')"
-  printf "| %s | OpenCV RgbdOdometry | %s | %s | %s | - | %s (odometry only) |\n" "$n" "$t" "$r" "$a" "${pf:--}" >> "$table"
+  printf "| %s | OpenCV RgbdOdometry | %s | %s | %s | %s | - | %s (odometry only) |\n" "$n" "$t" "$r" "$a" "$sc" "${pf:--}" >> "$table"
   echo "$n / OpenCV RgbdOdometry: RPE $t m/s $r deg/s, ATE $a m" >&2
   ests+=("$peer"); labels+=("OpenCV RgbdOdometry")
   if [ -n "$docs" ]; then
@@ -155,8 +156,11 @@ Every pplvo row is one `pplvo-run` (all processes over memq://, every frame, det
 errors by `pplvo-eval` (TUM definitions: ATE RMSE after SE(3) alignment, RPE RMSE over 1 s
 pairs, in m/s and deg/s). The peer is OpenCV 4.6's `cv::rgbd::RgbdOdometry` run by
 `pplvo-peer-odometry` on the same frames (docs/peer_odometry.md). "tracked" counts frames
-whose pose came from an accepted estimate (the first frame is the origin). frames/s is end to
-end: reading and decoding the PNGs (in the player's loader thread) included.
+whose pose came from an accepted estimate (the first frame is the origin). "motion scale" is
+`rpe.trans_scale`: the least-squares scale of the estimated 1 s relative translations against
+the ground truth's (1 = unbiased; below 1 = motion under-estimated, see docs/pipeline.md on
+ICL-NUIM). frames/s is end to end: reading and decoding the PNGs (in the player's loader
+thread) included.
 
 ## Accuracy
 TEXT
