@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace pplvo::geometry {
@@ -18,6 +19,26 @@ std::string validateDepth(const DepthWithVariance& depth, const PinholeCamera& c
     return "invalid camera intrinsics";
   return {};
 }
+
+namespace {
+
+/// max/min - 1 of the valid depths within the Chebyshev radius (0 if fewer than two).
+double depthSpread(const cv::Mat& depth_m, int u0, int v0, int radius) {
+  float zmin = std::numeric_limits<float>::max(), zmax = 0.f;
+  const int r = std::max(0, radius);
+  for (int v = std::max(0, v0 - r); v <= std::min(depth_m.rows - 1, v0 + r); ++v) {
+    const float* row = depth_m.ptr<float>(v);
+    for (int u = std::max(0, u0 - r); u <= std::min(depth_m.cols - 1, u0 + r); ++u) {
+      const float z = row[u];
+      if (!(z > 0.f) || !std::isfinite(z)) continue;
+      zmin = std::min(zmin, z);
+      zmax = std::max(zmax, z);
+    }
+  }
+  return zmax > zmin ? static_cast<double>(zmax) / zmin - 1.0 : 0.0;
+}
+
+}  // namespace
 
 LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth,
                      const LiftOptions& options) {
@@ -54,6 +75,12 @@ LiftStats liftPoints(FrameFeatures& frame, const DepthWithVariance& depth,
     }
     if (!found) {
       ++st.points_no_depth;
+      continue;
+    }
+    if (options.point_max_depth_spread > 0.0 &&
+        depthSpread(depth.depth_m, u0, v0, options.point_discontinuity_radius_px) >
+            options.point_max_depth_spread) {
+      ++st.points_on_discontinuity;
       continue;
     }
     f.point =

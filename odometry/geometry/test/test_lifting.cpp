@@ -43,6 +43,43 @@ TEST(LiftPoints, BackprojectsNearestPixelAndNeighbourFallback) {
   EXPECT_FALSE(f.points[1].has_3d);
 }
 
+TEST(LiftPoints, KeypointsOnDepthDiscontinuitiesAreNotLifted) {
+  // Left half a wall at 1.5 m, right half one at 3 m; a slanted floor-like gradient below.
+  const PinholeCamera cam = test::vgaCamera(true);
+  DepthWithVariance d;
+  d.depth_m = cv::Mat(480, 640, CV_32F, cv::Scalar(1.5f));
+  d.depth_m(cv::Rect(320, 0, 320, 240)).setTo(3.0f);
+  for (int v = 240; v < 480; ++v) d.depth_m.row(v).setTo(2.0f + 0.01f * (v - 240));  // 0.5 %/px
+  d.var_m2 = cv::Mat(480, 640, CV_32F, cv::Scalar(1e-4f));
+  FrameFeatures f = frameWith(cam);
+  PointFeature on_edge, flat, slanted, near_edge;
+  on_edge.px = {320.4, 100.0};
+  flat.px = {100.0, 100.0};
+  slanted.px = {300.0, 400.0};
+  near_edge.px = {324.0, 100.0};  // 4 px from the edge: outside the 3 px radius
+  f.points = {on_edge, flat, slanted, near_edge};
+  LiftOptions o;
+  o.point_max_depth_spread = 0.2;
+  o.point_discontinuity_radius_px = 3;
+  LiftStats st = liftPoints(f, d, o);
+  EXPECT_EQ(st.points_on_discontinuity, 1);
+  EXPECT_EQ(st.points_lifted, 3);
+  EXPECT_FALSE(f.points[0].has_3d);
+  EXPECT_TRUE(f.points[1].has_3d);
+  EXPECT_TRUE(f.points[2].has_3d);
+  EXPECT_TRUE(f.points[3].has_3d);
+  EXPECT_NEAR(f.points[3].point.p.z(), 3.0, 1e-6);
+  // Missing pixels do not count as a discontinuity.
+  d.depth_m(cv::Rect(90, 95, 5, 10)).setTo(0.0f);
+  st = liftPoints(f, d, o);
+  EXPECT_TRUE(f.points[1].has_3d);
+  // Disabled: every point with depth is lifted.
+  o.point_max_depth_spread = 0.0;
+  st = liftPoints(f, d, o);
+  EXPECT_EQ(st.points_on_discontinuity, 0);
+  EXPECT_EQ(st.points_lifted, 4);
+}
+
 TEST(LiftPoints, RejectsBadDepthInput) {
   FrameFeatures f = frameWith(test::vgaCamera(true));
   f.points.resize(3);

@@ -397,6 +397,12 @@ void listFields(V& v, geometry::LiftOptions& o) {
   v.field("point_search_radius_px", o.point_search_radius_px,
           "no depth at a keypoint: use the lowest-variance pixel within this radius (px)",
           atLeast(0));
+  v.field("point_max_depth_spread", o.point_max_depth_spread,
+          "a keypoint on a depth discontinuity is not lifted: valid depths within the radius "
+          "below span more than this fraction (max/min - 1); 0 disables",
+          atLeast(0));
+  v.field("point_discontinuity_radius_px", o.point_discontinuity_radius_px,
+          "radius of that depth-discontinuity test (px)", atLeast(0));
   v.field("max_line_samples", o.max_line_samples,
           "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)", atLeast(2));
   v.field("line_ransac_threshold_m", o.line_ransac_threshold_m,
