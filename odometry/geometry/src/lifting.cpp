@@ -108,6 +108,10 @@ LineFitResult liftLine(const PinholeCamera& camera, const DepthWithVariance& dep
   P.reserve(n_samples);
   C.reserve(n_samples);
   V.reserve(n_samples);
+  // Unit normal of the segment in the image, for the foreground test below.
+  const Eigen::Vector2d dir = len > 0 ? Eigen::Vector2d((px2 - px1) / len) : Eigen::Vector2d(1, 0);
+  const Eigen::Vector2d normal(-dir.y(), dir.x());
+  const int side_px = std::max(0, options.line_side_offset_px);
   int last_u = -1, last_v = -1;
   for (int k = 0; k < n_samples; ++k) {
     const double t = static_cast<double>(k) / (n_samples - 1);
@@ -118,7 +122,23 @@ LineFitResult liftLine(const PinholeCamera& camera, const DepthWithVariance& dep
     last_u = u;
     last_v = v;
     double z, var;
-    if (!depthAt(depth, u, v, options.noise, &z, &var)) continue;
+    bool found = depthAt(depth, u, v, options.noise, &z, &var);
+    if (side_px > 0 && options.line_max_depth_step > 0.0) {
+      // A segment on an occluding outline moves with the nearer surface: where the depths on
+      // its two sides differ by more than the step, take the nearer side's depth.
+      double za, va, zb, vb;
+      const Eigen::Vector2d a = px + side_px * normal, b = px - side_px * normal;
+      const bool ok_a = depthAt(depth, static_cast<int>(std::lround(a.x())),
+                                static_cast<int>(std::lround(a.y())), options.noise, &za, &va);
+      const bool ok_b = depthAt(depth, static_cast<int>(std::lround(b.x())),
+                                static_cast<int>(std::lround(b.y())), options.noise, &zb, &vb);
+      if (ok_a && ok_b && std::max(za, zb) > (1.0 + options.line_max_depth_step) * std::min(za, zb)) {
+        z = za < zb ? za : zb;
+        var = za < zb ? va : vb;
+        found = true;
+      }
+    }
+    if (!found) continue;
     const Point3WithCov p = backprojectWithCov(camera, u, v, z, var, options.pixel_variance_px2);
     P.push_back(p.p);
     C.push_back(p.cov);

@@ -152,6 +152,38 @@ TEST(LiftLines, RecoversSegmentOnWallAndAcrossDiscontinuity) {
   EXPECT_EQ((g.lines[1].line.p1 - f.lines[1].line.p1).norm(), 0.0);
 }
 
+TEST(LiftLines, OutlineTakesTheNearerSurface) {
+  // The outline of a near box (1.5 m, left) against a far wall (3 m): the segment lies on the
+  // depth step, where the sampled pixel may fall on either surface (here mostly the far one).
+  const PinholeCamera cam = test::vgaCamera(true);
+  DepthWithVariance d;
+  d.depth_m = cv::Mat(480, 640, CV_32F, cv::Scalar(3.0f));
+  d.depth_m(cv::Rect(0, 0, 320, 480)).setTo(1.5f);
+  d.var_m2 = cv::Mat(480, 640, CV_32F, cv::Scalar(1e-6f));
+  FrameFeatures f = frameWith(cam);
+  LineFeature outline;
+  outline.px1 = {320.0, 100.0};
+  outline.px2 = {320.0, 380.0};
+  f.lines = {outline};
+  LiftOptions o;
+  o.line_side_offset_px = 0;
+  liftLines(f, d, o);
+  ASSERT_TRUE(f.lines[0].has_3d);
+  EXPECT_NEAR(f.lines[0].line.p1.z(), 3.0, 0.05);  // the far wall's depth: wrong for an outline
+  o.line_side_offset_px = 3;
+  o.line_max_depth_step = 0.2;
+  liftLines(f, d, o);
+  ASSERT_TRUE(f.lines[0].has_3d);
+  EXPECT_NEAR(f.lines[0].line.p1.z(), 1.5, 0.05);
+  EXPECT_NEAR(f.lines[0].line.p2.z(), 1.5, 0.05);
+  // A line inside the far wall (no step across it) keeps its own depth.
+  f.lines[0].px1 = {500.0, 100.0};
+  f.lines[0].px2 = {500.0, 380.0};
+  liftLines(f, d, o);
+  ASSERT_TRUE(f.lines[0].has_3d);
+  EXPECT_NEAR(f.lines[0].line.p1.z(), 3.0, 0.05);
+}
+
 TEST(LiftLines, NoDepthAndNanEndpoints) {
   FrameFeatures f = frameWith(test::vgaCamera(true));
   LineFeature a;

@@ -403,6 +403,12 @@ void listFields(V& v, geometry::LiftOptions& o) {
           atLeast(0));
   v.field("point_discontinuity_radius_px", o.point_discontinuity_radius_px,
           "radius of that depth-discontinuity test (px)", atLeast(0));
+  v.field("line_side_offset_px", o.line_side_offset_px,
+          "a line sample on a depth step (depths this far to either side of the segment differ "
+          "by more than line_max_depth_step) takes the nearer side's depth (px; 0 disables)",
+          atLeast(0));
+  v.field("line_max_depth_step", o.line_max_depth_step,
+          "that depth step, as max/min - 1", atLeast(0));
   v.field("max_line_samples", o.max_line_samples,
           "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)", atLeast(2));
   v.field("line_ransac_threshold_m", o.line_ransac_threshold_m,
