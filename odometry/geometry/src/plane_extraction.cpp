@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "pplvo/geometry/lifting.h"  // validateDepth
@@ -91,26 +92,40 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
 
   // 1) Per-cell moments of the backprojected points (one pass over the image).
   std::fill(cell_moments_.begin(), cell_moments_.end(), Moments{});
+  // Each row's run of cs pixels is summed in registers (with y = yf z, so only x z, z and their
+  // squares need per-pixel sums), then added to its cell once.
+  constexpr float kInf = std::numeric_limits<float>::infinity();
   for (int v = 0; v < H; ++v) {
     const float* zr = depth.depth_m.ptr<float>(v);
-    const float yf = y_factor_[v];
+    const double yf = y_factor_[v];
     Moments* row_cells = &cell_moments_[static_cast<size_t>(v / cs) * cells_x_];
-    for (int u = 0; u < W; ++u) {
-      const float z = zr[u];
-      if (!(z > 0.0f) || !std::isfinite(z)) continue;
-      const double x = static_cast<double>(x_factor_[u]) * z, y = static_cast<double>(yf) * z,
-                   zz = z;
-      Moments& m = row_cells[cell_of_col_[u]];
-      m.n += 1;
-      m.sx += x;
-      m.sy += y;
-      m.sz += zz;
-      m.sxx += x * x;
-      m.syy += y * y;
-      m.szz += zz * zz;
-      m.sxy += x * y;
-      m.sxz += x * zz;
-      m.syz += y * zz;
+    for (int cx = 0; cx < cells_x_; ++cx) {
+      const int u0 = cx * cs, u1 = std::min(W, u0 + cs);
+      double n = 0, sx = 0, sz = 0, sxx = 0, szz = 0, sxz = 0;
+      for (int u = u0; u < u1; ++u) {
+        const float zf = zr[u];
+        const bool ok = zf > 0.0f && zf < kInf;  // false for NaN
+        const double z = ok ? zf : 0.0;
+        const double x = static_cast<double>(x_factor_[u]) * z;
+        n += ok ? 1.0 : 0.0;
+        sx += x;
+        sz += z;
+        sxx += x * x;
+        szz += z * z;
+        sxz += x * z;
+      }
+      if (n == 0) continue;
+      Moments& m = row_cells[cx];
+      m.n += n;
+      m.sx += sx;
+      m.sy += yf * sz;
+      m.sz += sz;
+      m.sxx += sxx;
+      m.syy += yf * yf * szz;
+      m.szz += szz;
+      m.sxy += yf * sxz;
+      m.sxz += sxz;
+      m.syz += yf * szz;
     }
   }
 
