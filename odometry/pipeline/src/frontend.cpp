@@ -67,35 +67,49 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
       cv::cvtColor(frame.bgr, gray, cv::COLOR_BGRA2GRAY);
     else
       gray = frame.bgr;
-    // Lines (the longest stage) run on a second thread while points and planes run here;
-    // each writes its own members of `f`, and the results do not depend on the threading.
-    FrameFeatures line_part;
-    double lines_ms = 0;
+    // Lines, then planes, run on a second thread while points run here (points take about
+    // as long as the other two together); each part writes its own members, and the results
+    // do not depend on the threading. Timings are recorded after the join (one writer).
+    FrameFeatures side;
+    side.camera = frame.camera;
+    double lines_ms = 0, planes_ms = 0;
     features::LineExtractionStats ls;
-    std::future<void> lines_job;
-    auto extractLines = [&] {
-      Stopwatch w;
-      ls = line_extractor_.extractInto(gray, frame.camera, line_part);
-      lines_ms = w.elapsedMs();
+    FrontendStats plane_stats;
+    const bool planes = options_.families.planes && !cgm.depth_m.empty();
+    auto sideJob = [&] {
+      if (options_.families.lines) {
+        Stopwatch w;
+        ls = line_extractor_.extractInto(gray, frame.camera, side);
+        lines_ms = w.elapsedMs();
+      }
+      if (planes) {
+        Stopwatch w;
+        extractPlanes(side, cgm, &plane_stats);
+        planes_ms = w.elapsedMs();
+      }
     };
-    if (options_.families.lines) {
-      if (options_.parallel)
-        lines_job = std::async(std::launch::async, extractLines);
-      else
-        extractLines();
-    }
+    std::future<void> side_job;
+    if (options_.parallel)
+      side_job = std::async(std::launch::async, sideJob);
+    else
+      sideJob();
     if (options_.families.points) {
       ScopedStageTimer t(timings_, "points");
       const auto ps = point_extractor_.extractInto(gray, frame.camera, f);
       if (!ps.error.empty()) s.warning = "points: " + ps.error;
     }
-    if (options_.families.planes && !cgm.depth_m.empty()) extractPlanesTimed(f, cgm, &s);
-    if (lines_job.valid()) lines_job.get();
+    if (side_job.valid()) side_job.get();
     if (options_.families.lines) {
       timings_.add("lines", lines_ms);
       if (!ls.error.empty()) s.warning = "lines: " + ls.error;
-      f.lines = std::move(line_part.lines);
-      f.line_descriptors = line_part.line_descriptors;
+      f.lines = std::move(side.lines);
+      f.line_descriptors = side.line_descriptors;
+    }
+    if (planes) {
+      timings_.add("planes", planes_ms);
+      if (!plane_stats.warning.empty()) s.warning = plane_stats.warning;
+      f.planes = std::move(side.planes);
+      f.plane_labels = side.plane_labels;
     }
   }
   s.points = static_cast<int>(f.points.size());
