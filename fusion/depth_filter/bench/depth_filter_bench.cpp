@@ -1,9 +1,9 @@
-// Timing of the depth filter stages on the shared sequences (VGA, one core), and depth RMSE on
-// the synthetic sequence (which has noiseless truth). Prints tables; not part of ctest.
-//   pplvo_depth_filter_bench [--data DIR] [--synth-frames N] [--timing-only 1]
-// DIR defaults to $PPLVO_SHARED_DATA or ../shared/data.
+// Timing of the depth filter stages on the shared sequences (VGA; O-GM with 1 and 2 threads by
+// default), and depth RMSE on the synthetic sequence (which has noiseless truth). Prints tables;
+// not part of ctest. Options: --help.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -24,6 +24,36 @@ using namespace pplvo;
 using namespace pplvo::depth_filter;
 
 namespace {
+
+const char* const kUsage =
+    "pplvo_depth_filter_bench [--data DIR] [--threads LIST] [--synth-frames N] "
+    "[--timing-only 1]\n"
+    "  Times the depth filter stages on the shared sequences (VGA): stage 1, C-GM and O-GM with\n"
+    "  windows 5 and 10, then prints depth RMSE against the synthetic room's truth.\n"
+    "  --data DIR        folder holding icl_living_room_kt0_short and\n"
+    "                    tum_fr3_sitting_static_short (default $PPLVO_SHARED_DATA or\n"
+    "                    ../shared/data)\n"
+    "  --threads LIST    O-GM thread counts (OgmOptions::threads) timed side by side, frame by\n"
+    "                    frame in turn, e.g. 1,2 (the default); each prints an output checksum,\n"
+    "                    which must not depend on the thread count\n"
+    "  --synth-frames N  synthetic frames for the RMSE (default 40, at least 11)\n"
+    "  --timing-only 1   skip the synthetic RMSE\n";
+
+/// "1,2,3" -> {1, 2, 3}; empty on a malformed list or a count < 1.
+std::vector<int> parseThreads(const std::string& text) {
+  std::vector<int> out;
+  size_t pos = 0;
+  while (pos <= text.size()) {
+    const size_t comma = std::min(text.find(',', pos), text.size());
+    const std::string item = text.substr(pos, comma - pos);
+    char* end = nullptr;
+    const long v = std::strtol(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || v < 1 || v > 64) return {};
+    out.push_back(static_cast<int>(v));
+    pos = comma + 1;
+  }
+  return out;
+}
 
 struct Sequence {
   std::string name;
@@ -78,6 +108,24 @@ double cpuMs() {
   return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
 }
 
+/// FNV-1a over the bytes of a matrix (continuous rows), chained through `h`: identical fused
+/// outputs give identical checksums, e.g. across versions or thread counts.
+uint64_t fnv1a(const cv::Mat& m, uint64_t h) {
+  for (int v = 0; v < m.rows; ++v) {
+    const uint8_t* p = m.ptr<uint8_t>(v);
+    const size_t n = m.elemSize() * static_cast<size_t>(m.cols);
+    for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ULL;
+  }
+  return h;
+}
+
+/// CPU time of the whole process (ms): all threads of a parallel fusion.
+double processCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
@@ -89,7 +137,7 @@ double mean(const std::vector<double>& v) {
   return v.empty() ? 0 : a / static_cast<double>(v.size());
 }
 
-void timeSequence(const Sequence& s) {
+void timeSequence(const Sequence& s, const std::vector<int>& threads) {
   const int n = static_cast<int>(s.depth_m.size());
   QuadraticSensorModel sensor;
   CgmFilter cgm;
@@ -112,30 +160,52 @@ void timeSequence(const Sequence& s) {
               median(t_sensor));
   std::printf("  %-10s mean %6.2f ms  median %6.2f ms  (CPU mean %.2f median %.2f ms)\n", "C-GM",
               mean(t_cgm), median(t_cgm), mean(c_cgm), median(c_cgm));
+  // O-GM with each thread count, interleaved frame by frame so that every setting sees the same
+  // machine load; the outputs must be identical (same checksum) whatever the thread count.
   for (int window : {5, 10}) {
-    OgmOptions o;
-    o.max_window = window;
-    OgmFusion ogm(o);
-    std::vector<double> t, c;
+    struct Run {
+      int threads;
+      OgmFusion ogm;
+      OgmResult r;
+      std::vector<double> t, c;
+      uint64_t checksum = 1469598103934665603ULL;
+    };
+    std::vector<Run> runs;
+    runs.reserve(threads.size());
+    for (int th : threads) {
+      OgmOptions o;
+      o.max_window = window;
+      o.threads = th;
+      runs.push_back(Run{th, OgmFusion(o), {}, {}, {}});
+    }
     double filled = 0, window_sum = 0;
-    OgmResult r;
     for (int i = 0; i < n; ++i) {
-      Stopwatch w;
-      const double c0 = cpuMs();
-      ogm.addFrame(i, s.camera, cgm_out[i]);
-      ogm.fuse(i, s.T_w_c[i], &r);
-      c.push_back(cpuMs() - c0);
-      t.push_back(w.elapsedMs());
+      for (Run& run : runs) {
+        Stopwatch w;
+        const double c0 = processCpuMs();
+        run.ogm.addFrame(i, s.camera, cgm_out[i]);
+        run.ogm.fuse(i, s.T_w_c[i], &run.r);
+        run.c.push_back(processCpuMs() - c0);
+        run.t.push_back(w.elapsedMs());
+        run.checksum = fnv1a(run.r.depth.var_m2, fnv1a(run.r.depth.depth_m, run.checksum));
+      }
+      const OgmResult& r = runs.front().r;
       window_sum += r.depth.window_length;
       filled += static_cast<double>(cv::countNonZero(r.depth.depth_m)) -
                 cv::countNonZero(cgm_out[i].depth_m);
     }
-    std::printf(
-        "  O-GM_%-5d mean %6.2f ms  median %6.2f ms  (CPU mean %.2f median %.2f ms; mean "
-        "window %.1f, filled %.0f px/frame, gated %.1f%% of projected)\n",
-        window, mean(t), median(t), mean(c), median(c), window_sum / n, filled / n,
-        100.0 * static_cast<double>(ogm.stats().points_gated) /
-            std::max<double>(1.0, static_cast<double>(ogm.stats().points_projected)));
+    for (const Run& run : runs) {
+      std::printf(
+          "  O-GM_%-2d %d thr mean %6.2f ms  median %6.2f ms  (CPU of all threads mean %.2f "
+          "median %.2f ms; output checksum %016llx)\n",
+          window, run.threads, mean(run.t), median(run.t), mean(run.c), median(run.c),
+          static_cast<unsigned long long>(run.checksum));
+    }
+    const OgmStats& st = runs.front().ogm.stats();
+    std::printf("  O-GM_%-2d mean window %.1f, filled %.0f px/frame, gated %.1f%% of projected\n",
+                window, window_sum / n, filled / n,
+                100.0 * static_cast<double>(st.points_gated) /
+                    std::max<double>(1.0, static_cast<double>(st.points_projected)));
   }
 }
 
@@ -197,6 +267,14 @@ int main(int argc, char** argv) {
   if (data.empty()) data = "../shared/data";
   int synth_frames = 40;
   bool timing_only = false;
+  std::vector<int> threads = {1, 2};
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::printf("%s", kUsage);
+      return 0;
+    }
+  }
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--data")
@@ -205,6 +283,12 @@ int main(int argc, char** argv) {
       synth_frames = std::max(11, std::atoi(argv[i + 1]));
     else if (a == "--timing-only")
       timing_only = std::atoi(argv[i + 1]) != 0;
+    else if (a == "--threads")
+      threads = parseThreads(argv[i + 1]);
+  }
+  if (threads.empty()) {
+    std::fprintf(stderr, "--threads: expected a list such as 1,2\n");
+    return 2;
   }
   for (const char* name : {"icl_living_room_kt0_short", "tum_fr3_sitting_static_short"}) {
     Sequence s;
@@ -213,7 +297,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "cannot load %s/%s\n", data.c_str(), name);
       continue;
     }
-    timeSequence(s);
+    timeSequence(s, threads);
   }
   if (timing_only) return 0;
   synthRmse(synth_frames, false);

@@ -2,12 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <limits>
+#include <opencv2/core/utility.hpp>
 
 namespace pplvo::depth_filter {
 
 OgmFusion::OgmFusion(const Options& options) : options_(options) {
   options_.max_window = std::max(1, options_.max_window);
   options_.k_consistency = std::max(1, options_.k_consistency);
+  options_.threads = std::max(1, options_.threads);
 }
 
 void OgmFusion::warn(const std::string& what) {
@@ -23,6 +28,8 @@ void OgmFusion::configure(const PinholeCamera& camera) {
   for (Slot& s : slots_) {
     s.depth_m.create(h, w, CV_32FC1);
     s.weight.create(h, w, CV_32FC1);
+    s.row_zmin.assign(static_cast<size_t>(h), 0.f);
+    s.row_zmax.assign(static_cast<size_t>(h), 0.f);
   }
   ray_x_.resize(static_cast<size_t>(w));
   ray_y_.resize(static_cast<size_t>(h));
@@ -40,11 +47,18 @@ void OgmFusion::configure(const PinholeCamera& camera) {
   }
   acc_.assign(static_cast<size_t>(w) * h, Acc{0, 0, 0, 0});
   count_.assign(static_cast<size_t>(w) * h, 0);
-  ax_.assign(static_cast<size_t>(w), 0.f);
-  ay_.assign(static_cast<size_t>(w), 0.f);
-  az_.assign(static_cast<size_t>(w), 0.f);
-  idx_.assign(static_cast<size_t>(w), -1);
-  range_.assign(static_cast<size_t>(w), 0.f);
+  past_.reserve(slots_.size());
+  frames_.reserve(slots_.size());
+  ray_rot_.assign(slots_.size() * 3 * static_cast<size_t>(w), 0.f);
+  const int n = std::min(options_.threads, h);
+  bands_.assign(static_cast<size_t>(n), Band());
+  for (int b = 0; b < n; ++b) {
+    Band& band = bands_[static_cast<size_t>(b)];
+    band.v0 = static_cast<int>(static_cast<int64_t>(h) * b / n);
+    band.v1 = static_cast<int>(static_cast<int64_t>(h) * (b + 1) / n);
+    band.idx.assign(static_cast<size_t>(w), -1);
+    band.range.assign(static_cast<size_t>(w), 0.f);
+  }
 }
 
 void OgmFusion::reset() {
@@ -121,6 +135,8 @@ bool OgmFusion::addFrame(int64_t seq, const PinholeCamera& camera, const DepthWi
     float* wo = slot->weight.ptr<float>(v);
     const float* cs = &cos_[static_cast<size_t>(v) * w];
     int32_t bad_row = 0;
+    // Depth range of the row's points as integers: positive floats order like their bits.
+    int32_t zmin_bits = std::numeric_limits<int32_t>::max(), zmax_bits = 0;
     for (int u = 0; u < w; ++u) {  // branch-free (vectorised); NaN fails every comparison
       const float z = zi[u], var = vi[u];
       const bool ok = (z > 0.f) & (z < 1e30f) & (var > 0.f) & (var < 1e30f);
@@ -128,8 +144,15 @@ bool OgmFusion::addFrame(int64_t seq, const PinholeCamera& camera, const DepthWi
       const float var_safe = ok ? var : 1.f;
       zo[u] = ok ? z : 0.f;
       wo[u] = ok ? (cs[u] * cs[u]) / var_safe : 0.f;  // 1 / sigma_r^2, eq. (6)
+      int32_t bits;
+      std::memcpy(&bits, &z, sizeof bits);
+      zmin_bits = std::min(zmin_bits, ok ? bits : std::numeric_limits<int32_t>::max());
+      zmax_bits = std::max(zmax_bits, ok ? bits : 0);
     }
     bad += bad_row;
+    if (zmax_bits == 0) zmin_bits = 0;  // no point: both 0
+    std::memcpy(&slot->row_zmin[static_cast<size_t>(v)], &zmin_bits, sizeof zmin_bits);
+    std::memcpy(&slot->row_zmax[static_cast<size_t>(v)], &zmax_bits, sizeof zmax_bits);
   }
   stats_.invalid_pixels += bad;
   ++stats_.frames_added;
@@ -240,12 +263,113 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
   cur->has_pose = true;
 
   const int w = camera_.width, h = camera_.height;
-  std::fill(count_.begin(), count_.end(), static_cast<uint8_t>(0));
+
+  // Past frames with a pose, newest to oldest, and their transforms into the current camera.
+  std::vector<Slot*>& past = past_;
+  past.clear();
+  for (Slot& s : slots_) {
+    if (s.used && s.has_pose && s.seq < seq) past.push_back(&s);
+  }
+  std::sort(past.begin(), past.end(), [](const Slot* a, const Slot* b) { return a->seq > b->seq; });
+  const Pose3 T_c_w = T_w_c.inverse();
+  frames_.clear();
+  for (size_t j = 0; j < past.size(); ++j) {
+    const Pose3 T_c_k = T_c_w * past[j]->T_w_c;
+    const Eigen::Matrix3f R = T_c_k.linear().cast<float>();
+    PastFrame f;
+    f.slot = past[j];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) f.r[3 * r + c] = R(r, c);
+    }
+    f.tx = static_cast<float>(T_c_k.translation().x());
+    f.ty = static_cast<float>(T_c_k.translation().y());
+    f.tz = static_cast<float>(T_c_k.translation().z());
+    float* ax = &ray_rot_[3 * j * static_cast<size_t>(w)];
+    float* ay = ax + w;
+    float* az = ay + w;
+    for (int u = 0; u < w; ++u) {
+      ax[u] = R(0, 0) * ray_x_[u];
+      ay[u] = R(1, 0) * ray_x_[u];
+      az[u] = R(2, 0) * ray_x_[u];
+    }
+    f.ax = ax;
+    f.ay = ay;
+    f.az = az;
+    frames_.push_back(f);
+  }
+
+  DepthWithVariance& out = result.depth;
+  out.depth_m.create(h, w, CV_32FC1);
+  out.var_m2.create(h, w, CV_32FC1);
+  for (Band& b : bands_) b.projected = b.gated = b.filled = 0;
+  const int n = static_cast<int>(bands_.size());
+  if (n == 1) {
+    fuseBand(*cur, out, bands_[0]);
+  } else {
+    // Bands write disjoint rows of the accumulator, the counts and the output.
+    cv::parallel_for_(
+        cv::Range(0, n),
+        [&](const cv::Range& r) {
+          for (int b = r.start; b < r.end; ++b) fuseBand(*cur, out, bands_[static_cast<size_t>(b)]);
+        },
+        n);
+  }
+  for (const Band& b : bands_) {
+    stats_.points_projected += b.projected;
+    stats_.points_gated += b.gated;
+    stats_.pixels_filled += b.filled;
+  }
+  out.window_length = 1 + static_cast<int>(past.size());
+  stats_.last_window_length = out.window_length;
+  ++stats_.frames_fused;
+  result.ok = true;
+}
+
+bool OgmFusion::rowMayReach(const PastFrame& f, int v, int v0, int v1) const {
+  // The target row of a point is floor(vf + 1/2), vf = fy py / pz + cy with
+  // p = z (d_u + b) + t, d_u + b = R (x_u, y_v, 1) affine in u. Where pz > 0 on the whole
+  // rectangle [0, w-1] x [z_min, z_max] of the row (pz is bilinear: checked at the corners),
+  // vf is monotonic in u and in z, so its extremes are at the four corners. The float
+  // projection differs from this (evaluated in double on the same float inputs) by rounding
+  // only: bounded by the margin where p is far from the image plane and its components do not
+  // cancel (pz >= (z |d|_1 + |t|_1) / 4 at the corners, hence everywhere). Otherwise the row
+  // is not excluded.
+  const Slot& s = *f.slot;
+  const double zs[2] = {s.row_zmin[static_cast<size_t>(v)], s.row_zmax[static_cast<size_t>(v)]};
+  const float ry = ray_y_[static_cast<size_t>(v)];
+  const float bx = f.r[1] * ry + f.r[2], by = f.r[4] * ry + f.r[5], bz = f.r[7] * ry + f.r[8];
+  const double t1 = std::abs(f.tx) + std::abs(f.ty) + std::abs(f.tz);
+  const double min_z = options_.min_depth_m;
+  const double fy = camera_.fy, cy = camera_.cy;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  const int us[2] = {0, camera_.width - 1};
+  for (const int u : us) {
+    const double dx = static_cast<double>(f.ax[u]) + bx, dy = static_cast<double>(f.ay[u]) + by,
+                 dz = static_cast<double>(f.az[u]) + bz;
+    const double d1 = std::abs(dx) + std::abs(dy) + std::abs(dz);
+    for (const double z : zs) {
+      const double py = z * dy + f.ty, pz = z * dz + f.tz;
+      if (!(pz > min_z) || !(4.0 * pz >= z * d1 + t1)) return true;
+      const double vf = fy * py / pz + cy;
+      lo = std::min(lo, vf);
+      hi = std::max(hi, vf);
+    }
+  }
+  // Rounding of the float projection under the conditions above: < 1e-5 (|fy| + |cy|) px.
+  const double margin = 1.0 + 1e-4 * (std::abs(fy) + std::abs(cy));
+  return hi + 0.5 + margin >= v0 && lo + 0.5 - margin < v1;
+}
+
+void OgmFusion::fuseBand(const Slot& cur, DepthWithVariance& out, Band& band) {
+  const int w = camera_.width, h = camera_.height;
+  const int v0 = band.v0, v1 = band.v1;
+  std::fill(count_.begin() + static_cast<ptrdiff_t>(v0) * w,
+            count_.begin() + static_cast<ptrdiff_t>(v1) * w, static_cast<uint8_t>(0));
 
   // Current frame first, at its own pixels: the first point of a pixel sets its reference.
-  for (int v = 0; v < h; ++v) {
-    const float* z = cur->depth_m.ptr<float>(v);
-    const float* wt = cur->weight.ptr<float>(v);
+  for (int v = v0; v < v1; ++v) {
+    const float* z = cur.depth_m.ptr<float>(v);
+    const float* wt = cur.weight.ptr<float>(v);
     const float* ic = &inv_cos_[static_cast<size_t>(v) * w];
     Acc* a = &acc_[static_cast<size_t>(v) * w];
     uint8_t* n = &count_[static_cast<size_t>(v) * w];
@@ -256,51 +380,36 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
     }
   }
 
-  // Past frames with a pose, newest to oldest.
-  std::vector<Slot*>& past = past_;
-  past.clear();
-  for (Slot& s : slots_) {
-    if (s.used && s.has_pose && s.seq < seq) past.push_back(&s);
-  }
-  std::sort(past.begin(), past.end(), [](const Slot* a, const Slot* b) { return a->seq > b->seq; });
-
-  const Pose3 T_c_w = T_w_c.inverse();
+  // Past frames, newest to oldest; each row row-major, only the points landing in the band.
   const float fx = static_cast<float>(camera_.fx), fy = static_cast<float>(camera_.fy);
   const float cx = static_cast<float>(camera_.cx), cy = static_cast<float>(camera_.cy);
   const float min_z = static_cast<float>(options_.min_depth_m);
   const int k = std::min(options_.k_consistency, 255);
   const float g2 = static_cast<float>(options_.gate_sigma * options_.gate_sigma);
   const float umax = static_cast<float>(w) - 0.5f, vmax = static_cast<float>(h) - 0.5f;
-  float* ax = ax_.data();
-  float* ay = ay_.data();
-  float* az = az_.data();
-  int32_t* idx = idx_.data();
-  float* range = range_.data();
+  const bool whole = v0 == 0 && v1 == h;
+  const int32_t first = v0 * w;  // band's pixels: [first, first + size)
+  const uint32_t size = static_cast<uint32_t>(v1 - v0) * static_cast<uint32_t>(w);
+  int32_t* idx = band.idx.data();
+  float* range = band.range.data();
   int64_t projected = 0, gated = 0;
-  for (Slot* s : past) {
-    const Pose3 T_c_k = T_c_w * s->T_w_c;
-    const Eigen::Matrix3f R = T_c_k.linear().cast<float>();
-    const float tx = static_cast<float>(T_c_k.translation().x());
-    const float ty = static_cast<float>(T_c_k.translation().y());
-    const float tz = static_cast<float>(T_c_k.translation().z());
-    for (int u = 0; u < w; ++u) {
-      ax[u] = R(0, 0) * ray_x_[u];
-      ay[u] = R(1, 0) * ray_x_[u];
-      az[u] = R(2, 0) * ray_x_[u];
-    }
+  for (const PastFrame& f : frames_) {
+    const Slot& s = *f.slot;
     for (int v = 0; v < h; ++v) {
-      const float* z = s->depth_m.ptr<float>(v);
-      const float* wt = s->weight.ptr<float>(v);
-      const float ry = ray_y_[v];
-      const float bx = R(0, 1) * ry + R(0, 2), by = R(1, 1) * ry + R(1, 2),
-                  bz = R(2, 1) * ry + R(2, 2);
-      projectRow(RowProjection{z, ax, ay, az, bx, by, bz, tx, ty, tz, fx, fy, cx, cy, min_z, umax,
-                               vmax, w},
+      if (!(s.row_zmax[static_cast<size_t>(v)] > 0.f)) continue;  // no point in this row
+      if (!whole && !rowMayReach(f, v, v0, v1)) continue;
+      const float* z = s.depth_m.ptr<float>(v);
+      const float* wt = s.weight.ptr<float>(v);
+      const float ry = ray_y_[static_cast<size_t>(v)];
+      const float bx = f.r[1] * ry + f.r[2], by = f.r[4] * ry + f.r[5], bz = f.r[7] * ry + f.r[8];
+      projectRow(RowProjection{z, f.ax, f.ay, f.az, bx, by, bz, f.tx, f.ty, f.tz, fx, fy, cx, cy,
+                               min_z, umax, vmax, w},
                  idx, range);
       // Accumulate (scattered).
       for (int u = 0; u < w; ++u) {
         const int32_t i = idx[u];
-        if (i < 0) continue;
+        // Outside the band or none (-1): i - first >= 0 and < size fails as unsigned.
+        if (static_cast<uint32_t>(i - first) >= size) continue;
         ++projected;
         Acc& a = acc_[static_cast<size_t>(i)];
         uint8_t& n = count_[static_cast<size_t>(i)];
@@ -325,16 +434,13 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
       }
     }
   }
-  stats_.points_projected += projected;
-  stats_.points_gated += gated;
+  band.projected = projected;
+  band.gated = gated;
 
   // Eq. (7) and the GM variance; back to depth with z = r cos(alpha).
-  DepthWithVariance& out = result.depth;
-  out.depth_m.create(h, w, CV_32FC1);
-  out.var_m2.create(h, w, CV_32FC1);
   int64_t filled = 0;
-  for (int v = 0; v < h; ++v) {
-    const float* zc = cur->depth_m.ptr<float>(v);
+  for (int v = v0; v < v1; ++v) {
+    const float* zc = cur.depth_m.ptr<float>(v);
     const float* cs = &cos_[static_cast<size_t>(v) * w];
     const Acc* a = &acc_[static_cast<size_t>(v) * w];
     const uint8_t* n = &count_[static_cast<size_t>(v) * w];
@@ -355,11 +461,7 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
     }
     filled += filled_row;
   }
-  stats_.pixels_filled += filled;
-  out.window_length = 1 + static_cast<int>(past.size());
-  stats_.last_window_length = out.window_length;
-  ++stats_.frames_fused;
-  result.ok = true;
+  band.filled = filled;
 }
 
 }  // namespace pplvo::depth_filter

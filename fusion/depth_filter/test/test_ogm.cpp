@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "analytic_scene.h"
@@ -154,6 +155,150 @@ TEST(OgmFusion, BadInputsAreCountedNotFatal) {
   EXPECT_EQ(ogm.stats().warnings, 4);  // unknown, NaN pose, bad size, size change
 }
 
+// ------------------------------------------------- parallel fusion: bands, same results ---
+
+/// Outputs and stats of fusing frames 0..n-1 in turn (each fused on its pose).
+struct ThreadRun {
+  std::vector<DepthWithVariance> out;
+  OgmStats stats;
+};
+
+ThreadRun fuseWithThreads(const PinholeCamera& cam, const std::vector<DepthWithVariance>& frames,
+                          const std::vector<Pose3>& T_w_c, int threads) {
+  OgmOptions o;
+  o.threads = threads;
+  OgmFusion ogm(o);
+  EXPECT_EQ(ogm.options().threads, threads);
+  ThreadRun run;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_TRUE(ogm.addFrame(static_cast<int64_t>(i), cam, frames[i]));
+    OgmResult r = ogm.fuse(static_cast<int64_t>(i), T_w_c[i]);
+    EXPECT_TRUE(r.ok) << r.warning;
+    run.out.push_back(r.depth);
+  }
+  run.stats = ogm.stats();
+  return run;
+}
+
+/// Bit-identical outputs (no NaN or infinity, where a != b would hide nothing) and equal stats.
+void expectIdentical(const ThreadRun& a, const ThreadRun& b, const std::string& what) {
+  ASSERT_EQ(a.out.size(), b.out.size()) << what;
+  for (size_t i = 0; i < a.out.size(); ++i) {
+    const DepthWithVariance &x = a.out[i], &y = b.out[i];
+    ASSERT_EQ(x.depth_m.size(), y.depth_m.size()) << what;
+    ASSERT_EQ(x.var_m2.size(), y.var_m2.size()) << what;
+    EXPECT_TRUE(cv::checkRange(x.depth_m, true) && cv::checkRange(x.var_m2, true)) << what;
+    EXPECT_TRUE(cv::checkRange(y.depth_m, true) && cv::checkRange(y.var_m2, true)) << what;
+    EXPECT_EQ(cv::countNonZero(x.depth_m != y.depth_m), 0) << what << ", frame " << i;
+    EXPECT_EQ(cv::countNonZero(x.var_m2 != y.var_m2), 0) << what << ", frame " << i;
+    EXPECT_EQ(x.window_length, y.window_length) << what;
+  }
+  const OgmStats &s = a.stats, &t = b.stats;
+  EXPECT_EQ(s.frames_added, t.frames_added) << what;
+  EXPECT_EQ(s.frames_fused, t.frames_fused) << what;
+  EXPECT_EQ(s.window_resets, t.window_resets) << what;
+  EXPECT_EQ(s.size_changes, t.size_changes) << what;
+  EXPECT_EQ(s.unknown_frame_poses, t.unknown_frame_poses) << what;
+  EXPECT_EQ(s.invalid_poses, t.invalid_poses) << what;
+  EXPECT_EQ(s.invalid_inputs, t.invalid_inputs) << what;
+  EXPECT_EQ(s.invalid_pixels, t.invalid_pixels) << what;
+  EXPECT_EQ(s.evicted_capacity, t.evicted_capacity) << what;
+  EXPECT_EQ(s.evicted_uncertainty, t.evicted_uncertainty) << what;
+  EXPECT_EQ(s.points_projected, t.points_projected) << what;
+  EXPECT_EQ(s.points_gated, t.points_gated) << what;
+  EXPECT_EQ(s.pixels_filled, t.pixels_filled) << what;
+  EXPECT_EQ(s.warnings, t.warnings) << what;
+  EXPECT_EQ(s.last_warning, t.last_warning) << what;
+  EXPECT_EQ(s.last_window_length, t.last_window_length) << what;
+}
+
+Pose3 rpyPose(double roll, double pitch, double yaw, const Eigen::Vector3d& t) {
+  const Eigen::Quaterniond q = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()) *
+                               Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ());
+  return makePose(t, q);
+}
+
+/// Planes through the last camera's centre (the world origin, identity pose) seen edge-on by
+/// it: plane j holds the points with y = m_j z, which it projects to image row cy + fy m_j,
+/// here 119.5, 159.5, 239.5, 319.5 and 359.5, exactly between the last rows of one band and
+/// the first of the next for 2, 3 and 4 threads (bands of 480 / n rows). Earlier frames see
+/// them from above and behind, so all their points land in those boundary rows of the last
+/// frame (many points per pixel, at different ranges: the gate decides, in order).
+TEST(OgmParallel, PointsOnBandBoundaryRowsSameForAnyThreadCount) {
+  PinholeCamera cam;
+  cam.width = 640;
+  cam.height = 480;
+  cam.fx = cam.fy = 525.0;
+  cam.cx = 319.5;
+  cam.cy = 239.5;
+  const double rows[5] = {119.5, 159.5, 239.5, 319.5, 359.5};
+  constexpr int kN = 8;  // frames 0..6 from above, frame 7 (identity) sees the planes edge-on
+  std::vector<Pose3> poses;
+  for (int i = 0; i < kN - 1; ++i) {
+    poses.push_back(rpyPose(0.02 * (i - 3), -(0.25 + 0.03 * i), 0.03 * (i - 3),
+                            Eigen::Vector3d(0.05 * i - 0.15, -0.3 - 0.02 * i, -0.4 - 0.03 * i)));
+  }
+  poses.push_back(Pose3::Identity());
+  std::vector<DepthWithVariance> frames;
+  for (const Pose3& T : poses) {
+    DepthWithVariance d;
+    d.depth_m = cv::Mat::zeros(cam.height, cam.width, CV_32FC1);
+    d.var_m2 = cv::Mat::zeros(cam.height, cam.width, CV_32FC1);
+    const Eigen::Vector3d o = T.translation();
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        const Eigen::Vector3d dir = T.linear() * cam.ray(u, v);  // camera z = 1: s is the depth
+        double best = std::numeric_limits<double>::infinity();
+        for (const double row : rows) {
+          const double m = (row - cam.cy) / cam.fy;
+          const double den = dir.y() - m * dir.z();
+          if (std::abs(den) < 1e-9) continue;
+          const double s = -(o.y() - m * o.z()) / den;
+          if (s > 0.2 && s < 8.0 && (o + s * dir).z() > 0.3) best = std::min(best, s);
+        }
+        if (!std::isfinite(best)) continue;
+        const double sigma = 1.425e-3 * best * best;
+        d.depth_m.at<float>(v, u) = static_cast<float>(best);
+        d.var_m2.at<float>(v, u) = static_cast<float>(sigma * sigma);
+      }
+    }
+    frames.push_back(d);
+  }
+  ASSERT_EQ(cv::countNonZero(frames.back().depth_m), 0);  // edge-on: nothing seen
+  ASSERT_GT(cv::countNonZero(frames.front().depth_m), 100000);
+
+  const ThreadRun serial = fuseWithThreads(cam, frames, poses, 1);
+  // Not vacuous: the last fusion fills (almost) only the boundary rows, with many points each,
+  // and the gate rejects some of them.
+  const cv::Mat& last = serial.out.back().depth_m;
+  int in_rows = 0;
+  for (const double row : rows) {
+    for (const int v : {static_cast<int>(row - 0.5), static_cast<int>(row + 0.5)})
+      in_rows += cv::countNonZero(last.row(v));
+  }
+  EXPECT_GT(in_rows, 2000);
+  EXPECT_GT(in_rows, cv::countNonZero(last) * 9 / 10);
+  EXPECT_GT(serial.stats.points_gated, 10000);
+  for (const int threads : {2, 3, 4}) {
+    expectIdentical(serial, fuseWithThreads(cam, frames, poses, threads),
+                    std::to_string(threads) + " threads");
+  }
+}
+
+TEST(OgmParallel, MoreThreadsThanRows) {
+  const PinholeCamera cam = smallCamera();  // 5 rows: 5 bands of one row
+  std::vector<DepthWithVariance> frames;
+  std::vector<Pose3> poses;
+  for (int i = 0; i < 6; ++i) {
+    frames.push_back(uniform(cam, 2.0f + 0.01f * static_cast<float>(i % 3), 1e-4f));
+    poses.push_back(rpyPose(0.3 * i, 0.0, 0.0, Eigen::Vector3d(0.0, 0.05 * i, 0.0)));
+  }
+  const ThreadRun serial = fuseWithThreads(cam, frames, poses, 1);
+  EXPECT_GT(serial.stats.points_projected, 50);
+  expectIdentical(serial, fuseWithThreads(cam, frames, poses, 8), "8 threads, 5 rows");
+}
+
 // ---------------------------------------------------------------- analytic noisy scene ---
 
 struct Errors {
@@ -258,6 +403,43 @@ std::vector<SceneFrame>* SceneTest::frames_ = nullptr;
 std::vector<DepthWithVariance>* SceneTest::cgm_ = nullptr;
 FusedRun* SceneTest::ogm5_ = nullptr;
 FusedRun* SceneTest::ogm10_ = nullptr;
+
+TEST_F(SceneTest, ThreadCountDoesNotChangeResults) {
+  std::vector<Pose3> poses;
+  for (const SceneFrame& f : *frames_) poses.push_back(f.T_w_c);
+  const ThreadRun serial = fuseWithThreads(scene_->camera(), *cgm_, poses, 1);
+  EXPECT_GT(serial.stats.points_gated, 0);
+  for (const int threads : {2, 3}) {
+    expectIdentical(serial, fuseWithThreads(scene_->camera(), *cgm_, poses, threads),
+                    std::to_string(threads) + " threads");
+  }
+}
+
+/// The same frames fused on poses far from the true ones: rolls of 90 and 180 degrees (rows
+/// become columns or reverse), a 25 degree pitch (~250 rows), a 75 degree yaw and a camera 2.5 m
+/// back (points near the image plane, no row bound), so that points cross every band.
+TEST_F(SceneTest, LargeMotionAcrossBandsSameForAnyThreadCount) {
+  const double kPi = 3.14159265358979323846;
+  const Pose3 motions[] = {
+      rpyPose(kPi / 2, 0.0, 0.0, Eigen::Vector3d(0.1, 0.0, 0.0)),
+      rpyPose(kPi, 0.0, 0.0, Eigen::Vector3d::Zero()),
+      rpyPose(0.0, 25 * kPi / 180, 0.0, Eigen::Vector3d(0.0, 0.4, 0.0)),
+      rpyPose(0.1, 0.0, 75 * kPi / 180, Eigen::Vector3d(0.5, 0.0, 0.3)),
+      rpyPose(0.0, 0.0, 0.0, Eigen::Vector3d(0.0, 0.0, -2.5)),
+      rpyPose(-kPi / 3, -0.2, 0.3, Eigen::Vector3d(-0.3, 0.2, 0.5)),
+  };
+  std::vector<Pose3> poses;
+  for (size_t i = 0; i < frames_->size(); ++i) {
+    poses.push_back((*frames_)[i].T_w_c * motions[i % (sizeof(motions) / sizeof(motions[0]))]);
+  }
+  const ThreadRun serial = fuseWithThreads(scene_->camera(), *cgm_, poses, 1);
+  EXPECT_GT(serial.stats.points_projected, 1000000);
+  EXPECT_GT(serial.stats.points_gated, 0);
+  for (const int threads : {2, 3}) {
+    expectIdentical(serial, fuseWithThreads(scene_->camera(), *cgm_, poses, threads),
+                    std::to_string(threads) + " threads");
+  }
+}
 
 TEST_F(SceneTest, DepthRmseOgm10BelowCgmAndRaw) {
   Errors raw, cgm, o5, o10;

@@ -230,6 +230,10 @@ void listFields(V& v, depth_filter::OgmOptions& o) {
           positive());
   v.field("min_depth_m", o.min_depth_m,
           "projected points closer than this to the current camera are ignored (m)", atLeast(0));
+  v.field("threads", o.threads,
+          "threads of the fusion (OpenCV's pool; bands of the image): 1 = serial. The results "
+          "do not depend on it, bit for bit",
+          atLeast(1));
 }
 
 template <class V>

@@ -54,6 +54,10 @@ struct OgmOptions {
   double max_translation_variance_m2 = 1e-4;
   /// Projected points closer than this (m) in the current camera are ignored.
   double min_depth_m = 0.05;
+  /// Threads of fuse() (OpenCV's parallel_for_ pool): the output image is split into this many
+  /// horizontal bands, each accumulating the points that land in it in the serial order.
+  /// 1 = serial. The results (depth, variance, stats) do not depend on it, bit for bit.
+  int threads = 2;
 };
 
 /// O-GM fusion. Each window frame is stored as its C-GM depth and range variance
@@ -68,6 +72,11 @@ struct OgmOptions {
 /// z = r_bar cos(alpha), var_z = var_r cos^2(alpha). Pixels without a current measurement but
 /// with projected points are filled. Memory: max_window frames of two float images plus one
 /// accumulator image, all allocated once per camera.
+/// Parallel (options.threads > 1): the output image is split into horizontal bands, one task
+/// each; every task walks the frames in the serial order and accumulates only the points that
+/// land in its band, so each pixel sees its points in the same order as in the serial fusion.
+/// A past-frame row is projected only by the tasks whose band it can reach (bound from the
+/// row's depth range and the transform); rows without depth are skipped.
 /// Fused variances come from float sums centred per pixel; relative precision ~1e-6.
 class OgmFusion {
  public:
@@ -110,6 +119,21 @@ class OgmFusion {
     Pose3 T_w_c = Pose3::Identity();
     cv::Mat depth_m;  ///< CV_32FC1, 0 = missing
     cv::Mat weight;   ///< CV_32FC1 1 / sigma_r^2 (eq. 6), 1/m^2; 0 where missing
+    std::vector<float> row_zmin, row_zmax;  ///< depth range of each row's points (0: none)
+  };
+  /// One past frame of a fusion: its transform into the current camera (float, as projected).
+  struct PastFrame {
+    const Slot* slot;
+    float r[9];                 ///< row-major rotation of T_c_k
+    float tx, ty, tz;           ///< translation of T_c_k
+    const float *ax, *ay, *az;  ///< R * (x_u, 0, 0) per column (in ray_rot_)
+  };
+  /// Output band [v0, v1) of one task, with its row buffers and counters.
+  struct Band {
+    int v0 = 0, v1 = 0;
+    std::vector<int32_t> idx;  ///< target pixel per column of one row (-1: none)
+    std::vector<float> range;  ///< range in the current camera per column of one row
+    int64_t projected = 0, gated = 0, filled = 0;
   };
   /// Running sums of one pixel, centred on its first accepted range r0 (float precision
   /// suffices for d = r - r0): S_w, S_w d, S_w (d^2 + sigma^2). The count lives in count_.
@@ -118,6 +142,10 @@ class OgmFusion {
   };
 
   void configure(const PinholeCamera& camera);
+  /// fuse() on the output rows of one band.
+  void fuseBand(const Slot& cur, DepthWithVariance& out, Band& band);
+  /// False only if no point of row v of `f` can land in rows [v0, v1) of the current image.
+  bool rowMayReach(const PastFrame& f, int v, int v0, int v1) const;
   void warn(const std::string& what);
   Slot* find(int64_t seq);
 
@@ -130,11 +158,11 @@ class OgmFusion {
   std::vector<float> cos_;            ///< cos(alpha) per pixel = 1 / |ray|
   std::vector<float> inv_cos_;        ///< |ray| per pixel
   std::vector<Acc> acc_;
-  std::vector<Slot*> past_;          ///< window frames used by one fusion, newest first
-  std::vector<uint8_t> count_;       ///< points per pixel (saturates at 255)
-  std::vector<float> ax_, ay_, az_;  ///< R * (x_u, 0, 0) per column of one past frame
-  std::vector<int32_t> idx_;         ///< target pixel per column of one row (-1: none)
-  std::vector<float> range_;         ///< range in the current camera per column of one row
+  std::vector<Slot*> past_;        ///< window frames used by one fusion, newest first
+  std::vector<PastFrame> frames_;  ///< the same with their transforms
+  std::vector<uint8_t> count_;     ///< points per pixel (saturates at 255)
+  std::vector<float> ray_rot_;     ///< ax, ay, az (w each) per window slot of one fusion
+  std::vector<Band> bands_;        ///< one per task (min(threads, height))
 };
 
 }  // namespace pplvo::depth_filter
