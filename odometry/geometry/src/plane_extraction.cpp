@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <opencv2/core/utility.hpp>  // parallel_for_
 
 #include "pplvo/geometry/lifting.h"  // validateDepth
 
@@ -77,6 +78,28 @@ PlaneExtractor::PlaneExtractor(const PinholeCamera& camera, const PlaneExtractio
   bin_count_.resize(2 * options_.histogram_bins * options_.histogram_bins);
 }
 
+namespace {
+
+/// Fixed bands of cell rows (independent of the thread count, so sums keep one order).
+constexpr int kBands = 4;
+
+/// Runs body(band) for band = 0..kBands-1 on up to `threads` threads.
+template <class F>
+void forEachBand(int threads, const F& body) {
+  if (threads <= 1) {
+    for (int b = 0; b < kBands; ++b) body(b);
+    return;
+  }
+  cv::parallel_for_(
+      cv::Range(0, kBands),
+      [&](const cv::Range& r) {
+        for (int b = r.start; b < r.end; ++b) body(b);
+      },
+      std::min(threads, kBands));
+}
+
+}  // namespace
+
 PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   PlaneExtractionResult res;
   PlaneExtractionStats& st = res.stats;
@@ -95,39 +118,48 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   // Each row's run of cs pixels is summed in registers (with y = yf z, so only x z, z and their
   // squares need per-pixel sums), then added to its cell once.
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  for (int v = 0; v < H; ++v) {
-    const float* zr = depth.depth_m.ptr<float>(v);
-    const double yf = y_factor_[v];
-    Moments* row_cells = &cell_moments_[static_cast<size_t>(v / cs) * cells_x_];
-    for (int cx = 0; cx < cells_x_; ++cx) {
-      const int u0 = cx * cs, u1 = std::min(W, u0 + cs);
-      double n = 0, sx = 0, sz = 0, sxx = 0, szz = 0, sxz = 0;
-      for (int u = u0; u < u1; ++u) {
-        const float zf = zr[u];
-        const bool ok = zf > 0.0f && zf < kInf;  // false for NaN
-        const double z = ok ? zf : 0.0;
-        const double x = static_cast<double>(x_factor_[u]) * z;
-        n += ok ? 1.0 : 0.0;
-        sx += x;
-        sz += z;
-        sxx += x * x;
-        szz += z * z;
-        sxz += x * z;
+  const int threads = std::max(1, options_.threads);
+  auto bandRows = [&](int band, int* c0, int* c1) {  // cell rows [c0, c1) of a band
+    *c0 = band * cells_y_ / kBands;
+    *c1 = (band + 1) * cells_y_ / kBands;
+  };
+  forEachBand(threads, [&](int band) {
+    int c0, c1;
+    bandRows(band, &c0, &c1);
+    for (int v = c0 * cs; v < std::min(H, c1 * cs); ++v) {
+      const float* zr = depth.depth_m.ptr<float>(v);
+      const double yf = y_factor_[v];
+      Moments* row_cells = &cell_moments_[static_cast<size_t>(v / cs) * cells_x_];
+      for (int cx = 0; cx < cells_x_; ++cx) {
+        const int u0 = cx * cs, u1 = std::min(W, u0 + cs);
+        double n = 0, sx = 0, sz = 0, sxx = 0, szz = 0, sxz = 0;
+        for (int u = u0; u < u1; ++u) {
+          const float zf = zr[u];
+          const bool ok = zf > 0.0f && zf < kInf;  // false for NaN
+          const double z = ok ? zf : 0.0;
+          const double x = static_cast<double>(x_factor_[u]) * z;
+          n += ok ? 1.0 : 0.0;
+          sx += x;
+          sz += z;
+          sxx += x * x;
+          szz += z * z;
+          sxz += x * z;
+        }
+        if (n == 0) continue;
+        Moments& m = row_cells[cx];
+        m.n += n;
+        m.sx += sx;
+        m.sy += yf * sz;
+        m.sz += sz;
+        m.sxx += sxx;
+        m.syy += yf * yf * szz;
+        m.szz += szz;
+        m.sxy += yf * sxz;
+        m.sxz += sxz;
+        m.syz += yf * szz;
       }
-      if (n == 0) continue;
-      Moments& m = row_cells[cx];
-      m.n += n;
-      m.sx += sx;
-      m.sy += yf * sz;
-      m.sz += sz;
-      m.sxx += sxx;
-      m.syy += yf * yf * szz;
-      m.szz += szz;
-      m.sxy += yf * sxz;
-      m.sxz += sxz;
-      m.syz += yf * szz;
     }
-  }
+  });
 
   // 2) Planarity test per cell.
   const double jump_k = options_.jump_sigma_factor, jump_m = options_.jump_margin_m;
@@ -313,94 +345,125 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   // among the segments of the (2R+1)^2 cell neighbourhood if it is within k sigma_z(z) + margin
   // (cells far from any segment are skipped). Without refinement, the valid pixels of each segment
   // cell are labelled.
+  // Per band of cell rows: labels of its own pixels, and plane statistics merged in band order.
+  struct LabelStats {
+    std::vector<int> count, umin, umax, vmin, vmax;
+    std::vector<Eigen::Vector3d> sum;
+  };
+  std::vector<LabelStats> band_stats(kBands);
+  forEachBand(threads, [&](int band) {
+    LabelStats& bs = band_stats[band];
+    bs.count.assign(np, 0);
+    bs.sum.assign(np, Eigen::Vector3d::Zero());
+    bs.umin.assign(np, W);
+    bs.umax.assign(np, -1);
+    bs.vmin.assign(np, H);
+    bs.vmax.assign(np, -1);
+    std::vector<int>& count = bs.count;
+    std::vector<Eigen::Vector3d>& sum = bs.sum;
+    std::vector<int>&umin = bs.umin, &umax = bs.umax, &vmin = bs.vmin, &vmax = bs.vmax;
+    int c0, c1;
+    bandRows(band, &c0, &c1);
+    for (int cy = c0; cy < c1; ++cy) {
+      for (int cx = 0; cx < cells_x_; ++cx) {
+        const int c = cy * cells_x_ + cx;
+        const int own = cell_segment_[c];
+        int cand[25];
+        int ncand = 0;
+        bool interior = own >= 0;
+        const int R = std::clamp(options_.refine_neighbourhood_cells, 1, 2);
+        for (int dy = -R; dy <= R; ++dy) {
+          for (int dx = -R; dx <= R; ++dx) {
+            const int qx = cx + dx, qy = cy + dy;
+            if (qx < 0 || qy < 0 || qx >= cells_x_ || qy >= cells_y_) continue;
+            const int s = cell_segment_[qy * cells_x_ + qx];
+            if (s != own) interior = false;
+            if (s >= 0 && s < np && std::find(cand, cand + ncand, s) == cand + ncand)
+              cand[ncand++] = s;
+          }
+        }
+        if (ncand == 0) continue;
+        if (own >= np) interior = false;    // beyond the label range
+        if (!options_.refine_boundaries) {  // cell-level labels only
+          if (own < 0 || own >= np) continue;
+          interior = true;
+        }
+        const int u0 = cx * cs, v0 = cy * cs, u1 = std::min(W, u0 + cs), v1 = std::min(H, v0 + cs);
+        // Per-cell accumulators indexed by candidate slot; merged into the planes once per cell.
+        int own_slot = -1;
+        for (int k = 0; k < ncand; ++k)
+          if (cand[k] == own) own_slot = k;
+        if (interior && own_slot < 0) continue;
+        int local_count[25] = {0};
+        double local_sum[25][3] = {{0}};
+        // Plane coefficients as plain arrays for the inner loop.
+        double pn[25][4];
+        for (int k = 0; k < ncand; ++k) {
+          pn[k][0] = planes[cand[k]].normal.x();
+          pn[k][1] = planes[cand[k]].normal.y();
+          pn[k][2] = planes[cand[k]].normal.z();
+          pn[k][3] = planes[cand[k]].d;
+        }
+        const double k_sigma = options_.refine_sigma_factor * options_.noise.sigma_z_coeff_per_m;
+        const double margin = options_.refine_margin_m;
+        const bool test_interior = options_.refine_boundaries;
+        for (int v = v0; v < v1; ++v) {
+          const float* zr = depth.depth_m.ptr<float>(v);
+          uint8_t* lr = res.labels.ptr<uint8_t>(v);
+          const double yf = y_factor_[v];
+          for (int u = u0; u < u1; ++u) {
+            const double z = zr[u];
+            if (!(z > 0.0) || !std::isfinite(z)) continue;
+            const double px = x_factor_[u] * z, py = yf * z;
+            const double thr = k_sigma * z * z + margin;
+            int slot = -1;
+            if (interior) {  // whole neighbourhood in one segment: keep the pixel if it fits
+              const double* q = pn[own_slot];
+              if (!test_interior || std::abs(q[0] * px + q[1] * py + q[2] * z + q[3]) < thr)
+                slot = own_slot;
+            } else {
+              double best_dist = thr;
+              for (int k = 0; k < ncand; ++k) {
+                const double dist =
+                    std::abs(pn[k][0] * px + pn[k][1] * py + pn[k][2] * z + pn[k][3]);
+                if (dist < best_dist) {
+                  best_dist = dist;
+                  slot = k;
+                }
+              }
+            }
+            if (slot < 0) continue;
+            lr[u] = static_cast<uint8_t>(cand[slot] + 1);
+            ++local_count[slot];
+            local_sum[slot][0] += px;
+            local_sum[slot][1] += py;
+            local_sum[slot][2] += z;
+          }
+        }
+        for (int k = 0; k < ncand; ++k) {
+          if (local_count[k] == 0) continue;
+          const int b = cand[k];
+          count[b] += local_count[k];
+          sum[b] += Eigen::Vector3d(local_sum[k][0], local_sum[k][1], local_sum[k][2]);
+          umin[b] = std::min(umin[b], u0);  // bounding box at cell granularity
+          umax[b] = std::max(umax[b], u1 - 1);
+          vmin[b] = std::min(vmin[b], v0);
+          vmax[b] = std::max(vmax[b], v1 - 1);
+        }
+      }
+    }
+  });
   std::vector<int> count(np, 0);
   std::vector<Eigen::Vector3d> sum(np, Eigen::Vector3d::Zero());
   std::vector<int> umin(np, W), umax(np, -1), vmin(np, H), vmax(np, -1);
-  for (int cy = 0; cy < cells_y_; ++cy) {
-    for (int cx = 0; cx < cells_x_; ++cx) {
-      const int c = cy * cells_x_ + cx;
-      const int own = cell_segment_[c];
-      int cand[25];
-      int ncand = 0;
-      bool interior = own >= 0;
-      const int R = std::clamp(options_.refine_neighbourhood_cells, 1, 2);
-      for (int dy = -R; dy <= R; ++dy) {
-        for (int dx = -R; dx <= R; ++dx) {
-          const int qx = cx + dx, qy = cy + dy;
-          if (qx < 0 || qy < 0 || qx >= cells_x_ || qy >= cells_y_) continue;
-          const int s = cell_segment_[qy * cells_x_ + qx];
-          if (s != own) interior = false;
-          if (s >= 0 && s < np && std::find(cand, cand + ncand, s) == cand + ncand)
-            cand[ncand++] = s;
-        }
-      }
-      if (ncand == 0) continue;
-      if (own >= np) interior = false;    // beyond the label range
-      if (!options_.refine_boundaries) {  // cell-level labels only
-        if (own < 0 || own >= np) continue;
-        interior = true;
-      }
-      const int u0 = cx * cs, v0 = cy * cs, u1 = std::min(W, u0 + cs), v1 = std::min(H, v0 + cs);
-      // Per-cell accumulators indexed by candidate slot; merged into the planes once per cell.
-      int own_slot = -1;
-      for (int k = 0; k < ncand; ++k)
-        if (cand[k] == own) own_slot = k;
-      if (interior && own_slot < 0) continue;
-      int local_count[25] = {0};
-      double local_sum[25][3] = {{0}};
-      // Plane coefficients as plain arrays for the inner loop.
-      double pn[25][4];
-      for (int k = 0; k < ncand; ++k) {
-        pn[k][0] = planes[cand[k]].normal.x();
-        pn[k][1] = planes[cand[k]].normal.y();
-        pn[k][2] = planes[cand[k]].normal.z();
-        pn[k][3] = planes[cand[k]].d;
-      }
-      const double k_sigma = options_.refine_sigma_factor * options_.noise.sigma_z_coeff_per_m;
-      const double margin = options_.refine_margin_m;
-      const bool test_interior = options_.refine_boundaries;
-      for (int v = v0; v < v1; ++v) {
-        const float* zr = depth.depth_m.ptr<float>(v);
-        uint8_t* lr = res.labels.ptr<uint8_t>(v);
-        const double yf = y_factor_[v];
-        for (int u = u0; u < u1; ++u) {
-          const double z = zr[u];
-          if (!(z > 0.0) || !std::isfinite(z)) continue;
-          const double px = x_factor_[u] * z, py = yf * z;
-          const double thr = k_sigma * z * z + margin;
-          int slot = -1;
-          if (interior) {  // whole neighbourhood in one segment: keep the pixel if it fits
-            const double* q = pn[own_slot];
-            if (!test_interior || std::abs(q[0] * px + q[1] * py + q[2] * z + q[3]) < thr)
-              slot = own_slot;
-          } else {
-            double best_dist = thr;
-            for (int k = 0; k < ncand; ++k) {
-              const double dist = std::abs(pn[k][0] * px + pn[k][1] * py + pn[k][2] * z + pn[k][3]);
-              if (dist < best_dist) {
-                best_dist = dist;
-                slot = k;
-              }
-            }
-          }
-          if (slot < 0) continue;
-          lr[u] = static_cast<uint8_t>(cand[slot] + 1);
-          ++local_count[slot];
-          local_sum[slot][0] += px;
-          local_sum[slot][1] += py;
-          local_sum[slot][2] += z;
-        }
-      }
-      for (int k = 0; k < ncand; ++k) {
-        if (local_count[k] == 0) continue;
-        const int b = cand[k];
-        count[b] += local_count[k];
-        sum[b] += Eigen::Vector3d(local_sum[k][0], local_sum[k][1], local_sum[k][2]);
-        umin[b] = std::min(umin[b], u0);  // bounding box at cell granularity
-        umax[b] = std::max(umax[b], u1 - 1);
-        vmin[b] = std::min(vmin[b], v0);
-        vmax[b] = std::max(vmax[b], v1 - 1);
-      }
+  for (const LabelStats& bs : band_stats) {
+    for (int b = 0; b < np; ++b) {
+      count[b] += bs.count[b];
+      sum[b] += bs.sum[b];
+      umin[b] = std::min(umin[b], bs.umin[b]);
+      umax[b] = std::max(umax[b], bs.umax[b]);
+      vmin[b] = std::min(vmin[b], bs.vmin[b]);
+      vmax[b] = std::max(vmax[b], bs.vmax[b]);
     }
   }
 
@@ -413,19 +476,15 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
       ++st.n_too_few_points;
   }
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return count[a] > count[b]; });
-  std::vector<uint8_t> lut(256, 0);
-  std::vector<Eigen::Vector3d> P;
-  std::vector<Eigen::Matrix3d> C;
-  std::vector<double> V;
-  DepthNoiseModel noise = options_.noise;
-  for (int i : order) {
-    if (static_cast<int>(res.planes.size()) >= options_.max_planes) break;
+  // The fits are independent: all candidates in parallel, then kept in size order.
+  const DepthNoiseModel noise = options_.noise;
+  auto fitSegment = [&](int i) {
     const int step =
         std::max(1, static_cast<int>(std::floor(std::sqrt(static_cast<double>(count[i]) /
                                                           std::max(1, options_.max_fit_points)))));
-    P.clear();
-    C.clear();
-    V.clear();
+    std::vector<Eigen::Vector3d> P;
+    std::vector<Eigen::Matrix3d> C;
+    std::vector<double> V;
     // Grid anchored at multiples of the step (independent of the bounding box).
     for (int v = (vmin[i] + step - 1) / step * step; v <= vmax[i]; v += step) {
       const uint8_t* lr = res.labels.ptr<uint8_t>(v);
@@ -440,7 +499,25 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
         V.push_back(var);
       }
     }
-    const PlaneFitResult fit = fitPlaneWls(P, C, V, options_.fit);
+    return fitPlaneWls(P, C, V, options_.fit);
+  };
+  std::vector<PlaneFitResult> fits(order.size());
+  const int n_fits = static_cast<int>(order.size());
+  if (threads <= 1) {
+    for (int k = 0; k < n_fits; ++k) fits[k] = fitSegment(order[k]);
+  } else {
+    cv::parallel_for_(
+        cv::Range(0, n_fits),
+        [&](const cv::Range& r) {
+          for (int k = r.start; k < r.end; ++k) fits[k] = fitSegment(order[k]);
+        },
+        threads);
+  }
+  std::vector<uint8_t> lut(256, 0);
+  for (int k = 0; k < n_fits; ++k) {
+    if (static_cast<int>(res.planes.size()) >= options_.max_planes) break;
+    const int i = order[k];
+    const PlaneFitResult& fit = fits[k];
     if (!fit.ok()) {
       ++st.n_fit_rejected;
       continue;

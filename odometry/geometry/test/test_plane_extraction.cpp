@@ -105,6 +105,31 @@ TEST(PlaneExtraction, RoomCornerFindsEachPlane) {
   }
 }
 
+TEST(PlaneExtraction, ResultsDoNotDependOnTheThreadCount) {
+  const PinholeCamera cam = test::vgaCamera(true);
+  const auto room = test::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
+  const test::Rendered r =
+      test::renderRoom(cam, test::cornerView(-50, -15, {0.2, 0.0, 0.5}), room, 5);
+  PlaneExtractionOptions o;
+  o.threads = 1;
+  const PlaneExtractionResult ref = PlaneExtractor(cam, o).extract(r.depth);
+  ASSERT_GE(ref.planes.size(), 2u);
+  for (int threads : {2, 3, 8}) {
+    o.threads = threads;
+    const PlaneExtractionResult res = PlaneExtractor(cam, o).extract(r.depth);
+    ASSERT_EQ(res.planes.size(), ref.planes.size()) << threads;
+    EXPECT_EQ(cv::countNonZero(res.labels != ref.labels), 0) << threads;
+    for (size_t i = 0; i < ref.planes.size(); ++i) {
+      EXPECT_EQ(res.planes[i].plane.hessian, ref.planes[i].plane.hessian) << threads;
+      EXPECT_EQ(res.planes[i].plane.cov, ref.planes[i].plane.cov) << threads;
+      EXPECT_EQ(res.planes[i].centroid, ref.planes[i].centroid) << threads;
+      EXPECT_EQ(res.planes[i].n_points, ref.planes[i].n_points) << threads;
+    }
+    EXPECT_EQ(res.stats.n_planar_cells, ref.stats.n_planar_cells);
+    EXPECT_EQ(res.stats.n_fit_rejected, ref.stats.n_fit_rejected);
+  }
+}
+
 TEST(PlaneExtraction, WithoutRefinementAndWithOtherCellSize) {
   const PinholeCamera cam = test::vgaCamera(false);
   const auto room = test::boxRoom(-2, 2, -1.2, 1.5, -2, 3);

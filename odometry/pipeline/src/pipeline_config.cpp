@@ -375,6 +375,9 @@ void listFields(V& v, geometry::PlaneExtractionOptions& o) {
   v.field("max_fit_points", o.max_fit_points,
           "the WLS fit uses a grid subsample of between this and 4x as many pixels", atLeast(3));
   v.field("max_planes", o.max_planes, "planes per frame (labels are 8-bit)", between(1, 254));
+  v.field("threads", o.threads,
+          "threads for the per-pixel passes and the fits (results do not depend on it)",
+          atLeast(1));
   v.section("fit", "WLS plane fitting (Sec. 4.3, eqs. 11-12)", [&] { listFields(v, o.fit); });
 }
 

@@ -65,6 +65,9 @@ struct PlaneExtractionOptions {
   /// floor(sqrt(n_pixels / max_fit_points)) (so between max_fit_points and 4x as many points).
   int max_fit_points = 3000;
   int max_planes = 64;  ///< labels are CV_8U (<= 254)
+  /// Threads for the per-pixel passes and the plane fits. The image is always cut into the
+  /// same bands of cell rows, so the result does not depend on this number.
+  int threads = 2;
   PlaneFitOptions fit;
 };
 
