@@ -67,38 +67,47 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
       cv::cvtColor(frame.bgr, gray, cv::COLOR_BGRA2GRAY);
     else
       gray = frame.bgr;
-    // Lines, then planes, run on a second thread while points run here (points take about
-    // as long as the other two together); each part writes its own members, and the results
-    // do not depend on the threading. Timings are recorded after the join (one writer).
+    // Lines and planes run on threads of their own while points run here (the OS packs the
+    // three onto the cores); each part writes its own members, and the results do not depend
+    // on the threading. Timings are recorded after the joins (one writer).
     FrameFeatures side;
     side.camera = frame.camera;
     double lines_ms = 0, planes_ms = 0;
     features::LineExtractionStats ls;
     FrontendStats plane_stats;
     const bool planes = options_.families.planes && !cgm.depth_m.empty();
-    auto sideJob = [&] {
-      if (options_.families.lines) {
-        Stopwatch w;
-        ls = line_extractor_.extractInto(gray, frame.camera, side);
-        lines_ms = w.elapsedMs();
-      }
-      if (planes) {
-        Stopwatch w;
-        extractPlanes(side, cgm, &plane_stats);
-        planes_ms = w.elapsedMs();
-      }
+    auto linesJob = [&] {
+      Stopwatch w;
+      ls = line_extractor_.extractInto(gray, frame.camera, side);
+      lines_ms = w.elapsedMs();
     };
-    std::future<void> side_job;
-    if (options_.parallel)
-      side_job = std::async(std::launch::async, sideJob);
-    else
-      sideJob();
+    FrameFeatures plane_part;
+    plane_part.camera = frame.camera;
+    auto planesJob = [&] {
+      Stopwatch w;
+      extractPlanes(plane_part, cgm, &plane_stats);
+      planes_ms = w.elapsedMs();
+    };
+    std::future<void> lines_job, planes_job;
+    if (options_.families.lines) {
+      if (options_.parallel)
+        lines_job = std::async(std::launch::async, linesJob);
+      else
+        linesJob();
+    }
+    if (planes) {
+      if (options_.parallel)
+        planes_job = std::async(std::launch::async, planesJob);
+      else
+        planesJob();
+    }
     if (options_.families.points) {
       ScopedStageTimer t(timings_, "points");
       const auto ps = point_extractor_.extractInto(gray, frame.camera, f);
       if (!ps.error.empty()) s.warning = "points: " + ps.error;
     }
-    if (side_job.valid()) side_job.get();
+    if (lines_job.valid()) lines_job.get();
+    if (planes_job.valid()) planes_job.get();
     if (options_.families.lines) {
       timings_.add("lines", lines_ms);
       if (!ls.error.empty()) s.warning = "lines: " + ls.error;
@@ -108,8 +117,8 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
     if (planes) {
       timings_.add("planes", planes_ms);
       if (!plane_stats.warning.empty()) s.warning = plane_stats.warning;
-      f.planes = std::move(side.planes);
-      f.plane_labels = side.plane_labels;
+      f.planes = std::move(plane_part.planes);
+      f.plane_labels = plane_part.plane_labels;
     }
   }
   s.points = static_cast<int>(f.points.size());
