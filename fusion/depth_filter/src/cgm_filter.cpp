@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/core/utility.hpp>
 #include <stdexcept>
 
 namespace pplvo::depth_filter {
@@ -11,29 +12,36 @@ CgmFilter::CgmFilter(const Options& options, std::shared_ptr<const SensorModel> 
   if (!model_) model_ = std::make_shared<QuadraticSensorModel>();
 }
 
+namespace {
+constexpr int kBands = 4;  // fixed, so that the per-band work does not depend on the threads
+}  // namespace
+
 void CgmFilter::resize(int rows, int cols) {
   rows_ = rows;
   cols_ = cols;
   const size_t n = static_cast<size_t>(cols);
-  z_.assign(n, 0.f);
-  var_.assign(n, 0.f);
-  // Padded row (cols + 2) of y, z, z^2 + sigma^2; three ring rows of horizontal sums.
-  pad_y_.assign(n + 2, 0.0);
-  pad_z_.assign(n + 2, 0.0);
-  pad_q_.assign(n + 2, 0.0);
-  h_s_.assign(3 * n, 0.0);
-  h_z_.assign(3 * n, 0.0);
-  h_q_.assign(3 * n, 0.0);
+  bands_.assign(kBands, RowBuffers());
+  for (RowBuffers& b : bands_) {
+    b.z.assign(n, 0.f);
+    b.var.assign(n, 0.f);
+    b.pad_y.assign(n + 2, 0.0);
+    b.pad_z.assign(n + 2, 0.0);
+    b.pad_q.assign(n + 2, 0.0);
+    b.h_s.assign(3 * n, 0.0);
+    b.h_z.assign(3 * n, 0.0);
+    b.h_q.assign(3 * n, 0.0);
+    b.centre.assign(3 * n, 0.f);
+  }
   zero_.assign(n, 0.0);
-  centre_.assign(3 * n, 0.f);
   ++stats_.resizes;
 }
 
-void CgmFilter::horizontalRow(const cv::Mat& depth_m, int r, int64_t* invalid, int64_t* valid) {
+void CgmFilter::horizontalRow(const cv::Mat& depth_m, int r, RowBuffers& b, int64_t* invalid,
+                              int64_t* valid) const {
   const int cols = cols_;
   const size_t slot = static_cast<size_t>(r % 3) * cols;
   const float* in = depth_m.ptr<float>(r);
-  float* z = z_.data();
+  float* z = b.z.data();
   int64_t bad = 0, good = 0;
   for (int c = 0; c < cols; ++c) {
     const float v = in[c];
@@ -44,27 +52,27 @@ void CgmFilter::horizontalRow(const cv::Mat& depth_m, int r, int64_t* invalid, i
   }
   *invalid += bad;
   *valid += good;
-  model_->varianceRow(z, var_.data(), cols);
-  double* py = pad_y_.data() + 1;
-  double* pz = pad_z_.data() + 1;
-  double* pq = pad_q_.data() + 1;
-  const float* var = var_.data();
+  model_->varianceRow(z, b.var.data(), cols);
+  double* py = b.pad_y.data() + 1;
+  double* pz = b.pad_z.data() + 1;
+  double* pq = b.pad_q.data() + 1;
+  const float* var = b.var.data();
   for (int c = 0; c < cols; ++c) {
     const double zz = z[c];
     py[c] = z[c] > 0.f ? 1.0 : 0.0;
     pz[c] = zz;
     pq[c] = zz * zz + static_cast<double>(var[c]);
   }
-  double* hs = &h_s_[slot];
-  double* hz = &h_z_[slot];
-  double* hq = &h_q_[slot];
-  const double* ys = pad_y_.data();
-  const double* zs = pad_z_.data();
-  const double* qs = pad_q_.data();
+  double* hs = &b.h_s[slot];
+  double* hz = &b.h_z[slot];
+  double* hq = &b.h_q[slot];
+  const double* ys = b.pad_y.data();
+  const double* zs = b.pad_z.data();
+  const double* qs = b.pad_q.data();
   for (int c = 0; c < cols; ++c) hs[c] = ys[c] + 2.0 * ys[c + 1] + ys[c + 2];
   for (int c = 0; c < cols; ++c) hz[c] = zs[c] + 2.0 * zs[c + 1] + zs[c + 2];
   for (int c = 0; c < cols; ++c) hq[c] = qs[c] + 2.0 * qs[c + 1] + qs[c + 2];
-  std::copy(z, z + cols, centre_.begin() + static_cast<std::ptrdiff_t>(slot));
+  std::copy(z, z + cols, b.centre.begin() + static_cast<std::ptrdiff_t>(slot));
 }
 
 DepthWithVariance CgmFilter::apply(const cv::Mat& depth_m) {
@@ -73,40 +81,37 @@ DepthWithVariance CgmFilter::apply(const cv::Mat& depth_m) {
   return out;
 }
 
-void CgmFilter::apply(const cv::Mat& depth_m, DepthWithVariance* out_ptr) {
-  if (depth_m.empty() || depth_m.type() != CV_32FC1) {
-    throw std::invalid_argument("CgmFilter::apply: depth must be a non-empty CV_32FC1 matrix");
-  }
-  const int rows = depth_m.rows, cols = depth_m.cols;
-  if (rows != rows_ || cols != cols_) resize(rows, cols);
-  ++stats_.frames;
-
-  DepthWithVariance& out = *out_ptr;
-  out.depth_m.create(rows, cols, CV_32FC1);
-  out.var_m2.create(rows, cols, CV_32FC1);
-  out.window_length = 1;
-  int64_t invalid = 0, valid_in = 0, valid_out = 0;
+void CgmFilter::applyRows(const cv::Mat& depth_m, int r0, int r1, RowBuffers& b,
+                          DepthWithVariance& out, BandCounts* counts) const {
+  const int rows = rows_, cols = cols_;
   const bool keep_holes = options_.missing_centre_stays_missing;
+  int64_t not_counted = 0;
   // Stage 1 and the horizontal [1 2 1] sums of y, y z, y (z^2 + sigma^2) row by row (missing
   // pixels carry z = sigma^2 = 0, so y multiplies out), kept in a ring of three rows; then the
-  // vertical [1 2 1] sums give S, S z_bar, and the second moment (eqs. 4, 5).
-  horizontalRow(depth_m, 0, &invalid, &valid_in);
-  for (int r = 0; r < rows; ++r) {
-    if (r + 1 < rows) horizontalRow(depth_m, r + 1, &invalid, &valid_in);
+  // vertical [1 2 1] sums give S, S z_bar, and the second moment (eqs. 4, 5). The rows just
+  // outside the band are computed here too but counted by their own band.
+  if (r0 > 0) horizontalRow(depth_m, r0 - 1, b, &not_counted, &not_counted);
+  horizontalRow(depth_m, r0, b, &counts->invalid, &counts->valid_in);
+  for (int r = r0; r < r1; ++r) {
+    if (r + 1 < rows) {
+      const bool own = r + 1 < r1;
+      horizontalRow(depth_m, r + 1, b, own ? &counts->invalid : &not_counted,
+                    own ? &counts->valid_in : &not_counted);
+    }
     const size_t mid = static_cast<size_t>(r % 3) * cols;
     const bool has_up = r > 0, has_dn = r + 1 < rows;
     const size_t up = static_cast<size_t>((r + 2) % 3) * cols;
     const size_t dn = static_cast<size_t>((r + 1) % 3) * cols;
-    const double* su = has_up ? &h_s_[up] : zero_.data();
-    const double* sd = has_dn ? &h_s_[dn] : zero_.data();
-    const double* zu = has_up ? &h_z_[up] : zero_.data();
-    const double* zd = has_dn ? &h_z_[dn] : zero_.data();
-    const double* qu = has_up ? &h_q_[up] : zero_.data();
-    const double* qd = has_dn ? &h_q_[dn] : zero_.data();
-    const double* sm = &h_s_[mid];
-    const double* zm = &h_z_[mid];
-    const double* qm = &h_q_[mid];
-    const float* zc = &centre_[mid];
+    const double* su = has_up ? &b.h_s[up] : zero_.data();
+    const double* sd = has_dn ? &b.h_s[dn] : zero_.data();
+    const double* zu = has_up ? &b.h_z[up] : zero_.data();
+    const double* zd = has_dn ? &b.h_z[dn] : zero_.data();
+    const double* qu = has_up ? &b.h_q[up] : zero_.data();
+    const double* qd = has_dn ? &b.h_q[dn] : zero_.data();
+    const double* sm = &b.h_s[mid];
+    const double* zm = &b.h_z[mid];
+    const double* qm = &b.h_q[mid];
+    const float* zc = &b.centre[mid];
     float* oz = out.depth_m.ptr<float>(r);
     float* ov = out.var_m2.ptr<float>(r);
     int64_t n = 0;
@@ -122,7 +127,42 @@ void CgmFilter::apply(const cv::Mat& depth_m, DepthWithVariance* out_ptr) {
       ov[c] = static_cast<float>(var);
       n += ok ? 1 : 0;
     }
-    valid_out += n;
+    counts->valid_out += n;
+  }
+}
+
+void CgmFilter::apply(const cv::Mat& depth_m, DepthWithVariance* out_ptr) {
+  if (depth_m.empty() || depth_m.type() != CV_32FC1) {
+    throw std::invalid_argument("CgmFilter::apply: depth must be a non-empty CV_32FC1 matrix");
+  }
+  const int rows = depth_m.rows, cols = depth_m.cols;
+  if (rows != rows_ || cols != cols_) resize(rows, cols);
+  ++stats_.frames;
+
+  DepthWithVariance& out = *out_ptr;
+  out.depth_m.create(rows, cols, CV_32FC1);
+  out.var_m2.create(rows, cols, CV_32FC1);
+  out.window_length = 1;
+  BandCounts counts[kBands];
+  auto band = [&](int k) {
+    const int r0 = k * rows / kBands, r1 = (k + 1) * rows / kBands;
+    if (r1 > r0) applyRows(depth_m, r0, r1, bands_[k], out, &counts[k]);
+  };
+  if (options_.threads <= 1) {
+    for (int k = 0; k < kBands; ++k) band(k);
+  } else {
+    cv::parallel_for_(
+        cv::Range(0, kBands),
+        [&](const cv::Range& range) {
+          for (int k = range.start; k < range.end; ++k) band(k);
+        },
+        std::min(options_.threads, kBands));
+  }
+  int64_t invalid = 0, valid_in = 0, valid_out = 0;
+  for (const BandCounts& c : counts) {
+    invalid += c.invalid;
+    valid_in += c.valid_in;
+    valid_out += c.valid_out;
   }
   stats_.invalid_inputs += invalid;
   stats_.last_valid_in = valid_in;

@@ -110,3 +110,35 @@ TEST(CgmFilter, BadInputCountedAllZeroAndWrongType) {
 
 }  // namespace
 }  // namespace pplvo::depth_filter
+
+namespace pplvo::depth_filter {
+namespace {
+
+TEST(CgmFilter, OutputAndCountsDoNotDependOnTheThreadCount) {
+  cv::Mat depth(97, 131, CV_32FC1);  // odd sizes: bands of unequal height
+  cv::RNG rng(7);
+  rng.fill(depth, cv::RNG::UNIFORM, 0.5, 4.0);
+  for (int i = 0; i < 800; ++i) depth.at<float>(rng.uniform(0, 97), rng.uniform(0, 131)) = 0.f;
+  depth.at<float>(24, 10) = std::numeric_limits<float>::quiet_NaN();  // on a band border
+  depth.at<float>(48, 11) = -1.f;
+  for (const cv::Size size : {cv::Size(131, 97), cv::Size(5, 3), cv::Size(4, 1)}) {
+    const cv::Mat in = depth(cv::Rect(0, 0, size.width, size.height)).clone();
+    CgmOptions o;
+    o.threads = 1;
+    CgmFilter serial(o);
+    const DepthWithVariance ref = serial.apply(in);
+    for (int threads : {2, 3, 8}) {
+      o.threads = threads;
+      CgmFilter banded(o);
+      const DepthWithVariance out = banded.apply(in);
+      EXPECT_EQ(cv::norm(out.depth_m, ref.depth_m, cv::NORM_INF), 0.0) << threads << " " << size;
+      EXPECT_EQ(cv::norm(out.var_m2, ref.var_m2, cv::NORM_INF), 0.0) << threads << " " << size;
+      EXPECT_EQ(banded.stats().invalid_inputs, serial.stats().invalid_inputs);
+      EXPECT_EQ(banded.stats().last_valid_in, serial.stats().last_valid_in);
+      EXPECT_EQ(banded.stats().last_valid_out, serial.stats().last_valid_out);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pplvo::depth_filter

@@ -211,6 +211,8 @@ void listFields(V& v, depth_filter::CgmOptions& o) {
   v.field("missing_centre_stays_missing", o.missing_centre_stays_missing,
           "a pixel without depth stays missing instead of taking the mixture of its 3x3 "
           "neighbours (eqs. 2-6); holes are left to O-GM");
+  v.field("threads", o.threads, "threads over bands of rows (the output does not depend on it)",
+          atLeast(1));
 }
 
 template <class V>

@@ -24,6 +24,9 @@ struct CgmOptions {
   /// mixture of its neighbours: C-GM then never invents depth in holes (the authors' code
   /// behaves the same). Filling holes is left to the temporal stage (O-GM).
   bool missing_centre_stays_missing = true;
+  /// Threads over horizontal bands of rows (each band computes its own border rows); the
+  /// output does not depend on this number.
+  int threads = 2;
 };
 
 /// C-GM filter. For pixel p with neighbours i (3x3, weights W = [1 2 1; 2 4 2; 1 2 1], eq. 3),
@@ -54,17 +57,29 @@ class CgmFilter {
   const SensorModel& sensorModel() const { return *model_; }
 
  private:
+  // Per band: one row of clean depth and sensor variance; padded rows of y, z, z^2 + sigma^2;
+  // a ring of three rows of horizontal [1 2 1] sums and of the centre depth.
+  struct RowBuffers {
+    std::vector<float> z, var, centre;
+    std::vector<double> pad_y, pad_z, pad_q, h_s, h_z, h_q;
+  };
+  struct BandCounts {
+    int64_t invalid = 0, valid_in = 0, valid_out = 0;
+  };
+
   void resize(int rows, int cols);
-  void horizontalRow(const cv::Mat& depth_m, int r, int64_t* invalid, int64_t* valid);
+  void horizontalRow(const cv::Mat& depth_m, int r, RowBuffers& b, int64_t* invalid,
+                     int64_t* valid) const;
+  /// Output rows [r0, r1) (inputs r0 - 1 .. r1 read, counted only within the band).
+  void applyRows(const cv::Mat& depth_m, int r0, int r1, RowBuffers& b, DepthWithVariance& out,
+                 BandCounts* counts) const;
 
   Options options_;
   std::shared_ptr<const SensorModel> model_;
   CgmStats stats_;
   int rows_ = 0, cols_ = 0;
-  // One row of clean depth and sensor variance; padded rows of y, z, z^2 + sigma^2; a ring of
-  // three rows of horizontal [1 2 1] sums and of the centre depth. Sized once per image size.
-  std::vector<float> z_, var_, centre_;
-  std::vector<double> pad_y_, pad_z_, pad_q_, h_s_, h_z_, h_q_, zero_;
+  std::vector<RowBuffers> bands_;  ///< sized once per image size
+  std::vector<double> zero_;
 };
 
 }  // namespace pplvo::depth_filter
