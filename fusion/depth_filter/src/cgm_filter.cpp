@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/core/utility.hpp>
 #include <stdexcept>
+
+#include "pplvo/core/parallel.h"
 
 namespace pplvo::depth_filter {
 
@@ -148,16 +149,7 @@ void CgmFilter::apply(const cv::Mat& depth_m, DepthWithVariance* out_ptr) {
     const int r0 = k * rows / kBands, r1 = (k + 1) * rows / kBands;
     if (r1 > r0) applyRows(depth_m, r0, r1, bands_[k], out, &counts[k]);
   };
-  if (options_.threads <= 1) {
-    for (int k = 0; k < kBands; ++k) band(k);
-  } else {
-    cv::parallel_for_(
-        cv::Range(0, kBands),
-        [&](const cv::Range& range) {
-          for (int k = range.start; k < range.end; ++k) band(k);
-        },
-        std::min(options_.threads, kBands));
-  }
+  forEachTask(kBands, options_.threads, band);
   int64_t invalid = 0, valid_in = 0, valid_out = 0;
   for (const BandCounts& c : counts) {
     invalid += c.invalid;

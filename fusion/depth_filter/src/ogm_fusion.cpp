@@ -5,7 +5,8 @@
 #include <cstddef>
 #include <cstring>
 #include <limits>
-#include <opencv2/core/utility.hpp>
+
+#include "pplvo/core/parallel.h"
 
 namespace pplvo::depth_filter {
 
@@ -302,18 +303,9 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
   out.depth_m.create(h, w, CV_32FC1);
   out.var_m2.create(h, w, CV_32FC1);
   for (Band& b : bands_) b.projected = b.gated = b.filled = 0;
+  // Bands write disjoint rows of the accumulator, the counts and the output.
   const int n = static_cast<int>(bands_.size());
-  if (n == 1) {
-    fuseBand(*cur, out, bands_[0]);
-  } else {
-    // Bands write disjoint rows of the accumulator, the counts and the output.
-    cv::parallel_for_(
-        cv::Range(0, n),
-        [&](const cv::Range& r) {
-          for (int b = r.start; b < r.end; ++b) fuseBand(*cur, out, bands_[static_cast<size_t>(b)]);
-        },
-        n);
-  }
+  forEachTask(n, n, [&](int b) { fuseBand(*cur, out, bands_[static_cast<size_t>(b)]); });
   for (const Band& b : bands_) {
     stats_.points_projected += b.projected;
     stats_.points_gated += b.gated;

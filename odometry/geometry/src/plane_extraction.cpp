@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <opencv2/core/utility.hpp>  // parallel_for_
 
+#include "pplvo/core/parallel.h"
 #include "pplvo/geometry/lifting.h"  // validateDepth
 
 namespace pplvo::geometry {
@@ -83,21 +83,6 @@ namespace {
 /// Fixed bands of cell rows (independent of the thread count, so sums keep one order).
 constexpr int kBands = 4;
 
-/// Runs body(band) for band = 0..kBands-1 on up to `threads` threads.
-template <class F>
-void forEachBand(int threads, const F& body) {
-  if (threads <= 1) {
-    for (int b = 0; b < kBands; ++b) body(b);
-    return;
-  }
-  cv::parallel_for_(
-      cv::Range(0, kBands),
-      [&](const cv::Range& r) {
-        for (int b = r.start; b < r.end; ++b) body(b);
-      },
-      std::min(threads, kBands));
-}
-
 }  // namespace
 
 PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
@@ -123,7 +108,7 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
     *c0 = band * cells_y_ / kBands;
     *c1 = (band + 1) * cells_y_ / kBands;
   };
-  forEachBand(threads, [&](int band) {
+  forEachTask(kBands, threads, [&](int band) {
     int c0, c1;
     bandRows(band, &c0, &c1);
     for (int v = c0 * cs; v < std::min(H, c1 * cs); ++v) {
@@ -351,7 +336,7 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
     std::vector<Eigen::Vector3d> sum;
   };
   std::vector<LabelStats> band_stats(kBands);
-  forEachBand(threads, [&](int band) {
+  forEachTask(kBands, threads, [&](int band) {
     LabelStats& bs = band_stats[band];
     bs.count.assign(np, 0);
     bs.sum.assign(np, Eigen::Vector3d::Zero());
@@ -503,16 +488,7 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
   };
   std::vector<PlaneFitResult> fits(order.size());
   const int n_fits = static_cast<int>(order.size());
-  if (threads <= 1) {
-    for (int k = 0; k < n_fits; ++k) fits[k] = fitSegment(order[k]);
-  } else {
-    cv::parallel_for_(
-        cv::Range(0, n_fits),
-        [&](const cv::Range& r) {
-          for (int k = r.start; k < r.end; ++k) fits[k] = fitSegment(order[k]);
-        },
-        threads);
-  }
+  forEachTask(n_fits, threads, [&](int k) { fits[k] = fitSegment(order[k]); });
   std::vector<uint8_t> lut(256, 0);
   for (int k = 0; k < n_fits; ++k) {
     if (static_cast<int>(res.planes.size()) >= options_.max_planes) break;
