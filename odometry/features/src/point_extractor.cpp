@@ -171,24 +171,59 @@ std::vector<int> selectSpread(const std::vector<cv::KeyPoint>& keypoints, int wi
 
 namespace {
 
-/// Smallest eigenvalue of the structure tensor over a (2w+1)^2 window centred at (u, v)
-/// (central differences); -1 too close to the border.
-double minEigenResponse(const cv::Mat& gray, int u, int v, int w) {
-  if (u - w - 1 < 0 || v - w - 1 < 0 || u + w + 1 >= gray.cols || v + w + 1 >= gray.rows) return -1;
-  double a = 0, b = 0, c = 0;
-  for (int y = v - w; y <= v + w; ++y) {
-    const uint8_t* r0 = gray.ptr<uint8_t>(y - 1);
-    const uint8_t* r1 = gray.ptr<uint8_t>(y);
-    const uint8_t* r2 = gray.ptr<uint8_t>(y + 1);
-    for (int x = u - w; x <= u + w; ++x) {
-      const double ix = 0.5 * (r1[x + 1] - r1[x - 1]);
-      const double iy = 0.5 * (r2[x] - r0[x]);
-      a += ix * ix;
-      b += ix * iy;
-      c += iy * iy;
+/// Smallest-eigenvalue corner responses of the structure tensor over (2w+1)^2 windows (central
+/// differences), for every centre of the (2r+1)^2 grid around (u0, v0); -1 where a window is too
+/// close to the border. Each gradient is half an integer difference, so the tensor sums are
+/// exact integers / 4: summed-area tables of the integer products give exactly the values of
+/// summing the windows pixel by pixel in double, at a fraction of the cost.
+void cornerResponses(const cv::Mat& gray, int u0, int v0, int r, int w, std::vector<double>* resp) {
+  const int n = 2 * r + 1;
+  const int p = n + 2 * w;  // patch side: every window pixel of every centre
+  const int px0 = u0 - r - w, py0 = v0 - r - w;
+  // Summed-area tables (row and column 0 are zero) of dx^2, dx dy, dy^2.
+  const int s = p + 1;
+  std::vector<int64_t> sat(static_cast<size_t>(3 * s * s), 0);
+  int64_t* sxx = sat.data();
+  int64_t* sxy = sxx + s * s;
+  int64_t* syy = sxy + s * s;
+  for (int y = 0; y < p; ++y) {
+    const int iy = py0 + y;
+    const bool row_ok = iy >= 1 && iy + 1 < gray.rows;
+    int64_t rxx = 0, rxy = 0, ryy = 0;
+    for (int x = 0; x < p; ++x) {
+      const int ix = px0 + x;
+      if (row_ok && ix >= 1 && ix + 1 < gray.cols) {
+        // Pixels without both neighbours only serve windows rejected below.
+        const int dx = gray.ptr<uint8_t>(iy)[ix + 1] - gray.ptr<uint8_t>(iy)[ix - 1];
+        const int dy = gray.ptr<uint8_t>(iy + 1)[ix] - gray.ptr<uint8_t>(iy - 1)[ix];
+        rxx += dx * dx;
+        rxy += dx * dy;
+        ryy += dy * dy;
+      }
+      const int k = (y + 1) * s + x + 1, up = y * s + x + 1;
+      sxx[k] = sxx[up] + rxx;
+      sxy[k] = sxy[up] + rxy;
+      syy[k] = syy[up] + ryy;
     }
   }
-  return 0.5 * (a + c - std::sqrt((a - c) * (a - c) + 4 * b * b));
+  auto box = [&](const int64_t* t, int x0, int y0) {  // window with top-left patch pixel (x0, y0)
+    const int x1 = x0 + 2 * w + 1, y1 = y0 + 2 * w + 1;
+    return t[y1 * s + x1] - t[y0 * s + x1] - t[y1 * s + x0] + t[y0 * s + x0];
+  };
+  resp->assign(static_cast<size_t>(n) * n, -1.0);
+  for (int dv = -r; dv <= r; ++dv) {
+    for (int du = -r; du <= r; ++du) {
+      const int u = u0 + du, v = v0 + dv;
+      if (u - w - 1 < 0 || v - w - 1 < 0 || u + w + 1 >= gray.cols || v + w + 1 >= gray.rows)
+        continue;
+      const int x0 = du + r, y0 = dv + r;  // window's top-left in patch coordinates
+      const double a = 0.25 * static_cast<double>(box(sxx, x0, y0));
+      const double b = 0.25 * static_cast<double>(box(sxy, x0, y0));
+      const double c = 0.25 * static_cast<double>(box(syy, x0, y0));
+      (*resp)[static_cast<size_t>(dv + r) * n + du + r] =
+          0.5 * (a + c - std::sqrt((a - c) * (a - c) + 4 * b * b));
+    }
+  }
 }
 
 /// Peak of the corner response near `pt`, at sub-pixel precision: the best of the pixels
@@ -198,12 +233,8 @@ cv::Point2f refineCorner(const cv::Mat& gray, const cv::Point2f& pt, int radius,
   const int u0 = static_cast<int>(std::lround(pt.x)), v0 = static_cast<int>(std::lround(pt.y));
   const int r = radius + 1;  // responses one pixel beyond the search area for the fit
   const int n = 2 * r + 1;
-  std::vector<double> resp(n * n);
-  for (int dv = -r; dv <= r; ++dv) {
-    for (int du = -r; du <= r; ++du) {
-      resp[(dv + r) * n + du + r] = minEigenResponse(gray, u0 + du, v0 + dv, w);
-    }
-  }
+  std::vector<double> resp;
+  cornerResponses(gray, u0, v0, r, w, &resp);
   auto at = [&](int du, int dv) { return resp[(dv + r) * n + du + r]; };
   int bu = 0, bv = 0;
   double best = -1;
