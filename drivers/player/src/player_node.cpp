@@ -43,8 +43,12 @@ calib_params.xml) as pplvo_msgs.rgbd_frame_t.
                            0 = as fast as possible (default 1)
   --fps F                  fixed publish rate in Hz instead of the stamps (scaled by --rate);
                            also the frame rate of frame-index stamps (ICL-NUIM, default 30)
-  --lockstep               publish the next frame only after a pose_t with the last frame's
-                           seq arrived on the pose channel
+  --lockstep               publish the next frame only after a pose_t of the frame
+                           --lockstep-in-flight frames before it arrived on the pose channel
+                           (and wait for the last frame's pose at the end)
+  --lockstep-in-flight N   frames published without their pose in lockstep (default 2: the
+                           next frame's features are extracted while this one is fused;
+                           1 = one frame at a time)
   --lockstep-timeout S     seconds to wait for that pose before warning and going on (default 5)
   --start N                first associated frame to publish (default 0)
   --max-frames N           publish at most N frames (default 0 = all)
@@ -74,7 +78,9 @@ ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
           *out = choices[k].second;
           return "";
         }
-        names += (k == 0 ? "" : k + 1 == choices.size() ? " or " : ", ") +
+        names += (k == 0                    ? ""
+                  : k + 1 == choices.size() ? " or "
+                                            : ", ") +
                  std::string(choices[k].first);
       }
       return std::string(name) + " must be " + names + ", got '" + v + "'";
@@ -94,19 +100,18 @@ ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
       .option("--max-depth-m", &o.max_depth_m, 0.0)
       .option("--start", &o.start, int64_t{0})
       .option("--max-frames", &o.max_frames, int64_t{0})
+      .option("--lockstep-in-flight", &o.lockstep_in_flight, 1, 1000)
       .option("--jpeg-quality", &o.jpeg_quality, 1, 100)
-      .option("--rgb-encoding",
-              encoding("--rgb-encoding",
-                       {{"raw", Img::ENCODING_RAW_BGR8},
-                        {"jpeg", Img::ENCODING_JPEG},
-                        {"png", Img::ENCODING_PNG}},
-                       &o.rgb_encoding))
-      .option("--depth-encoding",
-              encoding("--depth-encoding",
-                       {{"raw", Img::ENCODING_RAW_U16},
-                        {"zlib", Img::ENCODING_ZLIB_U16},
-                        {"png", Img::ENCODING_PNG_U16}},
-                       &o.depth_encoding))
+      .option("--rgb-encoding", encoding("--rgb-encoding",
+                                         {{"raw", Img::ENCODING_RAW_BGR8},
+                                          {"jpeg", Img::ENCODING_JPEG},
+                                          {"png", Img::ENCODING_PNG}},
+                                         &o.rgb_encoding))
+      .option("--depth-encoding", encoding("--depth-encoding",
+                                           {{"raw", Img::ENCODING_RAW_U16},
+                                            {"zlib", Img::ENCODING_ZLIB_U16},
+                                            {"png", Img::ENCODING_PNG_U16}},
+                                           &o.depth_encoding))
       .flag("--lockstep", &o.lockstep)
       .flag("--skip-bad", &o.skip_bad)
       .flag("--loop", &o.loop)
@@ -208,6 +213,14 @@ void PlayerNode::waitUntil(double target_s) {
 }
 
 bool PlayerNode::waitForPose(int64_t seq) {
+  if (options_.in_process) {
+    while (last_pose_seq_ < seq && !msgs::shutdownRequested()) {
+      const int rc = lcm_.handleTimeout(0);
+      if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
+      if (rc <= 0) break;
+    }
+    return last_pose_seq_ >= seq;
+  }
   const double deadline = nowS() + options_.lockstep_timeout_s;
   msgs::spin(
       lcm_, [&] { return last_pose_seq_ >= seq || nowS() >= deadline; }, [&] { periodic(false); },
@@ -361,6 +374,13 @@ void PlayerNode::runLoop(PlayerResult& result) {
       msg.depth = msgs::encodeImage(item->frame.depth_units, options_.depth_encoding);
     });
     if (!encoded) continue;  // counted by guarded()
+    if (options_.lockstep) {
+      // At most lockstep_in_flight frames without their pose.
+      const int64_t timeouts = result.lockstep_timeouts;
+      lockstepWait(published_ - std::max(1, options_.lockstep_in_flight), result);
+      if (result.lockstep_timeouts != timeouts) anchored = false;  // do not rush to catch up
+      if (msgs::shutdownRequested()) break;
+    }
     {
       ScopedStageTimer t(timings_, "publish");
       if (lcm_.publish(options_.channel, &msg) != 0) {
@@ -371,23 +391,27 @@ void PlayerNode::runLoop(PlayerResult& result) {
     ++counters_.frames_out;
     ++published_;
     ++published_this_pass;
-    drain();
-    if (options_.lockstep) {
-      ScopedStageTimer t(timings_, "lockstep_wait");
-      if (!waitForPose(msg.seq) && !msgs::shutdownRequested()) {
-        ++result.lockstep_timeouts;
-        ++counters_.errors;
-        counters_.last_warning = "lockstep: no pose for seq " + std::to_string(msg.seq) +
-                                 " within " + std::to_string(options_.lockstep_timeout_s) + " s";
-        if (result.lockstep_timeouts <= 5 || result.lockstep_timeouts % 100 == 0) {
-          std::fprintf(stderr, "[%s] %s; continuing (%lld so far)\n", options_.node_name.c_str(),
-                       counters_.last_warning.c_str(),
-                       static_cast<long long>(result.lockstep_timeouts));
-        }
-        anchored = false;  // do not rush the following frames to catch up
-      }
-    }
+    // In lockstep the wait before the next publish dispatches the messages (one at a time, so
+    // that the next frame goes out as soon as the lockstep allows, mid-way through this one).
+    if (!options_.lockstep) drain();
     periodic(false);
+  }
+  if (options_.lockstep && published_ > 0) lockstepWait(published_ - 1, result);
+}
+
+void PlayerNode::lockstepWait(int64_t seq, PlayerResult& result) {
+  if (seq < 0 || last_pose_seq_ >= seq) return;
+  ScopedStageTimer t(timings_, "lockstep_wait");
+  // In process an idle queue is no timeout: the pose may follow once later frames flush the
+  // pipeline (a frame whose pose never comes shows in the posed count).
+  if (waitForPose(seq) || options_.in_process || msgs::shutdownRequested()) return;
+  ++result.lockstep_timeouts;
+  ++counters_.errors;
+  counters_.last_warning = "lockstep: no pose for seq " + std::to_string(seq) + " within " +
+                           std::to_string(options_.lockstep_timeout_s) + " s";
+  if (result.lockstep_timeouts <= 5 || result.lockstep_timeouts % 100 == 0) {
+    std::fprintf(stderr, "[%s] %s; continuing (%lld so far)\n", options_.node_name.c_str(),
+                 counters_.last_warning.c_str(), static_cast<long long>(result.lockstep_timeouts));
   }
 }
 

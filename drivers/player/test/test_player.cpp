@@ -206,6 +206,7 @@ TEST(Player, LockstepTimeoutWarnsCountsAndContinues) {
   PlayerOptions o = baseOptions();
   o.lockstep = true;
   o.lockstep_timeout_s = 0.1;
+  o.lockstep_in_flight = 1;  // every frame waits for its own pose
   o.max_frames = 3;
   PlayerNode node(o, lcm);
   const auto r = node.run();
@@ -216,6 +217,64 @@ TEST(Player, LockstepTimeoutWarnsCountsAndContinues) {
   EXPECT_NE(node.counters().last_warning.find("lockstep"), std::string::npos);
   ASSERT_FALSE(rec.statuses.empty());
   EXPECT_EQ(rec.statuses.back().errors, 3);
+}
+
+/// Answers each frame with the pose of the frame `lag` before it (the newest `lag` frames are
+/// still "being processed"); records how many frames were out without their pose.
+struct LaggingResponder {
+  lcm::LCM& lcm;
+  int lag;
+  int64_t last_pose_sent = -1;
+  int64_t max_without_pose = 0;
+  explicit LaggingResponder(lcm::LCM& l, int lag_frames) : lcm(l), lag(lag_frames) {
+    lcm.subscribe("PPLVO_RGBD", &LaggingResponder::onFrame, this);
+  }
+  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::rgbd_frame_t* m) {
+    max_without_pose = std::max(max_without_pose, m->seq - last_pose_sent);
+    const int64_t seq = m->seq - lag;
+    if (seq < 0) return;
+    pplvo_msgs::pose_t p{};
+    p.seq = seq;
+    p.orientation[0] = 1.0;
+    lcm.publish("PPLVO_POSE", &p);
+    last_pose_sent = seq;
+  }
+};
+
+TEST(Player, LockstepKeepsInFlightFramesWithoutTheirPose) {
+  for (const int in_flight : {2, 3}) {
+    lcm::LCM lcm("memq://");
+    LaggingResponder responder(lcm, in_flight - 1);
+    PlayerOptions o = baseOptions();
+    o.lockstep = true;
+    o.lockstep_in_flight = in_flight;
+    o.lockstep_timeout_s = 0.2;
+    o.max_frames = 12;
+    PlayerNode node(o, lcm);
+    const auto r = node.run();
+    EXPECT_FALSE(r.failed) << r.error;
+    EXPECT_EQ(r.published, 12);
+    // Never more than in_flight frames out without a pose, and the lag never stalls the
+    // player: the only wait that times out is the final one for the last frame's pose.
+    EXPECT_EQ(responder.max_without_pose, in_flight);
+    EXPECT_EQ(r.lockstep_timeouts, 1) << "in flight " << in_flight;
+  }
+}
+
+TEST(Player, InProcessLockstepDoesNotWaitOnAnIdleQueue) {
+  // With every node in this thread an empty memq queue means no pose can come: go on at once.
+  lcm::LCM lcm("memq://");
+  PlayerOptions o = baseOptions();
+  o.lockstep = true;
+  o.in_process = true;
+  o.lockstep_timeout_s = 5.0;
+  o.max_frames = 4;
+  PlayerNode node(o, lcm);
+  const auto r = node.run();
+  EXPECT_FALSE(r.failed) << r.error;
+  EXPECT_EQ(r.published, 4);
+  EXPECT_EQ(r.lockstep_timeouts, 0);
+  EXPECT_LT(r.elapsed_s, 4.0);  // far from one 5 s timeout per frame
 }
 
 TEST(Player, RealTimePacingFollowsStampsAndFps) {
@@ -357,7 +416,8 @@ TEST(PlayerProcess, ExitCodesAndCtrlC) {
   EXPECT_EQ(run(exe + " --lcm-url memq:// --dataset " + iclDir() +
                 " --camera /nonexistent/cam.yaml 2>/dev/null"),
             1);
-  // Real-time playback of 251 frames takes 8 s; SIGINT after 3 s stops it cleanly (handlers are installed first thing in main).
+  // Real-time playback of 251 frames takes 8 s; SIGINT after 3 s stops it cleanly (handlers are
+  // installed first thing in main).
   EXPECT_EQ(run("timeout --preserve-status -s INT 3 " + exe + " --lcm-url memq:// --dataset " +
                 iclDir() + " 2>/dev/null"),
             0);

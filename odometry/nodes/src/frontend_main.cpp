@@ -65,8 +65,15 @@ int main(int argc, char** argv) {
                  o.rgbd_channel.c_str(), o.cgm_channel.c_str(), o.features_channel.c_str(),
                  o.fused_channel.c_str(), o.features_3d_channel.c_str(),
                  pipeline::toString(o.frontend.families).c_str());
+    // Checked between messages (at most 50 ms apart): a stage 2D whose predecessor's fused depth
+    // never came goes out once computed.
     msgs::spin(
-        *lcm, [] { return false; }, [&] { node.publishStatus(hostUtime()); }, 1.0);
+        *lcm,
+        [&] {
+          node.poll();
+          return false;
+        },
+        [&] { node.publishStatus(hostUtime()); }, 1.0);
     node.publishStatus(hostUtime());
     const msgs::NodeCounters& c = node.counters();
     std::fprintf(stderr, "[pplvo-frontend] done: in %lld out %lld dropped %lld skipped %lld\n%s",

@@ -1,5 +1,6 @@
 #include "pplvo/nodes/frontend_node.h"
 
+#include <chrono>
 #include <pplvo_msgs/features_t.hpp>
 
 #include "pplvo/msgs/convert_features.h"
@@ -116,23 +117,61 @@ void FrontendNode::extractReady() {
     frames_.pop_front();
     cgm_.pop_front();
     last_extracted_seq_ = frame.seq;
-    pipeline::FrontendStats stats;
-    FrameFeatures features = frontend_.extract2d(frame, depth, &stats);
-    if (!stats.warning.empty()) warn(stats.warning);
-    {
-      ScopedStageTimer t(timings_, "encode");
-      const pplvo_msgs::features_t m = msgs::toMsg(features, pplvo_msgs::features_t::STAGE_2D);
-      lcm_.publish(options_.features_channel, &m);
+    finishInFlight();  // an older frame's stage 2D goes out first
+    auto extract = [this, frame = std::move(frame), depth = std::move(depth)] {
+      Extracted e;
+      e.features = frontend_.extract2d(frame, depth, &e.stats);
+      return e;
+    };
+    if (!options_.extract_ahead) {
+      publishExtracted(extract());
+      continue;
     }
-    awaiting_3d_.push_back(std::move(features));
-    if (const int64_t n = trim(awaiting_3d_, options_.max_pending)) {
-      counters_.frames_dropped += n;
-      warn("features dropped: their fused depth never came");
-    }
+    in_flight_seq_ = last_extracted_seq_;
+    in_flight_ = std::async(std::launch::async, std::move(extract));
+    // With no frame waiting for its fused depth there is no lifting to overlap: publish now.
+    if (awaiting_3d_.empty()) finishInFlight();
   }
 }
 
+void FrontendNode::publishExtracted(Extracted extracted) {
+  if (!extracted.stats.warning.empty()) warn(extracted.stats.warning);
+  {
+    ScopedStageTimer t(timings_, "encode");
+    const pplvo_msgs::features_t m =
+        msgs::toMsg(extracted.features, pplvo_msgs::features_t::STAGE_2D);
+    lcm_.publish(options_.features_channel, &m);
+  }
+  awaiting_3d_.push_back(std::move(extracted.features));
+  if (const int64_t n = trim(awaiting_3d_, options_.max_pending)) {
+    counters_.frames_dropped += n;
+    warn("features dropped: their fused depth never came");
+  }
+}
+
+void FrontendNode::finishInFlight() {
+  if (!in_flight_.valid()) return;
+  Extracted e = in_flight_.get();  // invalidates the future even if it rethrows
+  publishExtracted(std::move(e));
+}
+
+void FrontendNode::poll() {
+  msgs::guarded(counters_, kName, [&] {
+    if (in_flight_.valid() &&
+        in_flight_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+      finishInFlight();
+    }
+  });
+}
+
 void FrontendNode::handleFused(const pplvo_msgs::depth_map_t& msg) {
+  // Depth for the frame in flight itself (or a later one): its stage 2D cannot wait.
+  if (in_flight_.valid() && in_flight_seq_ <= msg.seq) finishInFlight();
+  liftFused(msg);
+  finishInFlight();  // the next frame's stage 2D, computed while this one was lifted
+}
+
+void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
   // Stage-2D features of frames older than this map will never get theirs.
   while (!awaiting_3d_.empty() && awaiting_3d_.front().seq < msg.seq) {
     awaiting_3d_.pop_front();
@@ -163,7 +202,8 @@ void FrontendNode::handleFused(const pplvo_msgs::depth_map_t& msg) {
 }
 
 StageTimings FrontendNode::allTimings() const {
-  return pipeline::mergeTimings({&timings_, &frontend_.timings()});
+  const StageTimings frontend = frontend_.timings();
+  return pipeline::mergeTimings({&timings_, &frontend});
 }
 
 void FrontendNode::publishStatus(int64_t utime) {

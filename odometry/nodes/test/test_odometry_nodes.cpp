@@ -3,11 +3,14 @@
 // never comes, counted skips for bad messages; and the pipeline's command-line options.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <pplvo_msgs/features_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
+#include <thread>
 
 #include "pplvo/core/args.h"
 #include "pplvo/depth_filter/cgm_filter.h"
@@ -64,40 +67,111 @@ pplvo_msgs::depth_map_t cgmMsg(int i, int8_t stage = pplvo_msgs::depth_map_t::ST
 }
 
 TEST(FrontendNode, PairsColourAndDepthInAnyOrderAndLiftsOnFusedDepth) {
-  lcm::LCM lcm("memq://");
-  FrontendNode node({}, lcm);
-  Recorder<pplvo_msgs::features_t> f2d(lcm, channels::kFeatures), f3d(lcm, channels::kFeatures3d);
-  // Frame 0: depth first; frame 1: colour first, and its depth after the next colour.
-  auto m0 = frameMsg(0), m1 = frameMsg(1), m2 = frameMsg(2);
-  auto d0 = cgmMsg(0), d1 = cgmMsg(1);
-  lcm.publish(channels::kDepthCgm, &d0);
-  lcm.publish(channels::kRgbd, &m0);
-  lcm.publish(channels::kRgbd, &m1);
-  lcm.publish(channels::kRgbd, &m2);
-  lcm.publish(channels::kDepthCgm, &d1);
-  drain(lcm);
-  ASSERT_EQ(f2d.msgs.size(), 2u);
-  EXPECT_EQ(f2d.msgs[0].seq, m0.seq);
-  EXPECT_EQ(f2d.msgs[1].seq, m1.seq);
-  for (const auto& m : f2d.msgs) {
-    EXPECT_EQ(m.stage, pplvo_msgs::features_t::STAGE_2D);
-    EXPECT_GT(m.n_points, 200);
-    EXPECT_GT(m.n_lines, 10);
-    EXPECT_GE(m.n_planes, 2);
+  for (const bool ahead : {false, true}) {
+    SCOPED_TRACE(ahead ? "extract ahead" : "extract in the handler");
+    lcm::LCM lcm("memq://");
+    FrontendNodeOptions options;
+    options.extract_ahead = ahead;
+    FrontendNode node(options, lcm);
+    Recorder<pplvo_msgs::features_t> f2d(lcm, channels::kFeatures), f3d(lcm, channels::kFeatures3d);
+    // Frame 0: depth first; frame 1: colour first, and its depth after the next colour.
+    auto m0 = frameMsg(0), m1 = frameMsg(1), m2 = frameMsg(2);
+    auto d0 = cgmMsg(0), d1 = cgmMsg(1);
+    lcm.publish(channels::kDepthCgm, &d0);
+    lcm.publish(channels::kRgbd, &m0);
+    lcm.publish(channels::kRgbd, &m1);
+    lcm.publish(channels::kRgbd, &m2);
+    lcm.publish(channels::kDepthCgm, &d1);
+    drain(lcm);
+    if (ahead) {
+      // Frame 1 went to the worker while frame 0 waits for its fused depth; with nothing else
+      // coming, the idle-loop poll publishes it once it is done.
+      ASSERT_EQ(f2d.msgs.size(), 1u);
+      for (int i = 0; i < 2000 && f2d.msgs.size() < 2; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        node.poll();
+        drain(lcm);
+      }
+    }
+    ASSERT_EQ(f2d.msgs.size(), 2u);
+    EXPECT_EQ(f2d.msgs[0].seq, m0.seq);
+    EXPECT_EQ(f2d.msgs[1].seq, m1.seq);
+    for (const auto& m : f2d.msgs) {
+      EXPECT_EQ(m.stage, pplvo_msgs::features_t::STAGE_2D);
+      EXPECT_GT(m.n_points, 200);
+      EXPECT_GT(m.n_lines, 10);
+      EXPECT_GE(m.n_planes, 2);
+    }
+    EXPECT_TRUE(f3d.msgs.empty());
+    // Fused depth of frame 1 arrives: frame 0 never gets one and is dropped (counted).
+    auto fused1 = cgmMsg(1, pplvo_msgs::depth_map_t::STAGE_OGM);
+    lcm.publish(channels::kDepthFused, &fused1);
+    drain(lcm);
+    ASSERT_EQ(f3d.msgs.size(), 1u);
+    EXPECT_EQ(f3d.msgs[0].seq, m1.seq);
+    const FrameFeatures lifted = msgs::fromMsg(f3d.msgs[0]);
+    int with_3d = 0;
+    for (const auto& p : lifted.points) with_3d += p.has_3d;
+    EXPECT_GT(with_3d, 200);
+    EXPECT_EQ(node.counters().frames_dropped, 1);
+    EXPECT_EQ(node.counters().frames_out, 1);
   }
-  EXPECT_TRUE(f3d.msgs.empty());
-  // Fused depth of frame 1 arrives: frame 0 never gets one and is dropped (counted).
-  auto fused1 = cgmMsg(1, pplvo_msgs::depth_map_t::STAGE_OGM);
-  lcm.publish(channels::kDepthFused, &fused1);
-  drain(lcm);
-  ASSERT_EQ(f3d.msgs.size(), 1u);
-  EXPECT_EQ(f3d.msgs[0].seq, m1.seq);
-  const FrameFeatures lifted = msgs::fromMsg(f3d.msgs[0]);
-  int with_3d = 0;
-  for (const auto& p : lifted.points) with_3d += p.has_3d;
-  EXPECT_GT(with_3d, 200);
-  EXPECT_EQ(node.counters().frames_dropped, 1);
-  EXPECT_EQ(node.counters().frames_out, 1);
+}
+
+TEST(FrontendNode, ExtractsAheadWhileLiftingAndPublishesInFrameOrder) {
+  // The pipelined order of pplvo-run: frame 1 is paired while frame 0 waits for its fused
+  // depth; frame 1's stage 2D must come out after frame 0's stage 3D, equal to a serial run.
+  auto run = [](bool ahead, std::vector<pplvo_msgs::features_t>* out) {
+    lcm::LCM lcm("memq://");
+    FrontendNodeOptions options;
+    options.extract_ahead = ahead;
+    FrontendNode node(options, lcm);
+    struct Both {
+      std::vector<pplvo_msgs::features_t>* out;
+      void on(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::features_t* m) {
+        out->push_back(*m);
+      }
+    } both{out};
+    lcm.subscribe(channels::kFeatures, &Both::on, &both);
+    lcm.subscribe(channels::kFeatures3d, &Both::on, &both);
+    auto m0 = frameMsg(0), m1 = frameMsg(1);
+    auto d0 = cgmMsg(0), d1 = cgmMsg(1);
+    auto f0 = cgmMsg(0, pplvo_msgs::depth_map_t::STAGE_OGM);
+    auto f1 = cgmMsg(1, pplvo_msgs::depth_map_t::STAGE_OGM);
+    lcm.publish(channels::kRgbd, &m0);
+    lcm.publish(channels::kDepthCgm, &d0);
+    lcm.publish(channels::kRgbd, &m1);
+    lcm.publish(channels::kDepthCgm, &d1);
+    lcm.publish(channels::kDepthFused, &f0);
+    drain(lcm);
+    lcm.publish(channels::kDepthFused, &f1);
+    drain(lcm);
+    EXPECT_EQ(node.counters().frames_out, 2);
+    EXPECT_EQ(node.counters().frames_dropped, 0);
+  };
+  std::vector<pplvo_msgs::features_t> serial, ahead;
+  run(false, &serial);
+  run(true, &ahead);
+  ASSERT_EQ(ahead.size(), 4u);
+  const std::vector<std::pair<int8_t, int64_t>> order = {{pplvo_msgs::features_t::STAGE_2D, 0},
+                                                         {pplvo_msgs::features_t::STAGE_3D, 0},
+                                                         {pplvo_msgs::features_t::STAGE_2D, 1},
+                                                         {pplvo_msgs::features_t::STAGE_3D, 1}};
+  ASSERT_EQ(serial.size(), 4u);
+  auto encoded = [](const pplvo_msgs::features_t& m) {
+    std::vector<uint8_t> bytes(m.getEncodedSize());
+    m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    return bytes;
+  };
+  for (size_t i = 0; i < order.size(); ++i) {
+    EXPECT_EQ(std::make_pair(ahead[i].stage, ahead[i].seq), order[i]) << i;
+    // Same features as the serial run (which publishes frame 1's stage 2D at once).
+    const auto same = std::find_if(serial.begin(), serial.end(), [&](const auto& m) {
+      return std::make_pair(m.stage, m.seq) == order[i];
+    });
+    ASSERT_NE(same, serial.end()) << i;
+    EXPECT_EQ(encoded(ahead[i]), encoded(*same)) << i;
+  }
 }
 
 TEST(FrontendNode, BadMessagesAreCountedAndQueuesStayBounded) {

@@ -57,7 +57,11 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
   f.camera = frame.camera;
   if (frame.bgr.empty()) {
     s.warning = "frame without colour image: no points or lines";
-    if (options_.families.planes && !cgm.depth_m.empty()) extractPlanesTimed(f, cgm, &s);
+    if (options_.families.planes && !cgm.depth_m.empty()) {
+      Stopwatch w;
+      extractPlanes(planes_2d_, f, cgm, &s);
+      addTiming("planes", w.elapsedMs());
+    }
   } else {
     // Both extractors work on grey: convert once.
     cv::Mat gray;
@@ -85,7 +89,7 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
     plane_part.camera = frame.camera;
     auto planesJob = [&] {
       Stopwatch w;
-      extractPlanes(plane_part, cgm, &plane_stats);
+      extractPlanes(planes_2d_, plane_part, cgm, &plane_stats);
       planes_ms = w.elapsedMs();
     };
     std::future<void> lines_job, planes_job;
@@ -102,20 +106,21 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
         planesJob();
     }
     if (options_.families.points) {
-      ScopedStageTimer t(timings_, "points");
+      Stopwatch w;
       const auto ps = point_extractor_.extractInto(gray, frame.camera, f);
+      addTiming("points", w.elapsedMs());
       if (!ps.error.empty()) s.warning = "points: " + ps.error;
     }
     if (lines_job.valid()) lines_job.get();
     if (planes_job.valid()) planes_job.get();
     if (options_.families.lines) {
-      timings_.add("lines", lines_ms);
+      addTiming("lines", lines_ms);
       if (!ls.error.empty()) s.warning = "lines: " + ls.error;
       f.lines = std::move(side.lines);
       f.line_descriptors = side.line_descriptors;
     }
     if (planes) {
-      timings_.add("planes", planes_ms);
+      addTiming("planes", planes_ms);
       if (!plane_stats.warning.empty()) s.warning = plane_stats.warning;
       f.planes = std::move(plane_part.planes);
       f.plane_labels = plane_part.plane_labels;
@@ -149,7 +154,7 @@ void Frontend::lift3d(FrameFeatures& features, const DepthWithVariance& fused,
     Stopwatch w;
     FrameFeatures tmp;
     tmp.camera = features.camera;
-    extractPlanes(tmp, fused, &plane_stats);
+    extractPlanes(planes_3d_, tmp, fused, &plane_stats);
     fused_planes = std::move(tmp.planes);
     fused_labels = tmp.plane_labels;
     planes_ms = w.elapsedMs();
@@ -157,18 +162,19 @@ void Frontend::lift3d(FrameFeatures& features, const DepthWithVariance& fused,
   std::future<void> planes_job;
   if (planes && options_.parallel) planes_job = std::async(std::launch::async, extractFusedPlanes);
   {
-    ScopedStageTimer t(timings_, "lift");
+    Stopwatch w;
     if (!features.points.empty())
       s.points_3d = geometry::liftPoints(features, fused, options_.lift).points_lifted;
     if (!features.lines.empty())
       s.lines_3d = geometry::liftLines(features, fused, options_.lift).lines_lifted;
+    addTiming("lift", w.elapsedMs());
   }
   if (planes) {
     if (planes_job.valid())
       planes_job.get();
     else
       extractFusedPlanes();
-    timings_.add("planes", planes_ms);
+    addTiming("planes", planes_ms);
     if (!plane_stats.warning.empty()) s.warning = plane_stats.warning;
     features.planes = std::move(fused_planes);
     features.plane_labels = fused_labels;
@@ -178,15 +184,18 @@ void Frontend::lift3d(FrameFeatures& features, const DepthWithVariance& fused,
   s.planes = static_cast<int>(features.planes.size());
 }
 
-void Frontend::extractPlanesTimed(FrameFeatures& features, const DepthWithVariance& depth,
-                                  FrontendStats* stats) {
-  Stopwatch w;
-  extractPlanes(features, depth, stats);
-  timings_.add("planes", w.elapsedMs());
+void Frontend::addTiming(const char* stage, double ms) {
+  const std::lock_guard<std::mutex> lock(timings_mutex_);
+  timings_.add(stage, ms);
 }
 
-void Frontend::extractPlanes(FrameFeatures& features, const DepthWithVariance& depth,
-                             FrontendStats* stats) {
+StageTimings Frontend::timings() const {
+  const std::lock_guard<std::mutex> lock(timings_mutex_);
+  return timings_;
+}
+
+void Frontend::extractPlanes(PlaneStage& stage, FrameFeatures& features,
+                             const DepthWithVariance& depth, FrontendStats* stats) {
   const std::string invalid = geometry::validateDepth(depth, features.camera);
   if (!invalid.empty()) {
     stats->warning = "depth unusable for planes: " + invalid;
@@ -194,12 +203,11 @@ void Frontend::extractPlanes(FrameFeatures& features, const DepthWithVariance& d
     features.plane_labels = cv::Mat();
     return;
   }
-  // The extractor holds buffers sized for one camera: rebuild only when the camera changes.
-  if (!plane_extractor_ || plane_camera_ != features.camera) {
-    plane_extractor_ = std::make_unique<geometry::PlaneExtractor>(features.camera, options_.planes);
-    plane_camera_ = features.camera;
+  if (!stage.extractor || stage.camera != features.camera) {
+    stage.extractor = std::make_unique<geometry::PlaneExtractor>(features.camera, options_.planes);
+    stage.camera = features.camera;
   }
-  geometry::PlaneExtractionResult r = plane_extractor_->extract(depth);
+  geometry::PlaneExtractionResult r = stage.extractor->extract(depth);
   features.planes = std::move(r.planes);
   features.plane_labels = r.labels;
 }

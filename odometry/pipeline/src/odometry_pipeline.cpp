@@ -59,7 +59,8 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
 }
 
 StageTimings OdometryPipeline::timings() const {
-  return mergeTimings({&depth_timings_, &frontend_.timings(), &odometry_.timings()});
+  const StageTimings frontend = frontend_.timings();
+  return mergeTimings({&depth_timings_, &frontend, &odometry_.timings()});
 }
 
 StageTimings mergeTimings(const std::vector<const StageTimings*>& tables) {

@@ -28,8 +28,10 @@ std::string launchUsage() {
          "frames in/out/dropped/skipped per stage. Exit 0 only if every process ended cleanly.\n"
          "  --dataset DIR           TUM-layout folder (player)\n"
          "  --output TRAJ           TUM trajectory written by the logger from PPLVO_POSE\n"
-         "  --lockstep              player publishes frame k+1 only after the pose of frame k\n"
+         "  --lockstep              player publishes frame k+2 only after the pose of frame k\n"
          "                          (trajectory equal to pplvo-run's); default --rate 0 then\n"
+         "  --lockstep-in-flight N  frames out without their pose in lockstep (2; 1 = one at\n"
+         "                          a time)\n"
          "  --rate R                player speed: 1 real time (default), 0 as fast as possible\n"
          "  --lockstep-timeout S    player's wait for each pose in lockstep mode (10)\n"
          "  --config FILE           pipeline YAML (depth filter, frontend and estimator)\n"
@@ -148,7 +150,15 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
       rate_given = true;
     } else if (key == "--lockstep-timeout")
       number(&o.lockstep_timeout_s, 0.1);
-    else if (key == "--config")
+    else if (key == "--lockstep-in-flight") {
+      std::string t;
+      int64_t v = 0;
+      if (next(&t) && (!toInt(t, &v) || v < 1 || v > 1000))
+        p.errors.push_back("--lockstep-in-flight: expected an integer in [1, 1000], not '" + t +
+                           "'");
+      else
+        o.lockstep_in_flight = static_cast<int>(v);
+    } else if (key == "--config")
       next(&o.config);
     else if (key == "--set") {
       std::string kv;
@@ -367,7 +377,8 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::st
                  {"--dataset", o.dataset_dir, "--rate", fmtDouble(o.rate), "--no-progress"});
   if (o.lockstep) {
     pl.args.insert(pl.args.end(),
-                   {"--lockstep", "--lockstep-timeout", fmtDouble(o.lockstep_timeout_s)});
+                   {"--lockstep", "--lockstep-timeout", fmtDouble(o.lockstep_timeout_s),
+                    "--lockstep-in-flight", std::to_string(o.lockstep_in_flight)});
   }
   if (o.max_frames > 0)
     pl.args.insert(pl.args.end(), {"--max-frames", std::to_string(o.max_frames)});

@@ -23,6 +23,9 @@ void usage() {
       "  --start N               first associated frame (0)\n"
       "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
       "  --skip-bad              skip (and count) corrupt frames instead of stopping\n"
+      "  --in-flight N           frames published before the previous one's pose (2: the next\n"
+      "                          frame's features are extracted while this one is fused;\n"
+      "                          1: one frame at a time; same trajectory either way)\n"
       "  --summary FILE          write the run summary as YAML\n"
       "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
       "  --quiet                 no summary on stdout\n%s",
@@ -44,6 +47,7 @@ int main(int argc, char** argv) {
       .option("--summary", &o.summary)
       .option("--log", &o.log)
       .option("--max-frames", &o.max_frames, int64_t{0})
+      .option("--in-flight", &o.in_flight, 1, 1000)
       .option("--start", &o.start, int64_t{0})
       .option("--fps", &o.fps, 0.0)
       .flag("--skip-bad", &o.skip_bad)

@@ -185,7 +185,12 @@ RunResult runPipeline(const RunOptions& options) {
 
     player::PlayerOptions po;
     po.dataset_dir = options.dataset_dir;
-    po.rate = 0.0;  // as fast as possible; the player drains memq after each frame
+    po.rate = 0.0;  // as fast as possible
+    // Every node runs in this thread: the player dispatches memq's messages one at a time and
+    // publishes the next frame as soon as fewer than in_flight frames lack their pose.
+    po.lockstep = true;
+    po.lockstep_in_flight = std::max(1, options.in_flight);
+    po.in_process = true;
     po.fps = options.fps;
     po.start = options.start;
     po.max_frames = options.max_frames;

@@ -65,6 +65,29 @@ TEST_F(RunPipelineTest, EqualsTheLcmFreePipelineWithVerbatimStamps) {
   }
 }
 
+TEST_F(RunPipelineTest, FramesInFlightDoNotChangeTheTrajectory) {
+  // Pipelined (frame k+1 extracted while k is fused) or one frame at a time: the same poses,
+  // bit for bit, and nothing dropped.
+  std::vector<RunResult> runs;
+  for (const int in_flight : {1, 2, 3}) {
+    RunOptions o;
+    o.dataset_dir = sequenceDir();
+    o.in_flight = in_flight;
+    runs.push_back(runPipeline(o));
+    const RunResult& r = runs.back();
+    ASSERT_FALSE(r.failed) << r.error;
+    ASSERT_EQ(r.poses, kFrames) << "in flight " << in_flight;
+    for (const NodeReport& n : r.nodes) EXPECT_EQ(n.counters.frames_dropped, 0) << n.name;
+  }
+  for (size_t k = 1; k < runs.size(); ++k) {
+    for (int i = 0; i < kFrames; ++i) {
+      EXPECT_EQ(runs[k].trajectory[i].stamp_text, runs[0].trajectory[i].stamp_text);
+      EXPECT_TRUE(runs[k].trajectory[i].T_w_c.matrix() == runs[0].trajectory[i].T_w_c.matrix())
+          << "in flight " << k + 1 << ", frame " << i;
+    }
+  }
+}
+
 TEST_F(RunPipelineTest, TracksTheSyntheticSequenceWithBoundedDrift) {
   RunOptions o;
   o.dataset_dir = sequenceDir();

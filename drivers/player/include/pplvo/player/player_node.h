@@ -30,10 +30,16 @@ struct PlayerOptions {
   double fps = 0.0;
   bool lockstep = false;            ///< --lockstep
   double lockstep_timeout_s = 5.0;  ///< --lockstep-timeout
-  int64_t start = 0;                ///< --start: first associated frame
-  int64_t max_frames = 0;           ///< --max-frames: 0 = all
-  double max_depth_m = 0.0;         ///< --max-depth-m: 0 = no limit
-  bool skip_bad = false;            ///< --skip-bad
+  /// --lockstep-in-flight: frames published ahead of the last pose in lockstep. 2 lets the
+  /// frontend extract frame k+1 while frame k is fused and lifted; the results are the same.
+  int lockstep_in_flight = 2;
+  /// Every subscriber runs in this thread (memq://, pplvo-run): a lockstep wait dispatches
+  /// what is queued and ends when nothing is left, since nothing else can publish.
+  bool in_process = false;
+  int64_t start = 0;         ///< --start: first associated frame
+  int64_t max_frames = 0;    ///< --max-frames: 0 = all
+  double max_depth_m = 0.0;  ///< --max-depth-m: 0 = no limit
+  bool skip_bad = false;     ///< --skip-bad
   int8_t rgb_encoding = pplvo_msgs::image_t::ENCODING_RAW_BGR8;   ///< --rgb-encoding raw|jpeg|png
   int8_t depth_encoding = pplvo_msgs::image_t::ENCODING_RAW_U16;  ///< --depth-encoding raw|zlib|png
   int jpeg_quality = 90;                                          ///< --jpeg-quality
@@ -95,6 +101,8 @@ class PlayerNode {
   void drain();
   void waitUntil(double target_s);
   bool waitForPose(int64_t seq);
+  /// Waits (dispatching messages) for the pose of `seq`; counts and reports a timeout.
+  void lockstepWait(int64_t seq, PlayerResult& result);
   double nowS() const;
 
   PlayerOptions options_;

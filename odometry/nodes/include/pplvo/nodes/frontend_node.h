@@ -10,12 +10,15 @@
 /// | PPLVO_FEATURES_3D   | features_t    | out       | STAGE_3D: the same lifted, fused planes   |
 /// | PPLVO_STATUS        | node_status_t | out       | once a second                             |
 ///
-/// A frame's stage 2D is published when both its colour image and its C-GM depth are in
-/// (either may come first), stage 3D when its fused depth arrives. Every queue is bounded:
-/// entries older than the newest handled sequence number, or beyond max_pending, are dropped
-/// and counted.
+/// A frame's stage 2D starts when both its colour image and its C-GM depth are in (either may
+/// come first), stage 3D when its fused depth arrives. Stage 2D runs on a worker thread
+/// (`extract_ahead`) so that it overlaps the lifting of the previous frame: it is published
+/// after that frame's stage 3D, or at once when no frame waits for fused depth; the features do
+/// not depend on it. Every queue is bounded: entries older than the newest handled sequence
+/// number, or beyond max_pending, are dropped and counted.
 #include <cstdint>
 #include <deque>
+#include <future>
 #include <lcm/lcm-cpp.hpp>
 #include <pplvo_msgs/depth_map_t.hpp>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
@@ -38,6 +41,8 @@ struct FrontendNodeOptions {
   std::string status_channel = channels::kStatus;
   /// Frames held per queue (1 s at 30 Hz); older ones are dropped and counted.
   int max_pending = 30;
+  /// Stage 2D of a frame on a worker thread while the previous frame is lifted (above).
+  bool extract_ahead = true;
   pipeline::FrontendOptions frontend;
 };
 
@@ -51,6 +56,9 @@ class FrontendNode {
   FrontendNode& operator=(const FrontendNode&) = delete;
 
   void publishStatus(int64_t utime);
+  /// Publishes a stage 2D that finished on its worker thread but still waits for the previous
+  /// frame's fused depth (which may never come): call it from the idle loop. Never blocks.
+  void poll();
   const msgs::NodeCounters& counters() const { return counters_; }
   const StageTimings& timings() const { return timings_; }
   /// Decode/encode times of this node and the frontend's own stages, in one table.
@@ -71,8 +79,18 @@ class FrontendNode {
   void handleFrame(const pplvo_msgs::rgbd_frame_t& msg);
   void handleCgm(const pplvo_msgs::depth_map_t& msg);
   void handleFused(const pplvo_msgs::depth_map_t& msg);
+  void liftFused(const pplvo_msgs::depth_map_t& msg);
   /// Runs stage 2D for every frame whose colour and C-GM depth are both in.
   void extractReady();
+  /// Stage 2D computed for one frame (on the worker thread: no node state touched there).
+  struct Extracted {
+    FrameFeatures features;
+    pipeline::FrontendStats stats;
+  };
+  /// Publishes stage 2D and queues the features for their fused depth.
+  void publishExtracted(Extracted extracted);
+  /// Waits for the stage 2D in flight, if any, and publishes it.
+  void finishInFlight();
   void warn(const std::string& what);
 
   FrontendNodeOptions options_;
@@ -83,6 +101,10 @@ class FrontendNode {
   std::deque<PendingDepth> cgm_;           ///< C-GM depth in, colour not yet
   std::deque<FrameFeatures> awaiting_3d_;  ///< stage 2D published, fused depth not yet
   int64_t last_extracted_seq_ = -1;
+  /// Stage 2D running on the worker thread (at most one; destroyed, i.e. joined, before
+  /// frontend_).
+  std::future<Extracted> in_flight_;
+  int64_t in_flight_seq_ = -1;
   msgs::NodeCounters counters_;
   StageTimings timings_;
 };

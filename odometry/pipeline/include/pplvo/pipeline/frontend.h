@@ -5,6 +5,7 @@
 /// on the fused depth once the frame's pose has come back through the depth filter (stage 3D).
 /// No LCM: pplvo-frontend and the tests call the same code.
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include "pplvo/core/features.h"
@@ -49,6 +50,9 @@ struct FrontendStats {
   std::string warning;  ///< non-empty when an input was unusable (e.g. depth size mismatch)
 };
 
+/// Feature frontend of one camera. extract2d() of one frame may run on another thread while
+/// lift3d() of an earlier frame runs (each has its own plane extractor; the stage timings are
+/// shared under a lock); two calls of the same stage must not overlap.
 class Frontend {
  public:
   explicit Frontend(const FrontendOptions& options = {});
@@ -66,19 +70,26 @@ class Frontend {
               FrontendStats* stats = nullptr);
 
   const FrontendOptions& options() const { return options_; }
-  const StageTimings& timings() const { return timings_; }
+  /// A snapshot of the stage timings (both stages).
+  StageTimings timings() const;
 
  private:
+  /// A plane extractor holds buffers sized for one camera: rebuilt only when it changes.
+  struct PlaneStage {
+    std::unique_ptr<geometry::PlaneExtractor> extractor;
+    PinholeCamera camera;
+  };
   /// Planes of `depth` into `features` (no timing: may run on a second thread).
-  void extractPlanes(FrameFeatures& features, const DepthWithVariance& depth, FrontendStats* stats);
-  void extractPlanesTimed(FrameFeatures& features, const DepthWithVariance& depth,
-                          FrontendStats* stats);
+  void extractPlanes(PlaneStage& stage, FrameFeatures& features, const DepthWithVariance& depth,
+                     FrontendStats* stats);
+  void addTiming(const char* stage, double ms);
 
   FrontendOptions options_;
   features::PointExtractor point_extractor_;
   features::LineExtractor line_extractor_;
-  std::unique_ptr<geometry::PlaneExtractor> plane_extractor_;  ///< sized on first use
-  PinholeCamera plane_camera_;
+  PlaneStage planes_2d_;  ///< C-GM planes of stage 2D
+  PlaneStage planes_3d_;  ///< fused-depth planes of stage 3D
+  mutable std::mutex timings_mutex_;
   StageTimings timings_;
 };
 

@@ -29,7 +29,8 @@ const std::vector<std::string>& allPrograms();
 struct LaunchOptions {
   std::string dataset_dir;           ///< --dataset (required)
   std::string output;                ///< --output: TUM trajectory written by the logger (required)
-  bool lockstep = false;             ///< --lockstep: player waits for pose k before frame k+1
+  bool lockstep = false;             ///< --lockstep: player waits for pose k before frame k+2
+  int lockstep_in_flight = 2;        ///< --lockstep-in-flight: frames out without their pose
   double rate = 1.0;                 ///< --rate: player speed (1 real time, 0 as fast as possible)
   double lockstep_timeout_s = 10.0;  ///< --lockstep-timeout: player's wait per pose
   std::string config;                ///< --config: pipeline YAML for frontend and estimator

@@ -25,7 +25,11 @@ struct RunOptions {
   int64_t start = 0;        ///< --start: first associated frame
   double fps = 0.0;         ///< --fps: frame rate of integer-stamped datasets
   bool skip_bad = false;    ///< --skip-bad: skip corrupt frames (counted)
-  bool progress = false;    ///< progress line on stderr
+  /// --in-flight: frames published before the pose of the one before them (1: one frame at a
+  /// time). With 2 the next frame's 2D features are extracted while this one is fused and
+  /// lifted; the trajectory is the same.
+  int in_flight = 2;
+  bool progress = false;  ///< progress line on stderr
   pipeline::PipelineOptions pipeline;
 };
 
