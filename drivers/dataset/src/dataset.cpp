@@ -7,6 +7,8 @@
 #include <iterator>
 #include <opencv2/imgcodecs.hpp>
 
+#include "pplvo/dataset/png_decode.h"
+
 namespace fs = std::filesystem;
 
 namespace pplvo::dataset {
@@ -24,6 +26,15 @@ std::vector<uchar> readBytes(const std::string& path) {
 }
 
 cv::Mat decode(const std::vector<uchar>& bytes, int flags, const std::string& path) {
+  // PNG (the datasets' format): the fast decoder, which leaves unusual layouts to OpenCV and
+  // refuses corrupt files itself. Anything else (JPEG colour, ...) goes to OpenCV.
+  if (looksLikePng(bytes.data(), bytes.size())) {
+    try {
+      return decodePng(bytes.data(), bytes.size(), flags);
+    } catch (const PngError& e) {
+      throw FrameLoadError(path, std::string("corrupt image file (") + e.what() + ")");
+    }
+  }
   cv::Mat m;
   try {
     m = cv::imdecode(bytes, flags);

@@ -659,6 +659,42 @@ TEST(PngDecode, CorruptContentWithValidCrcs) {
   EXPECT_NE(errorOf(assemble(c)).find("OpenCV"), std::string::npos);
 }
 
+// loadRawFrame turns decoder errors into FrameLoadError naming the file and the reason.
+TEST(PngDecode, LoadRawFrameReportsTheReason) {
+  const fs::path dir = fs::temp_directory_path() / ("pplvo_test_png_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  Bytes rgb, depth;
+  ASSERT_TRUE(cv::imencode(".png", sampleImage(6, 8, CV_8UC3, 41), rgb));
+  ASSERT_TRUE(cv::imencode(".png", sampleImage(6, 8, CV_16UC1, 42), depth));
+  auto write = [&](const std::string& name, const Bytes& b) {
+    std::ofstream(dir / name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(b.data()), long(b.size()));
+    return (dir / name).string();
+  };
+  DatasetEntry e;
+  e.rgb_path = write("rgb.png", rgb);
+  e.depth_path = write("depth.png", depth);
+  const RawFrame f = loadRawFrame(e, 5000.0);
+  EXPECT_TRUE(identical(f.bgr, cv::imdecode(rgb, cv::IMREAD_COLOR)));
+  cv::Mat want = cv::imdecode(depth, cv::IMREAD_UNCHANGED);
+  want.setTo(0, want > 65534);
+  EXPECT_TRUE(identical(f.depth_units, want));
+
+  Bytes bad = depth;
+  bad[bad.size() - 20] ^= 1;
+  e.depth_path = write("bad.png", bad);
+  try {
+    loadRawFrame(e, 5000.0);
+    FAIL() << "corrupt depth accepted";
+  } catch (const FrameLoadError& err) {
+    const std::string m = err.what();
+    EXPECT_NE(m.find("corrupt image file (CRC error in IDAT chunk"), std::string::npos) << m;
+    EXPECT_NE(m.find("bad.png"), std::string::npos) << m;
+    EXPECT_EQ(err.path(), e.depth_path);
+  }
+  fs::remove_all(dir);
+}
+
 // One decompressor and scratch buffers per thread: concurrent decoding is safe and exact.
 TEST(PngDecode, ConcurrentThreads) {
   Bytes a, b;
