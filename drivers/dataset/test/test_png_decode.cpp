@@ -333,17 +333,22 @@ TEST(PngDecode, HandFilteredRowsAllFiltersAllLayouts) {
   };
   const std::vector<L> layouts = {{8, 0}, {16, 0}, {8, 2}, {16, 2},
                                   {8, 4}, {16, 4}, {8, 6}, {16, 6}};
-  const std::vector<cv::Size> sizes = {{1, 1}, {1, 6}, {3, 5}, {5, 11}, {641, 7}};
+  const std::vector<cv::Size> sizes = {{1, 1}, {1, 6}, {2, 2}, {3, 5}, {5, 11}, {641, 7}};
   std::map<int, int> filters;
   uint64_t seed = 100;
   for (const auto& l : layouts) {
     const int bpp = channelsOf(l.colour_type) * l.depth / 8;
     for (const auto& sz : sizes) {
-      for (int shift = 0; shift < 5; ++shift) {
+      for (int shift = 0; shift < 7; ++shift) {
         const size_t row_bytes = size_t(sz.width) * size_t(bpp);
         const Bytes pixels = samplePixels(row_bytes * size_t(sz.height), seed++);
-        const Bytes rows = filterRows(pixels, size_t(sz.height), row_bytes, bpp,
-                                      [&](size_t y) { return int((y + size_t(shift)) % 5); });
+        // Filters 0-4 in turn, or (shift >= 5) runs of Paeth rows broken by the others, as
+        // camera images have them (the decoder unfilters Paeth row pairs together).
+        const Bytes rows = filterRows(pixels, size_t(sz.height), row_bytes, bpp, [&](size_t y) {
+          if (shift < 5) return int((y + size_t(shift)) % 5);
+          const size_t k = y + size_t(shift - 5);
+          return k % 6 < 3 ? 4 : int(k % 4);
+        });
         for (size_t y = 0; y < size_t(sz.height); ++y) ++filters[rows[y * (row_bytes + 1)]];
         const Bytes png =
             buildPng(ihdr(uint32_t(sz.width), uint32_t(sz.height), l.depth, l.colour_type), rows,
