@@ -27,7 +27,7 @@ constexpr uint64_t kMaxPixels = 1ull << 30;
 // DEFLATE cannot expand by more than 1032:1 (a 258-byte match in two bits), so an IDAT
 // shorter than this bound cannot hold the image: refuse before allocating its buffer.
 constexpr uint64_t kMaxDeflateRatio = 1032;
-constexpr size_t kPad = 16;  // slack after buffers for the 4-byte SIMD loads of the last pixel
+constexpr size_t kPad = 16;  // slack after buffers: SIMD loads read up to 8 bytes per pixel
 
 uint32_t be32(const uint8_t* p) {
   return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | p[3];
@@ -195,8 +195,9 @@ Scan scanChunks(const uint8_t* data, size_t size,
     if (isType(type, "IEND")) break;
     if (isType(type, "IHDR")) throw PngError("second IHDR chunk");
     if (isType(type, "eXIf")) scan.has_exif = true;
-    // Critical chunks other than PLTE are unknown to every decoder: the file is not a PNG
-    // image we (or libpng) can read. Ancillary ones are skipped, as libpng does by default.
+    // An unknown critical chunk (upper-case first letter) may change how the image reads:
+    // libpng refuses such files too. Ancillary chunks are skipped, as libpng does by default
+    // (the tests check that OpenCV applies none of the standard ones either).
     if (!(type[0] & 0x20) && !isType(type, "PLTE")) {
       throw PngError("unknown critical chunk " + name);
     }
