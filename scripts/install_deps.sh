@@ -10,6 +10,7 @@ packages=(
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
   # algorithms
   libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev libyaml-cpp-dev zlib1g-dev
+  libdeflate-dev
   # camera drivers
   libopenni2-dev libfreenect-dev libfreenect-bin
   # tests and benchmarks

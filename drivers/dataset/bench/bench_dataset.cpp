@@ -1,11 +1,17 @@
 // Speed of the dataset library: frame decoding and association. Not part of ctest.
 // Run: build/bin/bench_dataset (needs PPLVO_SHARED_DATA or ../shared/data from the repo root).
-#include <cstdlib>
-#include <random>
-
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+
 #include "pplvo/dataset/dataset.h"
+#include "pplvo/dataset/png_decode.h"
 
 namespace {
 std::string sharedData() {
@@ -23,6 +29,49 @@ void BM_LoadRawFrame(benchmark::State& state, const char* folder) {
 }
 BENCHMARK_CAPTURE(BM_LoadRawFrame, icl, "icl_living_room_kt0_short")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LoadRawFrame, tum, "tum_fr3_sitting_static_short")
+    ->Unit(benchmark::kMillisecond);
+
+// One PNG decode from memory (the first 20 colour or depth files of a sequence in turn):
+// cv::imdecode against the fast decoder (pplvo/dataset/png_decode.h).
+std::vector<std::vector<uint8_t>> pngFiles(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) names.push_back(e.path());
+  std::sort(names.begin(), names.end());
+  names.resize(std::min<size_t>(names.size(), 20));
+  std::vector<std::vector<uint8_t>> files;
+  for (const auto& n : names) {
+    std::ifstream in(n, std::ios::binary);
+    files.emplace_back(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  return files;
+}
+
+void BM_DecodePng(benchmark::State& state, const char* folder, bool depth, bool fast) {
+  const auto files = pngFiles(sharedData() + "/" + folder + (depth ? "/depth" : "/rgb"));
+  const int flags = depth ? cv::IMREAD_UNCHANGED : cv::IMREAD_COLOR;
+  size_t i = 0;
+  for (auto _ : state) {
+    const auto& f = files[i++ % files.size()];
+    const cv::Mat m =
+        fast ? pplvo::dataset::decodePng(f.data(), f.size(), flags) : cv::imdecode(f, flags);
+    benchmark::DoNotOptimize(m.data);
+  }
+}
+BENCHMARK_CAPTURE(BM_DecodePng, icl_colour_opencv, "icl_living_room_kt0_short", false, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecodePng, icl_colour_fast, "icl_living_room_kt0_short", false, true)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecodePng, icl_depth_opencv, "icl_living_room_kt0_short", true, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecodePng, icl_depth_fast, "icl_living_room_kt0_short", true, true)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecodePng, tum_colour_opencv, "tum_fr3_sitting_static_short", false, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecodePng, tum_colour_fast, "tum_fr3_sitting_static_short", false, true)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecodePng, tum_depth_opencv, "tum_fr3_sitting_static_short", true, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecodePng, tum_depth_fast, "tum_fr3_sitting_static_short", true, true)
     ->Unit(benchmark::kMillisecond);
 
 void BM_LoadFrameMetres(benchmark::State& state) {
