@@ -117,20 +117,31 @@ void FrontendNode::extractReady() {
     frames_.pop_front();
     cgm_.pop_front();
     last_extracted_seq_ = frame.seq;
-    finishInFlight();  // an older frame's stage 2D goes out first
-    auto extract = [this, frame = std::move(frame), depth = std::move(depth)] {
+    if (options_.extract_ahead <= 0) {
       Extracted e;
       e.features = frontend_.extract2d(frame, depth, &e.stats);
-      return e;
-    };
-    if (!options_.extract_ahead) {
-      publishExtracted(extract());
+      publishExtracted(std::move(e));
       continue;
     }
-    in_flight_seq_ = last_extracted_seq_;
-    in_flight_ = std::async(std::launch::async, std::move(extract));
-    // With no frame waiting for its fused depth there is no lifting to overlap: publish now.
-    if (awaiting_3d_.empty()) finishInFlight();
+    while (static_cast<int>(in_flight_.size()) >= options_.extract_ahead) finishOldest();
+    std::promise<void> done;
+    std::shared_future<void> previous = newest_done_;
+    newest_done_ = done.get_future().share();
+    auto job = [this, previous, done = std::move(done), frame = std::move(frame),
+                depth = std::move(depth)]() mutable {
+      if (previous.valid()) previous.wait();
+      Extracted e;
+      try {
+        e.features = frontend_.extract2d(frame, depth, &e.stats);
+      } catch (...) {
+        done.set_value();
+        throw;  // rethrown by get() in the handler that publishes it
+      }
+      done.set_value();
+      return e;
+    };
+    in_flight_.push_back({last_extracted_seq_, std::async(std::launch::async, std::move(job))});
+    publishWhenDue();
   }
 }
 
@@ -149,26 +160,31 @@ void FrontendNode::publishExtracted(Extracted extracted) {
   }
 }
 
-void FrontendNode::finishInFlight() {
-  if (!in_flight_.valid()) return;
-  Extracted e = in_flight_.get();  // invalidates the future even if it rethrows
-  publishExtracted(std::move(e));
+void FrontendNode::finishOldest() {
+  InFlight job = std::move(in_flight_.front());
+  in_flight_.pop_front();
+  publishExtracted(job.result.get());  // a job's exception surfaces here (counted skip)
+}
+
+void FrontendNode::publishWhenDue() {
+  // With no frame waiting for its fused depth there is no lifting to overlap: publish now.
+  while (awaiting_3d_.empty() && !in_flight_.empty()) finishOldest();
 }
 
 void FrontendNode::poll() {
   msgs::guarded(counters_, kName, [&] {
-    if (in_flight_.valid() &&
-        in_flight_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
-      finishInFlight();
+    while (!in_flight_.empty() && in_flight_.front().result.wait_for(std::chrono::seconds(0)) ==
+                                      std::future_status::ready) {
+      finishOldest();
     }
   });
 }
 
 void FrontendNode::handleFused(const pplvo_msgs::depth_map_t& msg) {
-  // Depth for the frame in flight itself (or a later one): its stage 2D cannot wait.
-  if (in_flight_.valid() && in_flight_seq_ <= msg.seq) finishInFlight();
+  // Depth for a frame in flight (or a later one): its stage 2D cannot wait.
+  while (!in_flight_.empty() && in_flight_.front().seq <= msg.seq) finishOldest();
   liftFused(msg);
-  finishInFlight();  // the next frame's stage 2D, computed while this one was lifted
+  publishWhenDue();  // the next frame's stage 2D, computed while this one was lifted
 }
 
 void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {

@@ -41,8 +41,9 @@ struct FrontendNodeOptions {
   std::string status_channel = channels::kStatus;
   /// Frames held per queue (1 s at 30 Hz); older ones are dropped and counted.
   int max_pending = 30;
-  /// Stage 2D of a frame on a worker thread while the previous frame is lifted (above).
-  bool extract_ahead = true;
+  /// Frames whose stage 2D may be under way on the worker thread (computed one after the other,
+  /// in frame order) while earlier frames are lifted; 0 computes it in the handler.
+  int extract_ahead = 2;
   pipeline::FrontendOptions frontend;
 };
 
@@ -89,8 +90,10 @@ class FrontendNode {
   };
   /// Publishes stage 2D and queues the features for their fused depth.
   void publishExtracted(Extracted extracted);
-  /// Waits for the stage 2D in flight, if any, and publishes it.
-  void finishInFlight();
+  /// Waits for the oldest stage 2D in flight and publishes it.
+  void finishOldest();
+  /// Publishes stage 2D in flight while no earlier frame waits for its fused depth.
+  void publishWhenDue();
   void warn(const std::string& what);
 
   FrontendNodeOptions options_;
@@ -101,10 +104,14 @@ class FrontendNode {
   std::deque<PendingDepth> cgm_;           ///< C-GM depth in, colour not yet
   std::deque<FrameFeatures> awaiting_3d_;  ///< stage 2D published, fused depth not yet
   int64_t last_extracted_seq_ = -1;
-  /// Stage 2D running on the worker thread (at most one; destroyed, i.e. joined, before
-  /// frontend_).
-  std::future<Extracted> in_flight_;
-  int64_t in_flight_seq_ = -1;
+  /// Stage 2D under way on the worker, oldest first (destroyed, i.e. joined, before frontend_).
+  struct InFlight {
+    int64_t seq;
+    std::future<Extracted> result;
+  };
+  std::deque<InFlight> in_flight_;
+  /// Completion of the newest job: the next one starts after it (extract2d is not reentrant).
+  std::shared_future<void> newest_done_;
   msgs::NodeCounters counters_;
   StageTimings timings_;
 };
