@@ -23,6 +23,8 @@ void usage() {
       "  --features-3d-channel NAME out, features_t stage 3D (PPLVO_FEATURES_3D)\n"
       "  --status-channel NAME      out, node_status_t (PPLVO_STATUS)\n"
       "  --max-pending N            frames held per queue (30)\n"
+      "  --extract-ahead N          frames whose 2D features may be extracted on the worker\n"
+      "                             while earlier frames are lifted (1; 0 = in the handler)\n"
       "pipeline options (the frontend section is used):\n%s",
       pplvo::pipeline::pipelineOptionsUsage());
 }
@@ -43,7 +45,8 @@ int main(int argc, char** argv) {
       .option("--features-channel", &o.features_channel)
       .option("--features-3d-channel", &o.features_3d_channel)
       .option("--status-channel", &o.status_channel)
-      .option("--max-pending", &o.max_pending, 1);
+      .option("--max-pending", &o.max_pending, 1)
+      .option("--extract-ahead", &o.extract_ahead, 0, 100);
   p.parse(argsFromArgv(argc, argv));
   if (p.help()) {
     usage();

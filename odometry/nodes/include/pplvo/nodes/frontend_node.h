@@ -42,8 +42,10 @@ struct FrontendNodeOptions {
   /// Frames held per queue (1 s at 30 Hz); older ones are dropped and counted.
   int max_pending = 30;
   /// Frames whose stage 2D may be under way on the worker thread (computed one after the other,
-  /// in frame order) while earlier frames are lifted; 0 computes it in the handler.
-  int extract_ahead = 2;
+  /// in frame order) while earlier frames are lifted; 0 computes it in the handler. 2 measured
+  /// no faster than 1 in pplvo-run (the two cores are then busy) and wastes more work on frames
+  /// that free-running drops later.
+  int extract_ahead = 1;
   pipeline::FrontendOptions frontend;
 };
 
