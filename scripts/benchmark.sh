@@ -169,6 +169,10 @@ TEXT
     echo
     echo "## Per-stage time (ms/frame, configuration 'all', O-GM_10)"
     echo
+    echo "Wall time of each stage while it runs. The frames are pipelined (the next frame's points,"
+    echo "lines and planes are extracted while this one is fused and lifted: docs/pipeline.md), so"
+    echo "stages share the two cores and their sum is more than the time per frame."
+    echo
     cat "$stages"
     echo
     echo "## Trajectories"
