@@ -6,6 +6,8 @@
 
 #include <cstdlib>  // defines __GLIBC__ on glibc
 #include <cstring>
+#include <sys/resource.h>
+#include <vector>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -32,6 +34,37 @@ TEST(Allocator, FrameBuffersComeFromTheHeapAndStayMappedAfterFree) {
   size_t arena_after_free = 0;
   EXPECT_EQ(mmappedBlocksWhileHolding(4 * kFrameBytes, &arena_after_free), 0u);
   EXPECT_GE(arena_after_free, 4 * kFrameBytes) << "freed frame memory was trimmed";
+}
+
+long minorFaults() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_minflt;
+}
+
+/// Page faults taken while allocating, writing and freeing `n` frame buffers at once.
+long faultsForFrameBuffers(int n) {
+  const long before = minorFaults();
+  std::vector<void*> blocks;
+  for (int i = 0; i < n; ++i) {
+    void* p = std::malloc(kFrameBytes);
+    if (p) std::memset(p, 1, kFrameBytes);
+    blocks.push_back(p);
+  }
+  for (void* p : blocks) std::free(p);
+  return minorFaults() - before;
+}
+
+TEST(Allocator, PrefaultedHeapServesTheFirstFramesWithoutPageFaults) {
+  ASSERT_TRUE(keepFrameBuffersMapped());
+  const long pages_per_buffer = static_cast<long>(kFrameBytes) / 4096;
+  // Beyond the heap mapped so far (the test above left about 4 buffers): a fault per page.
+  const long fresh = faultsForFrameBuffers(16);
+  EXPECT_GT(fresh, 8 * pages_per_buffer);
+  // After prefaultHeap, far more buffers than the heap held come from pages already mapped.
+  ASSERT_TRUE(prefaultHeap(64 * kFrameBytes));
+  const long prefaulted = faultsForFrameBuffers(48);
+  EXPECT_LT(prefaulted, pages_per_buffer) << "fresh buffers took " << fresh << " faults";
 }
 
 }  // namespace

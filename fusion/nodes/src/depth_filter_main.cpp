@@ -16,6 +16,8 @@ void usage() {
   std::printf(
       "usage: pplvo-depth-filter [options]\n"
       "  --lcm-url URL            LCM URL (default $LCM_DEFAULT_URL)\n"
+      "  --prefault-mb N          heap mapped at start-up, MiB (128; 0 = none), so\n"
+      "                           that the first frames take no page faults\n"
       "  --rgbd-channel NAME      in, rgbd_frame_t (PPLVO_RGBD)\n"
       "  --pose-channel NAME      in, pose_t (PPLVO_POSE)\n"
       "  --cgm-channel NAME       out, depth_map_t (PPLVO_DEPTH_CGM)\n"
@@ -40,9 +42,11 @@ int main(int argc, char** argv) {
   pipeline::PipelineArgs pa;
   int window = 0;
   double max_translation_variance_m2 = 0;
+  int prefault_mb = 128;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);  // --config, --set, --features (unused), --depth-model
   p.option("--lcm-url", &o.lcm_url)
+      .option("--prefault-mb", &prefault_mb, 0, 1 << 20)
       .option("--rgbd-channel", &o.rgbd_channel)
       .option("--pose-channel", &o.pose_channel)
       .option("--cgm-channel", &o.cgm_channel)
@@ -81,6 +85,7 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
+  prefaultHeap(static_cast<size_t>(prefault_mb) << 20);  // before any thread starts
   try {
     msgs::installShutdownHandlers();
     auto lcm = msgs::openLcm(o.lcm_url);

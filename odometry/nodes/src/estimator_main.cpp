@@ -16,6 +16,8 @@ void usage() {
   std::printf(
       "usage: pplvo-estimator [options]\n"
       "  --lcm-url URL              LCM URL (default $LCM_DEFAULT_URL)\n"
+      "  --prefault-mb N            heap mapped at start-up, MiB (32; 0 = none), so\n"
+      "                             that the first frames take no page faults\n"
       "  --features-channel NAME    in, features_t stage 2D (PPLVO_FEATURES)\n"
       "  --features-3d-channel NAME in, features_t stage 3D (PPLVO_FEATURES_3D)\n"
       "  --pose-channel NAME        out, pose_t (PPLVO_POSE)\n"
@@ -32,9 +34,11 @@ int main(int argc, char** argv) {
   using namespace pplvo;
   nodes::EstimatorNodeOptions o;
   pipeline::PipelineArgs pa;
+  int prefault_mb = 32;  // features and poses only
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   p.option("--lcm-url", &o.lcm_url)
+      .option("--prefault-mb", &prefault_mb, 0, 1 << 20)
       .option("--features-channel", &o.features_channel)
       .option("--features-3d-channel", &o.features_3d_channel)
       .option("--pose-channel", &o.pose_channel)
@@ -54,6 +58,7 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
+  prefaultHeap(static_cast<size_t>(prefault_mb) << 20);  // before any thread starts
   try {
     msgs::installShutdownHandlers();
     auto lcm = msgs::openLcm(o.lcm_url);

@@ -16,6 +16,8 @@ void usage() {
   std::printf(
       "usage: pplvo-frontend [options]\n"
       "  --lcm-url URL              LCM URL (default $LCM_DEFAULT_URL)\n"
+      "  --prefault-mb N            heap mapped at start-up, MiB (128; 0 = none), so\n"
+      "                             that the first frames take no page faults\n"
       "  --rgbd-channel NAME        in, rgbd_frame_t (PPLVO_RGBD)\n"
       "  --cgm-channel NAME         in, depth_map_t (PPLVO_DEPTH_CGM)\n"
       "  --fused-channel NAME       in, depth_map_t (PPLVO_DEPTH_FUSED)\n"
@@ -36,9 +38,11 @@ int main(int argc, char** argv) {
   using namespace pplvo;
   nodes::FrontendNodeOptions o;
   pipeline::PipelineArgs pa;
+  int prefault_mb = 128;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   p.option("--lcm-url", &o.lcm_url)
+      .option("--prefault-mb", &prefault_mb, 0, 1 << 20)
       .option("--rgbd-channel", &o.rgbd_channel)
       .option("--cgm-channel", &o.cgm_channel)
       .option("--fused-channel", &o.fused_channel)
@@ -60,6 +64,7 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
+  prefaultHeap(static_cast<size_t>(prefault_mb) << 20);  // before any thread starts
   try {
     msgs::installShutdownHandlers();
     auto lcm = msgs::openLcm(o.lcm_url);

@@ -1,4 +1,5 @@
 #pragma once
+#include <cstddef>
 
 namespace pplvo {
 
@@ -12,5 +13,12 @@ namespace pplvo {
 /// the next frame reuses pages already mapped. Call once at the start of main(), before any
 /// thread starts. Returns false if the allocator refused a setting (other C libraries).
 bool keepFrameBuffersMapped();
+
+/// Maps `bytes` of heap now: allocates them, writes every page and frees them again, so that
+/// (after keepFrameBuffersMapped(), which keeps freed heap mapped) the buffers of the first
+/// frames come from pages already mapped. For processes that start before their input
+/// streams: a VM pays about 10 us per first touch of a page, several ms per frame while the
+/// window and feature buffers fill. Returns false if the allocation failed.
+bool prefaultHeap(size_t bytes);
 
 }  // namespace pplvo
