@@ -1,13 +1,16 @@
 // keepFrameBuffersMapped(): frame-sized blocks come from the heap (no mmap per frame) and stay
 // mapped after free. Its own executable: the settings are process-wide.
-#include "pplvo/core/allocator.h"
-
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cstdlib>  // defines __GLIBC__ on glibc
 #include <cstring>
-#include <sys/resource.h>
+#include <thread>
 #include <vector>
+
+#include "pplvo/core/allocator.h"
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -65,6 +68,46 @@ TEST(Allocator, PrefaultedHeapServesTheFirstFramesWithoutPageFaults) {
   ASSERT_TRUE(prefaultHeap(64 * kFrameBytes));
   const long prefaulted = faultsForFrameBuffers(48);
   EXPECT_LT(prefaulted, pages_per_buffer) << "fresh buffers took " << fresh << " faults";
+}
+
+/// `n` threads at once each allocate and write 3 frame buffers, hold them until all have, and
+/// free them (so that each uses an arena of its own); the most page faults one of them took.
+long maxFaultsInConcurrentThreads(int n) {
+  std::atomic<int> started{0}, written{0};
+  std::vector<long> faults(n, 0);
+  std::vector<std::thread> pool;
+  for (int i = 0; i < n; ++i) {
+    pool.emplace_back([&, i] {
+      ++started;
+      while (started.load() < n) std::this_thread::yield();
+      rusage before{}, after{};
+      getrusage(RUSAGE_THREAD, &before);
+      std::vector<void*> blocks;
+      for (int k = 0; k < 3; ++k) {
+        void* p = std::malloc(kFrameBytes);
+        if (p) std::memset(p, 1, kFrameBytes);
+        blocks.push_back(p);
+      }
+      getrusage(RUSAGE_THREAD, &after);
+      faults[i] = after.ru_minflt - before.ru_minflt;
+      ++written;
+      while (written.load() < n) std::this_thread::yield();
+      for (void* p : blocks) std::free(p);
+    });
+  }
+  for (std::thread& t : pool) t.join();
+  return *std::max_element(faults.begin(), faults.end());
+}
+
+TEST(Allocator, PrefaultedArenasServeNewWorkerThreads) {
+  ASSERT_TRUE(keepFrameBuffersMapped());
+  const long pages = 3 * static_cast<long>(kFrameBytes) / 4096;
+  // Two new threads: new arenas, a fault per page.
+  EXPECT_GT(maxFaultsInConcurrentThreads(2), pages / 2);
+  // Eight threads after prefaultThreadArenas(8, ...): every one finds an arena already mapped
+  // (without it, six of them would start new arenas).
+  ASSERT_TRUE(prefaultThreadArenas(8, 16 << 20));
+  EXPECT_LT(maxFaultsInConcurrentThreads(8), pages / 10);
 }
 
 }  // namespace

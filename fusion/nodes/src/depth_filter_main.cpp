@@ -16,7 +16,8 @@ void usage() {
   std::printf(
       "usage: pplvo-depth-filter [options]\n"
       "  --lcm-url URL            LCM URL (default $LCM_DEFAULT_URL)\n"
-      "  --prefault-mb N          heap mapped at start-up, MiB (128; 0 = none), so\n"
+      "  --prefault-mb N          heap mapped at start-up: MiB of main heap, and 8\n"
+      "                           worker arenas of a quarter of it (64; 0 = none), so\n"
       "                           that the first frames take no page faults\n"
       "  --rgbd-channel NAME      in, rgbd_frame_t (PPLVO_RGBD)\n"
       "  --pose-channel NAME      in, pose_t (PPLVO_POSE)\n"
@@ -42,7 +43,7 @@ int main(int argc, char** argv) {
   pipeline::PipelineArgs pa;
   int window = 0;
   double max_translation_variance_m2 = 0;
-  int prefault_mb = 128;
+  int prefault_mb = 64;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);  // --config, --set, --features (unused), --depth-model
   p.option("--lcm-url", &o.lcm_url)
@@ -85,7 +86,7 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
-  prefaultHeap(static_cast<size_t>(prefault_mb) << 20);  // before any thread starts
+  prefaultForStreaming(static_cast<size_t>(prefault_mb));  // before the LCM threads start
   try {
     msgs::installShutdownHandlers();
     auto lcm = msgs::openLcm(o.lcm_url);

@@ -16,7 +16,8 @@ void usage() {
   std::printf(
       "usage: pplvo-estimator [options]\n"
       "  --lcm-url URL              LCM URL (default $LCM_DEFAULT_URL)\n"
-      "  --prefault-mb N            heap mapped at start-up, MiB (32; 0 = none), so\n"
+      "  --prefault-mb N            heap mapped at start-up: MiB of main heap, and 8\n"
+      "                             worker arenas of a quarter of it (16; 0 = none), so\n"
       "                             that the first frames take no page faults\n"
       "  --features-channel NAME    in, features_t stage 2D (PPLVO_FEATURES)\n"
       "  --features-3d-channel NAME in, features_t stage 3D (PPLVO_FEATURES_3D)\n"
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
   using namespace pplvo;
   nodes::EstimatorNodeOptions o;
   pipeline::PipelineArgs pa;
-  int prefault_mb = 32;  // features and poses only
+  int prefault_mb = 16;  // features and poses only
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   p.option("--lcm-url", &o.lcm_url)
@@ -58,7 +59,7 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
-  prefaultHeap(static_cast<size_t>(prefault_mb) << 20);  // before any thread starts
+  prefaultForStreaming(static_cast<size_t>(prefault_mb));  // before the LCM threads start
   try {
     msgs::installShutdownHandlers();
     auto lcm = msgs::openLcm(o.lcm_url);

@@ -16,7 +16,8 @@ void usage() {
   std::printf(
       "usage: pplvo-frontend [options]\n"
       "  --lcm-url URL              LCM URL (default $LCM_DEFAULT_URL)\n"
-      "  --prefault-mb N            heap mapped at start-up, MiB (128; 0 = none), so\n"
+      "  --prefault-mb N            heap mapped at start-up: MiB of main heap, and 8\n"
+      "                             worker arenas of a quarter of it (64; 0 = none), so\n"
       "                             that the first frames take no page faults\n"
       "  --rgbd-channel NAME        in, rgbd_frame_t (PPLVO_RGBD)\n"
       "  --cgm-channel NAME         in, depth_map_t (PPLVO_DEPTH_CGM)\n"
@@ -38,7 +39,7 @@ int main(int argc, char** argv) {
   using namespace pplvo;
   nodes::FrontendNodeOptions o;
   pipeline::PipelineArgs pa;
-  int prefault_mb = 128;
+  int prefault_mb = 64;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   p.option("--lcm-url", &o.lcm_url)
@@ -64,7 +65,7 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
-  prefaultHeap(static_cast<size_t>(prefault_mb) << 20);  // before any thread starts
+  prefaultForStreaming(static_cast<size_t>(prefault_mb));  // before the LCM threads start
   try {
     msgs::installShutdownHandlers();
     auto lcm = msgs::openLcm(o.lcm_url);
