@@ -28,6 +28,8 @@ void usage() {
       "  --max-pending N            frames held per queue (30)\n"
       "  --extract-ahead N          frames whose 2D features may be extracted on the worker\n"
       "                             while earlier frames are lifted (1; 0 = in the handler)\n"
+      "  --max-unlifted N           frames extracted but not yet lifted beyond which a new\n"
+      "                             frame is dropped before extraction (3; 0 = never)\n"
       "pipeline options (the frontend section is used):\n%s",
       pplvo::pipeline::pipelineOptionsUsage());
 }
@@ -51,7 +53,8 @@ int main(int argc, char** argv) {
       .option("--features-3d-channel", &o.features_3d_channel)
       .option("--status-channel", &o.status_channel)
       .option("--max-pending", &o.max_pending, 1)
-      .option("--extract-ahead", &o.extract_ahead, 0, 100);
+      .option("--extract-ahead", &o.extract_ahead, 0, 100)
+      .option("--max-unlifted", &o.max_unlifted, 0, 1000);
   p.parse(argsFromArgv(argc, argv));
   if (p.help()) {
     usage();

@@ -117,6 +117,15 @@ void FrontendNode::extractReady() {
     frames_.pop_front();
     cgm_.pop_front();
     last_extracted_seq_ = frame.seq;
+    const size_t unlifted = awaiting_3d_.size() + in_flight_.size();
+    if (options_.max_unlifted > 0 && unlifted >= static_cast<size_t>(options_.max_unlifted)) {
+      // The pose -> fused depth -> lifting loop is behind: extracting this frame would only
+      // delay it further, and the estimator would drop the frame anyway.
+      ++counters_.frames_dropped;
+      warn("frame " + std::to_string(frame.seq) + " dropped before extraction: " +
+           std::to_string(unlifted) + " frames wait for their fused depth");
+      continue;
+    }
     if (options_.extract_ahead <= 0) {
       Extracted e;
       e.features = frontend_.extract2d(frame, depth, &e.stats);

@@ -174,6 +174,35 @@ TEST(FrontendNode, ExtractsAheadWhileLiftingAndPublishesInFrameOrder) {
   }
 }
 
+TEST(FrontendNode, DropsNewFramesBeforeExtractionWhileTheLoopIsBehind) {
+  // Five frames, no fused depth ever: with max_unlifted 3 the fourth and fifth are dropped
+  // before their (expensive, wasted) extraction; with 0 every frame is extracted.
+  for (const int max_unlifted : {3, 0}) {
+    SCOPED_TRACE("max_unlifted " + std::to_string(max_unlifted));
+    lcm::LCM lcm("memq://");
+    FrontendNodeOptions options;
+    options.max_unlifted = max_unlifted;
+    FrontendNode node(options, lcm);
+    Recorder<pplvo_msgs::features_t> f2d(lcm, channels::kFeatures);
+    for (int i = 0; i < 5; ++i) {
+      auto m = frameMsg(i);
+      auto d = cgmMsg(i);
+      lcm.publish(channels::kRgbd, &m);
+      lcm.publish(channels::kDepthCgm, &d);
+      drain(lcm);
+    }
+    // Frame 0 went out at once; each later one waits on the worker until the next pairs.
+    if (max_unlifted == 3) {
+      EXPECT_EQ(node.counters().frames_dropped, 2);
+      EXPECT_EQ(f2d.msgs.size(), 2u);  // frames 0 and 1; frame 2 still on the worker
+      EXPECT_NE(node.counters().last_warning.find("dropped before extraction"), std::string::npos);
+    } else {
+      EXPECT_EQ(node.counters().frames_dropped, 0);
+      EXPECT_EQ(f2d.msgs.size(), 4u);  // frames 0-3; frame 4 still on the worker
+    }
+  }
+}
+
 TEST(FrontendNode, BadMessagesAreCountedAndQueuesStayBounded) {
   lcm::LCM lcm("memq://");
   FrontendNodeOptions o;

@@ -46,6 +46,11 @@ struct FrontendNodeOptions {
   /// no faster than 1 in pplvo-run (the two cores are then busy) and wastes more work on frames
   /// that free-running drops later.
   int extract_ahead = 1;
+  /// Frames extracted but not yet lifted (their fused depth has not come) beyond which a new
+  /// frame is dropped before extraction, counted: the loop through the estimator and the depth
+  /// filter is behind, and the estimator would drop it anyway. 0 = never. 3 never drops in
+  /// lockstep with up to 3 frames in flight.
+  int max_unlifted = 3;
   pipeline::FrontendOptions frontend;
 };
 
