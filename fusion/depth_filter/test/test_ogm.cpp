@@ -226,12 +226,10 @@ Pose3 rpyPose(double roll, double pitch, double yaw, const Eigen::Vector3d& t) {
 /// them from above and behind, so all their points land in those boundary rows of the last
 /// frame (many points per pixel, at different ranges: the gate decides, in order).
 TEST(OgmParallel, PointsOnBandBoundaryRowsSameForAnyThreadCount) {
-  PinholeCamera cam;
-  cam.width = 640;
-  cam.height = 480;
-  cam.fx = cam.fy = 525.0;
-  cam.cx = 319.5;
-  cam.cy = 239.5;
+  const PinholeCamera cam = AnalyticScene().camera();  // 640x480, f 525, centre (319.5, 239.5)
+  ASSERT_EQ(cam.height, 480);
+  ASSERT_DOUBLE_EQ(cam.fy, 525.0);
+  ASSERT_DOUBLE_EQ(cam.cy, 239.5);
   const double rows[5] = {119.5, 159.5, 239.5, 319.5, 359.5};
   constexpr int kN = 8;  // frames 0..6 from above, frame 7 (identity) sees the planes edge-on
   std::vector<Pose3> poses;

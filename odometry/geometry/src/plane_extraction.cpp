@@ -392,12 +392,8 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
         const double k_sigma = options_.refine_sigma_factor * options_.noise.sigma_z_coeff_per_m;
         const double margin = options_.refine_margin_m;
         const bool test_interior = options_.refine_boundaries;
-        if (interior) {
-          // One plane: the sums stay in registers (same order of additions as the loop below).
-          const double* q = pn[own_slot];
-          const uint8_t label = static_cast<uint8_t>(own + 1);
-          int n_in = 0;
-          double sx = 0, sy = 0, sz = 0;
+        // visit(label, px, py, z, thr) for every valid pixel of the cell, row-major.
+        auto forEachPoint = [&](auto&& visit) {
           for (int v = v0; v < v1; ++v) {
             const float* zr = depth.depth_m.ptr<float>(v);
             uint8_t* lr = res.labels.ptr<uint8_t>(v);
@@ -405,48 +401,46 @@ PlaneExtractionResult PlaneExtractor::extract(const DepthWithVariance& depth) {
             for (int u = u0; u < u1; ++u) {
               const double z = zr[u];
               if (!(z > 0.0) || !std::isfinite(z)) continue;
-              const double px = x_factor_[u] * z, py = yf * z;
-              const double thr = k_sigma * z * z + margin;
-              if (test_interior && !(std::abs(q[0] * px + q[1] * py + q[2] * z + q[3]) < thr))
-                continue;
-              lr[u] = label;
-              ++n_in;
-              sx += px;
-              sy += py;
-              sz += z;
+              visit(lr[u], x_factor_[u] * z, yf * z, z, k_sigma * z * z + margin);
             }
           }
+        };
+        if (interior) {
+          // One plane: the sums stay in registers (same order of additions as per slot below).
+          const double* q = pn[own_slot];
+          const uint8_t label = static_cast<uint8_t>(own + 1);
+          int n_in = 0;
+          double sx = 0, sy = 0, sz = 0;
+          forEachPoint([&](uint8_t& l, double px, double py, double z, double thr) {
+            if (test_interior && !(std::abs(q[0] * px + q[1] * py + q[2] * z + q[3]) < thr)) return;
+            l = label;
+            ++n_in;
+            sx += px;
+            sy += py;
+            sz += z;
+          });
           local_count[own_slot] = n_in;
           local_sum[own_slot][0] = sx;
           local_sum[own_slot][1] = sy;
           local_sum[own_slot][2] = sz;
         } else {  // a boundary cell: each pixel joins the nearest candidate plane
-          for (int v = v0; v < v1; ++v) {
-            const float* zr = depth.depth_m.ptr<float>(v);
-            uint8_t* lr = res.labels.ptr<uint8_t>(v);
-            const double yf = y_factor_[v];
-            for (int u = u0; u < u1; ++u) {
-              const double z = zr[u];
-              if (!(z > 0.0) || !std::isfinite(z)) continue;
-              const double px = x_factor_[u] * z, py = yf * z;
-              double best_dist = k_sigma * z * z + margin;
-              int slot = -1;
-              for (int k = 0; k < ncand; ++k) {
-                const double dist =
-                    std::abs(pn[k][0] * px + pn[k][1] * py + pn[k][2] * z + pn[k][3]);
-                if (dist < best_dist) {
-                  best_dist = dist;
-                  slot = k;
-                }
+          forEachPoint([&](uint8_t& l, double px, double py, double z, double thr) {
+            double best_dist = thr;
+            int slot = -1;
+            for (int k = 0; k < ncand; ++k) {
+              const double dist = std::abs(pn[k][0] * px + pn[k][1] * py + pn[k][2] * z + pn[k][3]);
+              if (dist < best_dist) {
+                best_dist = dist;
+                slot = k;
               }
-              if (slot < 0) continue;
-              lr[u] = static_cast<uint8_t>(cand[slot] + 1);
-              ++local_count[slot];
-              local_sum[slot][0] += px;
-              local_sum[slot][1] += py;
-              local_sum[slot][2] += z;
             }
-          }
+            if (slot < 0) return;
+            l = static_cast<uint8_t>(cand[slot] + 1);
+            ++local_count[slot];
+            local_sum[slot][0] += px;
+            local_sum[slot][1] += py;
+            local_sum[slot][2] += z;
+          });
         }
         for (int k = 0; k < ncand; ++k) {
           if (local_count[k] == 0) continue;

@@ -26,8 +26,8 @@ void usage() {
       "  --features-3d-channel NAME out, features_t stage 3D (PPLVO_FEATURES_3D)\n"
       "  --status-channel NAME      out, node_status_t (PPLVO_STATUS)\n"
       "  --max-pending N            frames held per queue (30)\n"
-      "  --extract-ahead N          frames whose 2D features may be extracted on the worker\n"
-      "                             while earlier frames are lifted (1; 0 = in the handler)\n"
+      "  --no-extract-ahead         extract 2D features in the message handler, not on a\n"
+      "                             worker thread while the previous frame is lifted\n"
       "  --max-unlifted N           frames extracted but not yet lifted beyond which a new\n"
       "                             frame is dropped before extraction (3; 0 = never)\n"
       "pipeline options (the frontend section is used):\n%s",
@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
       .option("--features-3d-channel", &o.features_3d_channel)
       .option("--status-channel", &o.status_channel)
       .option("--max-pending", &o.max_pending, 1)
-      .option("--extract-ahead", &o.extract_ahead, 0, 100)
+      .flag("--no-extract-ahead", &o.extract_ahead, false)
       .option("--max-unlifted", &o.max_unlifted, 0, 1000);
   p.parse(argsFromArgv(argc, argv));
   if (p.help()) {

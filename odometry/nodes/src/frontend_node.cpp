@@ -117,7 +117,7 @@ void FrontendNode::extractReady() {
     frames_.pop_front();
     cgm_.pop_front();
     last_extracted_seq_ = frame.seq;
-    const size_t unlifted = awaiting_3d_.size() + in_flight_.size();
+    const size_t unlifted = awaiting_3d_.size() + (in_flight_.result.valid() ? 1 : 0);
     if (options_.max_unlifted > 0 && unlifted >= static_cast<size_t>(options_.max_unlifted)) {
       // The pose -> fused depth -> lifting loop is behind: extracting this frame would only
       // delay it further, and the estimator would drop the frame anyway.
@@ -126,30 +126,17 @@ void FrontendNode::extractReady() {
            std::to_string(unlifted) + " frames wait for their fused depth");
       continue;
     }
-    if (options_.extract_ahead <= 0) {
+    auto extract = [this, frame = std::move(frame), depth = std::move(depth)] {
       Extracted e;
       e.features = frontend_.extract2d(frame, depth, &e.stats);
-      publishExtracted(std::move(e));
-      continue;
-    }
-    while (static_cast<int>(in_flight_.size()) >= options_.extract_ahead) finishOldest();
-    std::promise<void> done;
-    std::shared_future<void> previous = newest_done_;
-    newest_done_ = done.get_future().share();
-    auto job = [this, previous, done = std::move(done), frame = std::move(frame),
-                depth = std::move(depth)]() mutable {
-      if (previous.valid()) previous.wait();
-      Extracted e;
-      try {
-        e.features = frontend_.extract2d(frame, depth, &e.stats);
-      } catch (...) {
-        done.set_value();
-        throw;  // rethrown by get() in the handler that publishes it
-      }
-      done.set_value();
       return e;
     };
-    in_flight_.push_back({last_extracted_seq_, std::async(std::launch::async, std::move(job))});
+    if (!options_.extract_ahead) {
+      publishExtracted(extract());
+      continue;
+    }
+    finishInFlight();  // one frame on the worker at a time (extract2d is not reentrant)
+    in_flight_ = {last_extracted_seq_, std::async(std::launch::async, std::move(extract))};
     publishWhenDue();
   }
 }
@@ -169,29 +156,28 @@ void FrontendNode::publishExtracted(Extracted extracted) {
   }
 }
 
-void FrontendNode::finishOldest() {
-  InFlight job = std::move(in_flight_.front());
-  in_flight_.pop_front();
-  publishExtracted(job.result.get());  // a job's exception surfaces here (counted skip)
+void FrontendNode::finishInFlight() {
+  if (!in_flight_.result.valid()) return;
+  publishExtracted(in_flight_.result.get());  // a job's exception surfaces here (counted skip)
 }
 
 void FrontendNode::publishWhenDue() {
   // With no frame waiting for its fused depth there is no lifting to overlap: publish now.
-  while (awaiting_3d_.empty() && !in_flight_.empty()) finishOldest();
+  if (awaiting_3d_.empty()) finishInFlight();
 }
 
 void FrontendNode::poll() {
   msgs::guarded(counters_, kName, [&] {
-    while (!in_flight_.empty() && in_flight_.front().result.wait_for(std::chrono::seconds(0)) ==
-                                      std::future_status::ready) {
-      finishOldest();
+    if (in_flight_.result.valid() &&
+        in_flight_.result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+      finishInFlight();
     }
   });
 }
 
 void FrontendNode::handleFused(const pplvo_msgs::depth_map_t& msg) {
-  // Depth for a frame in flight (or a later one): its stage 2D cannot wait.
-  while (!in_flight_.empty() && in_flight_.front().seq <= msg.seq) finishOldest();
+  // Depth for the frame in flight (or a later one): its stage 2D cannot wait.
+  if (in_flight_.result.valid() && in_flight_.seq <= msg.seq) finishInFlight();
   liftFused(msg);
   publishWhenDue();  // the next frame's stage 2D, computed while this one was lifted
 }

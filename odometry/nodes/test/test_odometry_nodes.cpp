@@ -67,7 +67,7 @@ pplvo_msgs::depth_map_t cgmMsg(int i, int8_t stage = pplvo_msgs::depth_map_t::ST
 }
 
 TEST(FrontendNode, PairsColourAndDepthInAnyOrderAndLiftsOnFusedDepth) {
-  for (const int ahead : {0, 2}) {
+  for (const bool ahead : {false, true}) {
     SCOPED_TRACE(ahead ? "extract ahead" : "extract in the handler");
     lcm::LCM lcm("memq://");
     FrontendNodeOptions options;
@@ -121,7 +121,7 @@ TEST(FrontendNode, PairsColourAndDepthInAnyOrderAndLiftsOnFusedDepth) {
 TEST(FrontendNode, ExtractsAheadWhileLiftingAndPublishesInFrameOrder) {
   // The pipelined order of pplvo-run: frame 1 is paired while frame 0 waits for its fused
   // depth; frame 1's stage 2D must come out after frame 0's stage 3D, equal to a serial run.
-  auto run = [](int ahead, std::vector<pplvo_msgs::features_t>* out) {
+  auto run = [](bool ahead, std::vector<pplvo_msgs::features_t>* out) {
     lcm::LCM lcm("memq://");
     FrontendNodeOptions options;
     options.extract_ahead = ahead;
@@ -150,8 +150,8 @@ TEST(FrontendNode, ExtractsAheadWhileLiftingAndPublishesInFrameOrder) {
     EXPECT_EQ(node.counters().frames_dropped, 0);
   };
   std::vector<pplvo_msgs::features_t> serial, ahead;
-  run(0, &serial);
-  run(2, &ahead);
+  run(false, &serial);
+  run(true, &ahead);
   ASSERT_EQ(ahead.size(), 4u);
   const std::vector<std::pair<int8_t, int64_t>> order = {{pplvo_msgs::features_t::STAGE_2D, 0},
                                                          {pplvo_msgs::features_t::STAGE_3D, 0},

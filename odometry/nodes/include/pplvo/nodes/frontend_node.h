@@ -41,11 +41,10 @@ struct FrontendNodeOptions {
   std::string status_channel = channels::kStatus;
   /// Frames held per queue (1 s at 30 Hz); older ones are dropped and counted.
   int max_pending = 30;
-  /// Frames whose stage 2D may be under way on the worker thread (computed one after the other,
-  /// in frame order) while earlier frames are lifted; 0 computes it in the handler. 2 measured
-  /// no faster than 1 in pplvo-run (the two cores are then busy) and wastes more work on frames
-  /// that free-running drops later.
-  int extract_ahead = 1;
+  /// Stage 2D of a frame on a worker thread while the previous frame is lifted (above); false
+  /// computes it in the handler. One frame at a time: a second one ahead measured no faster
+  /// in pplvo-run (the two cores are then busy) and wastes work on frames dropped later.
+  bool extract_ahead = true;
   /// Frames extracted but not yet lifted (their fused depth has not come) beyond which a new
   /// frame is dropped before extraction, counted: the loop through the estimator and the depth
   /// filter is behind, and the estimator would drop it anyway. 0 = never. 3 never drops in
@@ -97,8 +96,8 @@ class FrontendNode {
   };
   /// Publishes stage 2D and queues the features for their fused depth.
   void publishExtracted(Extracted extracted);
-  /// Waits for the oldest stage 2D in flight and publishes it.
-  void finishOldest();
+  /// Waits for the stage 2D in flight, if any, and publishes it.
+  void finishInFlight();
   /// Publishes stage 2D in flight while no earlier frame waits for its fused depth.
   void publishWhenDue();
   void warn(const std::string& what);
@@ -111,14 +110,13 @@ class FrontendNode {
   std::deque<PendingDepth> cgm_;           ///< C-GM depth in, colour not yet
   std::deque<FrameFeatures> awaiting_3d_;  ///< stage 2D published, fused depth not yet
   int64_t last_extracted_seq_ = -1;
-  /// Stage 2D under way on the worker, oldest first (destroyed, i.e. joined, before frontend_).
+  /// Stage 2D under way on the worker (result invalid: none; destroyed, i.e. joined, before
+  /// frontend_).
   struct InFlight {
-    int64_t seq;
+    int64_t seq = -1;
     std::future<Extracted> result;
   };
-  std::deque<InFlight> in_flight_;
-  /// Completion of the newest job: the next one starts after it (extract2d is not reentrant).
-  std::shared_future<void> newest_done_;
+  InFlight in_flight_;
   msgs::NodeCounters counters_;
   StageTimings timings_;
 };
