@@ -14,6 +14,7 @@ void usage() {
   std::fprintf(stderr,
                "usage: pplvo-viewer [options]\n"
                "  --lcm-url URL          LCM URL (default $LCM_DEFAULT_URL)\n"
+               "  --route CHANNEL=URL    CHANNEL is carried by URL (repeatable; docs/channels.md)\n"
                "  --replay LOG           read an LCM log (file://LOG?speed=S) instead of a bus\n"
                "  --replay-speed S       replay speed factor (default 1; 0 = as fast as possible)\n"
                "  --headless             no window\n"
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
   using pplvo::viewer::ViewerOptions;
   ViewerOptions o;
   std::string url, replay;
+  std::vector<pplvo::msgs::ChannelRoute> routes;
   double replay_speed = 1.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -52,9 +54,17 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--lcm-url")
+    if (a == "--lcm-url") {
       url = next();
-    else if (a == "--replay")
+    } else if (a == "--route") {
+      pplvo::msgs::ChannelRoute r;
+      const std::string error = pplvo::msgs::parseChannelRoute(next(), &r);
+      if (!error.empty()) {
+        std::fprintf(stderr, "pplvo-viewer: --route: %s\n", error.c_str());
+        return 2;
+      }
+      routes.push_back(r);
+    } else if (a == "--replay")
       replay = next();
     else if (a == "--replay-speed")
       replay_speed = std::atof(next());
@@ -129,8 +139,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!replay.empty()) {
-    if (!url.empty()) {
-      std::fprintf(stderr, "pplvo-viewer: --replay or --lcm-url, not both\n");
+    if (!url.empty() || !routes.empty()) {
+      std::fprintf(stderr, "pplvo-viewer: --replay or --lcm-url/--route, not both\n");
       return 2;
     }
     char speed[32];
@@ -140,8 +150,8 @@ int main(int argc, char** argv) {
   }
   try {
     pplvo::msgs::installShutdownHandlers();
-    auto lcm = pplvo::msgs::openLcm(url);
-    pplvo::viewer::ViewerNode node(o, *lcm);
+    pplvo::msgs::BusConnections lcm(url, routes);
+    pplvo::viewer::ViewerNode node(o, lcm.bus());
     char timeout_buf[48];
     std::snprintf(timeout_buf, sizeof timeout_buf, ", timeout %g s", o.timeout_s);
     const std::string timeout_text = timeout_buf;

@@ -22,7 +22,7 @@ double secondsSince(std::chrono::steady_clock::time_point t) {
 }
 }  // namespace
 
-ViewerNode::ViewerNode(const ViewerOptions& options, lcm::LCM& lcm) : options_(options), lcm_(lcm) {
+ViewerNode::ViewerNode(const ViewerOptions& options, msgs::Bus bus) : options_(options), bus_(std::move(bus)) {
   if (!(options_.max_fps > 0)) throw std::invalid_argument("max_fps must be > 0");
   if (options_.every < 1) throw std::invalid_argument("every must be >= 1");
   if (options_.frame_ring < 1) options_.frame_ring = 1;
@@ -33,14 +33,14 @@ ViewerNode::ViewerNode(const ViewerOptions& options, lcm::LCM& lcm) : options_(o
     if (!r.ok) throw std::runtime_error("ground truth: " + r.error);
     groundtruth_ = std::move(r.file);
   }
-  lcm_.subscribe(options_.rgbd_channel, &ViewerNode::onRgbd, this);
-  lcm_.subscribe(options_.depth_cgm_channel, &ViewerNode::onDepthCgm, this);
-  lcm_.subscribe(options_.depth_fused_channel, &ViewerNode::onDepthFused, this);
-  lcm_.subscribe(options_.features_channel, &ViewerNode::onFeatures, this);
-  lcm_.subscribe(options_.features_3d_channel, &ViewerNode::onFeatures3d, this);
-  lcm_.subscribe(options_.pose_channel, &ViewerNode::onPose, this);
-  lcm_.subscribe(options_.status_channel, &ViewerNode::onStatus, this);
-  lcm_.subscribe(options_.stream_channel, &ViewerNode::onStream, this);
+  bus_.subscribe(options_.rgbd_channel, &ViewerNode::onRgbd, this);
+  bus_.subscribe(options_.depth_cgm_channel, &ViewerNode::onDepthCgm, this);
+  bus_.subscribe(options_.depth_fused_channel, &ViewerNode::onDepthFused, this);
+  bus_.subscribe(options_.features_channel, &ViewerNode::onFeatures, this);
+  bus_.subscribe(options_.features_3d_channel, &ViewerNode::onFeatures3d, this);
+  bus_.subscribe(options_.pose_channel, &ViewerNode::onPose, this);
+  bus_.subscribe(options_.status_channel, &ViewerNode::onStatus, this);
+  bus_.subscribe(options_.stream_channel, &ViewerNode::onStream, this);
   last_status_ = Clock::now();
   last_draw_ = Clock::now() - std::chrono::hours(1);
 }
@@ -335,7 +335,7 @@ void ViewerNode::publishStatus() {
   msgs::guarded(counters_, options_.node_name.c_str(), [&] {
     const pplvo_msgs::node_status_t msg =
         msgs::toStatusMsg(options_.node_name, counters_, timings_, hostUtime());
-    lcm_.publish(options_.status_channel, &msg);
+    bus_.publish(options_.status_channel, &msg);
   });
   last_status_ = Clock::now();
 }
@@ -343,7 +343,7 @@ void ViewerNode::publishStatus() {
 int ViewerNode::spinOnce(double wait_s) {
   int handled = 0;
   const int wait_ms = std::max(0, static_cast<int>(std::lround(wait_s * 1000.0)));
-  int rc = lcm_.handleTimeout(wait_ms);
+  int rc = bus_.handleTimeout(wait_ms);
   const double period_s = 1.0 / options_.max_fps;
   const double drain_budget_s = std::max(period_s, 0.05);
   const auto start = Clock::now();
@@ -351,7 +351,7 @@ int ViewerNode::spinOnce(double wait_s) {
   while (rc > 0) {
     ++handled;
     if (secondsSince(start) > drain_budget_s) break;
-    rc = lcm_.handleTimeout(0);
+    rc = bus_.handleTimeout(0);
   }
   if (rc < 0 && !input_ended_) {
     // A file:// log at its end (or a broken provider): nothing more will arrive.

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "pplvo/eval/tum_file.h"
+#include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/viewer/plot.h"
@@ -59,7 +60,7 @@ class ViewerNode {
  public:
   /// Subscribes; reads the ground truth (throws std::runtime_error when it cannot be read);
   /// opens the video writer lazily at the first canvas.
-  ViewerNode(const ViewerOptions& options, lcm::LCM& lcm);
+  ViewerNode(const ViewerOptions& options, msgs::Bus bus);
   ~ViewerNode();
   ViewerNode(const ViewerNode&) = delete;
   ViewerNode& operator=(const ViewerNode&) = delete;
@@ -106,7 +107,7 @@ class ViewerNode {
   double stampSeconds(const std::string& stamp, int64_t utime) const;
 
   ViewerOptions options_;
-  lcm::LCM& lcm_;
+  msgs::Bus bus_;
   msgs::NodeCounters counters_;
   StageTimings timings_;
 

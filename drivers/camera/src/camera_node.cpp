@@ -23,6 +23,8 @@ std::string nodeUsage() {
       "  --device URI|INDEX           OpenNI2 URI (or .oni file) or index; freenect index\n"
       "  --lcm-url URL                LCM provider (default $LCM_DEFAULT_URL); e.g.\n"
       "                               'file:///tmp/cam.lcmlog?mode=w' to record to a log\n"
+      "  --route CHANNEL=URL          carry CHANNEL over URL instead (repeatable;\n"
+      "                               docs/channels.md)\n"
       "  --channel NAME               frame channel (default PPLVO_RGBD)\n"
       "  --stream-channel NAME        stream events (default PPLVO_STREAM)\n"
       "  --status-channel NAME        node status (default PPLVO_STATUS)\n"
@@ -47,6 +49,7 @@ bool parseNodeArgs(int argc, const char* const* argv, NodeOptions* o, std::strin
     };
   };
   ArgParser p;
+  pplvo::msgs::addRouteOption(p, &o->routes);
   p.option("--backend", &o->backend)
       .option("--device", &o->device.device)
       .option("--lcm-url", &o->lcm_url)
@@ -139,10 +142,10 @@ int8_t depthCode(DepthEncoding e) {
 /// The publishing side: converts captured frames to messages and keeps the counters.
 class CameraPublisher {
  public:
-  CameraPublisher(const NodeOptions& options, lcm::LCM& lcm, pplvo::PinholeCamera camera,
+  CameraPublisher(const NodeOptions& options, pplvo::msgs::Bus bus, pplvo::PinholeCamera camera,
                   std::string source)
       : options_(options),
-        lcm_(lcm),
+        bus_(std::move(bus)),
         camera_(camera),
         source_(std::move(source)),
         limiter_(options.max_fps) {}
@@ -177,7 +180,7 @@ class CameraPublisher {
       msg.depth_scale = f.depth_scale;
       msg.rgb = pm::encodeImage(f.bgr, rgbCode(options_.rgb_encoding), options_.jpeg_quality);
       msg.depth = pm::encodeImage(f.depth_u16, depthCode(options_.depth_encoding));
-      lcm_.publish(options_.channel, &msg);
+      bus_.publish(options_.channel, &msg);
       ++seq_;
       ++counters_.frames_out;
       counters_.last_seq = msg.seq;
@@ -193,7 +196,7 @@ class CameraPublisher {
       ev.event = event;
       ev.frames_published = counters_.frames_out;
       ev.frames_skipped = counters_.frames_skipped;
-      lcm_.publish(options_.stream_channel, &ev);
+      bus_.publish(options_.stream_channel, &ev);
     });
   }
 
@@ -202,7 +205,7 @@ class CameraPublisher {
       pm::NodeCounters c = counters_;
       c.frames_dropped += backend_dropped;
       auto msg = pm::toStatusMsg(kNodeName, c, timings_, pplvo::hostUtime());
-      lcm_.publish(options_.status_channel, &msg);
+      bus_.publish(options_.status_channel, &msg);
     });
   }
 
@@ -214,7 +217,7 @@ class CameraPublisher {
 
  private:
   const NodeOptions& options_;
-  lcm::LCM& lcm_;
+  pplvo::msgs::Bus bus_;
   pplvo::PinholeCamera camera_;
   std::string source_;
   std::optional<DeviceClockMapper> clock_;
@@ -226,10 +229,10 @@ class CameraPublisher {
 
 }  // namespace
 
-NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, lcm::LCM& lcm,
+NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, pplvo::msgs::Bus bus,
                             const PinholeCamera& camera, const std::string& camera_origin) {
   std::string error;
-  CameraPublisher publisher(options, lcm, camera, backend.source());
+  CameraPublisher publisher(options, bus, camera, backend.source());
   publisher.resetClock(backend.clockOptions());
   const auto reg = backend.registration();
   if (!reg.warning.empty()) publisher.warn(reg.warning);

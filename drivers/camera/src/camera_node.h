@@ -10,6 +10,7 @@
 #include "backend.h"
 #include "pplvo/camera/convert.h"
 #include "pplvo/core/camera.h"
+#include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 
 namespace pplvo::camera {
@@ -25,6 +26,7 @@ struct NodeOptions {
   std::string backend = "openni2";
   BackendOptions device;
   std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string channel = pplvo::channels::kRgbd;
   std::string stream_channel = pplvo::channels::kStream;
   std::string status_channel = pplvo::channels::kStatus;
@@ -54,7 +56,7 @@ struct NodeRunResult {
 /// Publishes from an opened backend until shutdown is requested, --max-frames is reached or
 /// the source ends; reconnects after losses. Publishes START first and END (plus a final
 /// status) last. Never throws for per-frame problems (they are counted).
-NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, lcm::LCM& lcm,
+NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, pplvo::msgs::Bus bus,
                             const PinholeCamera& camera, const std::string& camera_origin);
 
 }  // namespace pplvo::camera

@@ -49,9 +49,9 @@ int main(int argc, char** argv) {
     return pc::kExitNoDevice;
   }
 
-  std::unique_ptr<lcm::LCM> lcm;
+  std::unique_ptr<pm::BusConnections> lcm;
   try {
-    lcm = pm::openLcm(options.lcm_url);
+    lcm = std::make_unique<pm::BusConnections>(options.lcm_url, options.routes);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: %s\n", pc::kNodeName, e.what());
     return pc::kExitRuntime;
@@ -70,6 +70,6 @@ int main(int argc, char** argv) {
     camera = pc::kinectV1DefaultIntrinsics(options.device.width, options.device.height);
     origin = "nominal Kinect v1 intrinsics";
   }
-  pc::runCameraNode(options, *backend, *lcm, camera, origin);
+  pc::runCameraNode(options, *backend, lcm->bus(), camera, origin);
   return pc::kExitOk;
 }

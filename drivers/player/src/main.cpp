@@ -24,8 +24,8 @@ int main(int argc, char** argv) {
   opt.progress = progressEnabled(args, opt.progress);  // default: stderr is a terminal
   msgs::installShutdownHandlers();
   try {
-    auto lcm = msgs::openLcm(opt.lcm_url);
-    player::PlayerNode node(opt, *lcm);
+    msgs::BusConnections lcm(opt.lcm_url, opt.routes);
+    player::PlayerNode node(opt, lcm.bus());
     const auto& ds = node.dataset();
     const auto& cam = ds.camera();
     std::fprintf(stderr, "pplvo-player: %s: %zu frames; %s\n", ds.dir().c_str(), ds.size(),

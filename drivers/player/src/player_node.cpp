@@ -35,6 +35,8 @@ calib_params.xml) as pplvo_msgs.rgbd_frame_t.
   --camera FILE.yaml       camera file (keys: width height fx fy cx cy distortion depth_scale);
                            default: DIR/calib_params.xml
   --lcm-url URL            LCM URL (default: $LCM_DEFAULT_URL, else LCM's default)
+  --route CHANNEL=URL      carry CHANNEL over URL instead of --lcm-url (repeatable;
+                           docs/channels.md: frame-sized channels on their own port)
   --channel NAME           frame channel (default PPLVO_RGBD)
   --pose-channel NAME      pose channel for --lockstep (default PPLVO_POSE)
   --stream-channel NAME    START/END events (default PPLVO_STREAM)
@@ -87,6 +89,7 @@ ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
     };
   };
   ArgParser p;
+  msgs::addRouteOption(p, &o.routes);
   p.option("--dataset", &o.dataset_dir)
       .option("--camera", &o.camera_file)
       .option("--lcm-url", &o.lcm_url)
@@ -138,17 +141,17 @@ std::string PlayerResult::summaryLine() const {
   return s;
 }
 
-PlayerNode::PlayerNode(const PlayerOptions& options, lcm::LCM& lcm)
+PlayerNode::PlayerNode(const PlayerOptions& options, msgs::Bus bus)
     : options_(options),
-      lcm_(lcm),
+      bus_(std::move(bus)),
       dataset_(dataset::Dataset::open(options.dataset_dir, datasetOptions(options))) {
   if (options_.lockstep) {
-    pose_sub_ = lcm_.subscribe(options_.pose_channel, &PlayerNode::onPose, this);
+    pose_sub_ = bus_.subscribe(options_.pose_channel, &PlayerNode::onPose, this);
   }
 }
 
 PlayerNode::~PlayerNode() {
-  if (pose_sub_) lcm_.unsubscribe(pose_sub_);
+  bus_.unsubscribe(pose_sub_);
 }
 
 double PlayerNode::nowS() const {
@@ -169,7 +172,7 @@ void PlayerNode::publishStream(int8_t event, const PlayerResult& result) {
   ev.event = event;
   ev.frames_published = result.published;
   ev.frames_skipped = result.skipped;
-  lcm_.publish(options_.stream_channel, &ev);
+  bus_.publish(options_.stream_channel, &ev);
 }
 
 void PlayerNode::periodic(bool force) {
@@ -177,7 +180,7 @@ void PlayerNode::periodic(bool force) {
   if (force || now - last_status_s_ >= options_.status_period_s) {
     last_status_s_ = now;
     const auto msg = msgs::toStatusMsg(options_.node_name, counters_, timings_, hostUtime());
-    lcm_.publish(options_.status_channel, &msg);
+    bus_.publish(options_.status_channel, &msg);
   }
   if (options_.progress && (force || now - last_progress_s_ >= 0.25)) {
     last_progress_s_ = now;
@@ -193,7 +196,7 @@ void PlayerNode::drain() {
   // memq queues until handled: dispatch what is pending so subscribers on this instance run
   // and the queue does not grow (bounded in case a handler keeps republishing).
   for (int i = 0; i < 100000; ++i) {
-    const int rc = lcm_.handleTimeout(0);
+    const int rc = bus_.handleTimeout(0);
     if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
     if (rc <= 0) break;
   }
@@ -205,7 +208,7 @@ void PlayerNode::waitUntil(double target_s) {
     if (remaining <= 0) break;
     const int ms = static_cast<int>(std::min(100.0, std::ceil(remaining * 1000.0)));
     // EINTR from Ctrl-C ends the wait; the loop then sees the shutdown request.
-    if (lcm_.handleTimeout(ms) < 0 && !msgs::shutdownRequested()) {
+    if (bus_.handleTimeout(ms) < 0 && !msgs::shutdownRequested()) {
       throw std::runtime_error("LCM handle failed");
     }
     periodic(false);
@@ -215,7 +218,7 @@ void PlayerNode::waitUntil(double target_s) {
 bool PlayerNode::waitForPose(int64_t seq) {
   if (options_.in_process) {
     while (last_pose_seq_ < seq && !msgs::shutdownRequested()) {
-      const int rc = lcm_.handleTimeout(0);
+      const int rc = bus_.handleTimeout(0);
       if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
       if (rc <= 0) break;
     }
@@ -223,7 +226,7 @@ bool PlayerNode::waitForPose(int64_t seq) {
   }
   const double deadline = nowS() + options_.lockstep_timeout_s;
   msgs::spin(
-      lcm_, [&] { return last_pose_seq_ >= seq || nowS() >= deadline; }, [&] { periodic(false); },
+      bus_, [&] { return last_pose_seq_ >= seq || nowS() >= deadline; }, [&] { periodic(false); },
       0.05);
   return last_pose_seq_ >= seq;
 }
@@ -383,7 +386,7 @@ void PlayerNode::runLoop(PlayerResult& result) {
     }
     {
       ScopedStageTimer t(timings_, "publish");
-      if (lcm_.publish(options_.channel, &msg) != 0) {
+      if (bus_.publish(options_.channel, &msg) != 0) {
         throw std::runtime_error("LCM publish failed on " + options_.channel);
       }
     }

@@ -16,6 +16,7 @@ void usage() {
   std::printf(
       "usage: pplvo-depth-filter [options]\n"
       "  --lcm-url URL            LCM URL (default $LCM_DEFAULT_URL)\n"
+      "%s"
       "  --prefault-mb N          heap mapped at start-up: MiB of main heap, and 8\n"
       "                           worker arenas of a quarter of it (64; 0 = none), so\n"
       "                           that the first frames take no page faults\n"
@@ -31,7 +32,8 @@ void usage() {
       "  --compress               zlib-compress published maps\n"
       "  --config FILE            pipeline YAML (config/pplvo.yaml): its depth_filter section\n"
       "  --set KEY=VALUE          one configuration value (repeatable), e.g.\n"
-      "                           --set depth_filter.ogm.k_consistency=1\n");
+      "                           --set depth_filter.ogm.k_consistency=1\n",
+      pplvo::msgs::kRouteUsage);
 }
 
 }  // namespace
@@ -46,6 +48,7 @@ int main(int argc, char** argv) {
   int prefault_mb = 64;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);  // --config, --set, --features (unused), --depth-model
+  msgs::addRouteOption(p, &o.routes);
   p.option("--lcm-url", &o.lcm_url)
       .option("--prefault-mb", &prefault_mb, 0, 1 << 20)
       .option("--rgbd-channel", &o.rgbd_channel)
@@ -89,12 +92,12 @@ int main(int argc, char** argv) {
   prefaultForStreaming(static_cast<size_t>(prefault_mb));  // before the LCM threads start
   try {
     msgs::installShutdownHandlers();
-    auto lcm = msgs::openLcm(o.lcm_url);
-    nodes::DepthFilterNode node(o, *lcm);
+    msgs::BusConnections lcm(o.lcm_url, o.routes);
+    nodes::DepthFilterNode node(o, lcm.bus());
     std::fprintf(stderr, "[pplvo-depth-filter] %s -> %s, %s; window %d\n", o.rgbd_channel.c_str(),
                  o.cgm_channel.c_str(), o.fused_channel.c_str(), o.ogm.max_window);
     msgs::spin(
-        *lcm, [] { return false; }, [&] { node.publishStatus(hostUtime()); }, 1.0);
+        lcm.bus(), [] { return false; }, [&] { node.publishStatus(hostUtime()); }, 1.0);
     node.publishStatus(hostUtime());
     std::fprintf(
         stderr, "[pplvo-depth-filter] done: in %lld out %lld dropped %lld skipped %lld\n%s",

@@ -10,19 +10,19 @@
 
 namespace pplvo::nodes {
 
-DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, lcm::LCM& lcm)
+DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, msgs::Bus bus)
     : options_(options),
-      lcm_(lcm),
+      bus_(std::move(bus)),
       sensor_(options.sensor),
       cgm_(options.cgm, std::make_shared<depth_filter::QuadraticSensorModel>(options.sensor)),
       ogm_(options.ogm) {
   if (options_.max_pending < 1) options_.max_pending = 1;
-  subscriptions_.push_back(lcm_.subscribe(options_.rgbd_channel, &DepthFilterNode::onFrame, this));
-  subscriptions_.push_back(lcm_.subscribe(options_.pose_channel, &DepthFilterNode::onPose, this));
+  subscriptions_.push_back(bus_.subscribe(options_.rgbd_channel, &DepthFilterNode::onFrame, this));
+  subscriptions_.push_back(bus_.subscribe(options_.pose_channel, &DepthFilterNode::onPose, this));
 }
 
 DepthFilterNode::~DepthFilterNode() {
-  for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+  for (const msgs::BusSubscription& s : subscriptions_) bus_.unsubscribe(s);
 }
 
 void DepthFilterNode::onFrame(const lcm::ReceiveBuffer*, const std::string&,
@@ -39,7 +39,7 @@ void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
                                    const DepthWithVariance& d, int8_t stage) {
   const pplvo_msgs::depth_map_t m =
       depthToMsg(d, p.camera, p.utime, p.seq, p.stamp, stage, options_.compress);
-  lcm_.publish(channel, &m);
+  bus_.publish(channel, &m);
 }
 
 void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
@@ -144,7 +144,7 @@ void DepthFilterNode::publishStatus(int64_t utime) {
       counters_.last_warning = ogm_.stats().last_warning;
     }
     const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, timings_, utime);
-    lcm_.publish(options_.status_channel, &m);
+    bus_.publish(options_.status_channel, &m);
   });
 }
 

@@ -183,6 +183,39 @@ TEST(DepthFilterNode, CgmModelPublishesCgmAsFused) {
   EXPECT_FALSE(parseDepthModel("bilateral", &m));
 }
 
+TEST(DepthFilterNode, RoutedFramesAndMapsNeverTouchTheMainInstance) {
+  // pplvo-launch's layout: frames and depth maps on their own instances, poses and statuses
+  // on the main one. Every message must travel where its route says.
+  AnalyticScene scene(smallScene());
+  lcm::LCM main_lcm("memq://"), frames("memq://"), maps("memq://");
+  msgs::Bus bus(main_lcm);
+  bus.route(channels::kRgbd, frames);
+  bus.route(channels::kDepthCgm, maps);
+  bus.route(channels::kDepthFused, maps);
+  DepthFilterNodeOptions o;
+  DepthFilterNode node(o, bus);
+  Collector c;
+  maps.subscribe(channels::kDepthCgm, &Collector::onDepth, &c);
+  maps.subscribe(channels::kDepthFused, &Collector::onDepth, &c);
+  Collector wrong;
+  main_lcm.subscribe("PPLVO_DEPTH_.*", &Collector::onDepth, &wrong);
+  for (int i = 0; i < 3; ++i) {
+    pplvo_msgs::rgbd_frame_t f = frameMsg(scene, i);
+    frames.publish(channels::kRgbd, &f);
+    pplvo_msgs::pose_t p = poseMsg(scene, i);
+    main_lcm.publish(channels::kPose, &p);
+    while (bus.handleTimeout(0) > 0) {
+    }
+    drain(maps);
+    drain(main_lcm);
+  }
+  EXPECT_EQ(c.cgm.size(), 3u);
+  EXPECT_EQ(c.fused.size(), 3u);
+  EXPECT_TRUE(wrong.cgm.empty());
+  EXPECT_TRUE(wrong.fused.empty());
+  EXPECT_EQ(node.counters().frames_out, 3);
+}
+
 TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   AnalyticScene scene(smallScene());
   lcm::LCM lcm("memq://");

@@ -36,13 +36,13 @@ std::unique_ptr<lcm::LCM> openLcm(const std::string& url) {
   return lcm;
 }
 
-int64_t spin(lcm::LCM& lcm, const std::function<bool()>& done,
+int64_t spin(const Bus& bus, const std::function<bool()>& done,
              const std::function<void()>& periodic, double period_s) {
   using Clock = std::chrono::steady_clock;
   auto next = Clock::now() + std::chrono::duration<double>(period_s);
   int64_t handled = 0;
   while (!shutdownRequested() && !(done && done())) {
-    const int rc = lcm.handleTimeout(50);
+    const int rc = bus.handleTimeout(50);
     if (rc > 0) ++handled;
     // A signal (Ctrl-C) interrupts the wait with EINTR: that is a shutdown, not a failure.
     if (rc < 0) {

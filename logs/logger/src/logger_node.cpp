@@ -77,6 +77,8 @@ the estimated trajectory (pose_t) as TUM lines, and a YAML run summary at exit.
   --timeout S              stop after S seconds
   --idle-timeout S         stop after S seconds without any message
   --lcm-url URL            LCM URL (default: $LCM_DEFAULT_URL, else LCM's default)
+  --route CHANNEL=URL      CHANNEL is carried by URL, not --lcm-url (repeatable;
+                           docs/channels.md: frame-sized channels on their own port)
   --progress / --no-progress   progress line on stderr (default: when stderr is a terminal)
   -h, --help               this text
 At least one of --output, --trajectory, --summary is required.
@@ -99,6 +101,7 @@ LoggerParseResult parseLoggerArgs(const std::vector<std::string>& args) {
     };
   };
   ArgParser p;
+  msgs::addRouteOption(p, &o.routes);
   p.option("--output", &o.output)
       .option("-o", &o.output)
       .option("--channels", &o.channels)
@@ -143,7 +146,7 @@ std::string LoggerResult::summaryLine() const {
   return s;
 }
 
-LoggerNode::LoggerNode(const LoggerOptions& options, lcm::LCM& lcm) : options_(options), lcm_(lcm) {
+LoggerNode::LoggerNode(const LoggerOptions& options, msgs::Bus bus) : options_(options), bus_(std::move(bus)) {
   if (!options_.output.empty()) {
     std::error_code ec;
     if (!options_.force && std::filesystem::exists(options_.output, ec) &&
@@ -158,20 +161,25 @@ LoggerNode::LoggerNode(const LoggerOptions& options, lcm::LCM& lcm) : options_(o
     trajectory_ = std::make_unique<TrajectoryWriter>(options_.trajectory);
     summary_.trajectory_path = options_.trajectory;
   }
-  subs_.push_back(lcm_.subscribe(options_.channels, &LoggerNode::onRecord, this));
+  // Recording (event log or per-channel summary) listens to every channel of the pattern.
+  // With only --trajectory it must not: on udpm that would join the frame channels' ports
+  // and copy ~6.5 MB per 640x480 frame out of the kernel for nothing.
+  if (log_ || !options_.summary.empty()) {
+    subs_.push_back(bus_.subscribe(options_.channels, &LoggerNode::onRecord, this));
+  }
   if (trajectory_)
-    subs_.push_back(lcm_.subscribe(options_.pose_channel, &LoggerNode::onPose, this));
-  subs_.push_back(lcm_.subscribe(options_.status_channel, &LoggerNode::onStatus, this));
-  subs_.push_back(lcm_.subscribe(options_.stream_channel, &LoggerNode::onStream, this));
-  for (auto* s : subs_) {
-    if (!s) throw std::runtime_error("LCM subscription failed (bad --channels regex?)");
+    subs_.push_back(bus_.subscribe(options_.pose_channel, &LoggerNode::onPose, this));
+  subs_.push_back(bus_.subscribe(options_.status_channel, &LoggerNode::onStatus, this));
+  subs_.push_back(bus_.subscribe(options_.stream_channel, &LoggerNode::onStream, this));
+  for (const msgs::BusSubscription& s : subs_) {
+    for (const auto& part : s.parts) {
+      if (!part.second) throw std::runtime_error("LCM subscription failed (bad --channels regex?)");
+    }
   }
 }
 
 LoggerNode::~LoggerNode() {
-  for (auto* s : subs_) {
-    if (s) lcm_.unsubscribe(s);
-  }
+  for (const msgs::BusSubscription& s : subs_) bus_.unsubscribe(s);
 }
 
 double LoggerNode::nowS() const {
@@ -296,7 +304,7 @@ LoggerResult LoggerNode::run() {
   };
   try {
     msgs::spin(
-        lcm_, done, [&] { progress(false); }, 0.5);
+        bus_, done, [&] { progress(false); }, 0.5);
   } catch (const std::exception& e) {
     if (fatal_.empty() && !msgs::shutdownRequested()) fatal_ = e.what();
   }

@@ -24,8 +24,8 @@ int main(int argc, char** argv) {
   opt.progress = progressEnabled(args, opt.progress);  // default: stderr is a terminal
   msgs::installShutdownHandlers();
   try {
-    auto lcm = msgs::openLcm(opt.lcm_url);
-    logging::LoggerNode node(opt, *lcm);
+    msgs::BusConnections lcm(opt.lcm_url, opt.routes);
+    logging::LoggerNode node(opt, lcm.bus());
     std::fprintf(stderr, "pplvo-logger: recording '%s'%s%s%s%s\n", opt.channels.c_str(),
                  opt.output.empty() ? "" : " to ", opt.output.c_str(),
                  opt.trajectory.empty() ? "" : ", trajectory to ", opt.trajectory.c_str());

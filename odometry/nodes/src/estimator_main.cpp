@@ -16,6 +16,7 @@ void usage() {
   std::printf(
       "usage: pplvo-estimator [options]\n"
       "  --lcm-url URL              LCM URL (default $LCM_DEFAULT_URL)\n"
+      "%s"
       "  --prefault-mb N            heap mapped at start-up: MiB of main heap, and 8\n"
       "                             worker arenas of a quarter of it (16; 0 = none), so\n"
       "                             that the first frames take no page faults\n"
@@ -25,7 +26,7 @@ void usage() {
       "  --status-channel NAME      out, node_status_t (PPLVO_STATUS)\n"
       "  --max-waiting N            frames waiting for their reference (3)\n"
       "pipeline options (the odometry section is used):\n%s",
-      pplvo::pipeline::pipelineOptionsUsage());
+      pplvo::msgs::kRouteUsage, pplvo::pipeline::pipelineOptionsUsage());
 }
 
 }  // namespace
@@ -38,6 +39,7 @@ int main(int argc, char** argv) {
   int prefault_mb = 16;  // features and poses only
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
+  msgs::addRouteOption(p, &o.routes);
   p.option("--lcm-url", &o.lcm_url)
       .option("--prefault-mb", &prefault_mb, 0, 1 << 20)
       .option("--features-channel", &o.features_channel)
@@ -62,12 +64,12 @@ int main(int argc, char** argv) {
   prefaultForStreaming(static_cast<size_t>(prefault_mb));  // before the LCM threads start
   try {
     msgs::installShutdownHandlers();
-    auto lcm = msgs::openLcm(o.lcm_url);
-    nodes::EstimatorNode node(o, *lcm);
+    msgs::BusConnections lcm(o.lcm_url, o.routes);
+    nodes::EstimatorNode node(o, lcm.bus());
     std::fprintf(stderr, "[pplvo-estimator] %s + %s -> %s\n", o.features_channel.c_str(),
                  o.features_3d_channel.c_str(), o.pose_channel.c_str());
     msgs::spin(
-        *lcm, [] { return false; }, [&] { node.publishStatus(hostUtime()); }, 1.0);
+        lcm.bus(), [] { return false; }, [&] { node.publishStatus(hostUtime()); }, 1.0);
     node.publishStatus(hostUtime());
     const msgs::NodeCounters& c = node.counters();
     const nodes::EstimatorCounts& k = node.counts();

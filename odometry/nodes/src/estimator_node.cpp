@@ -9,17 +9,17 @@
 
 namespace pplvo::nodes {
 
-EstimatorNode::EstimatorNode(const EstimatorNodeOptions& options, lcm::LCM& lcm)
-    : options_(options), lcm_(lcm), odometry_(options.odometry) {
+EstimatorNode::EstimatorNode(const EstimatorNodeOptions& options, msgs::Bus bus)
+    : options_(options), bus_(std::move(bus)), odometry_(options.odometry) {
   if (options_.max_waiting < 1) options_.max_waiting = 1;
   subscriptions_.push_back(
-      lcm_.subscribe(options_.features_channel, &EstimatorNode::onFeatures, this));
+      bus_.subscribe(options_.features_channel, &EstimatorNode::onFeatures, this));
   subscriptions_.push_back(
-      lcm_.subscribe(options_.features_3d_channel, &EstimatorNode::onFeatures3d, this));
+      bus_.subscribe(options_.features_3d_channel, &EstimatorNode::onFeatures3d, this));
 }
 
 EstimatorNode::~EstimatorNode() {
-  for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+  for (const msgs::BusSubscription& s : subscriptions_) bus_.unsubscribe(s);
 }
 
 void EstimatorNode::onFeatures(const lcm::ReceiveBuffer*, const std::string&,
@@ -133,7 +133,7 @@ void EstimatorNode::publish(const TrackerOutput& out, const FrameFeatures& frame
   {
     ScopedStageTimer t(timings_, "encode");
     const pplvo_msgs::pose_t m = msgs::toMsg(pose);
-    lcm_.publish(options_.pose_channel, &m);
+    bus_.publish(options_.pose_channel, &m);
   }
   ++counters_.frames_out;
 }
@@ -145,7 +145,7 @@ StageTimings EstimatorNode::allTimings() const {
 void EstimatorNode::publishStatus(int64_t utime) {
   msgs::guarded(counters_, kName, [&] {
     const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, allTimings(), utime);
-    lcm_.publish(options_.status_channel, &m);
+    bus_.publish(options_.status_channel, &m);
   });
 }
 

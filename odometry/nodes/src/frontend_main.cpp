@@ -16,6 +16,7 @@ void usage() {
   std::printf(
       "usage: pplvo-frontend [options]\n"
       "  --lcm-url URL              LCM URL (default $LCM_DEFAULT_URL)\n"
+      "%s"
       "  --prefault-mb N            heap mapped at start-up: MiB of main heap, and 8\n"
       "                             worker arenas of a quarter of it (64; 0 = none), so\n"
       "                             that the first frames take no page faults\n"
@@ -31,7 +32,7 @@ void usage() {
       "  --max-unlifted N           frames extracted but not yet lifted beyond which a new\n"
       "                             frame is dropped before extraction (3; 0 = never)\n"
       "pipeline options (the frontend section is used):\n%s",
-      pplvo::pipeline::pipelineOptionsUsage());
+      pplvo::msgs::kRouteUsage, pplvo::pipeline::pipelineOptionsUsage());
 }
 
 }  // namespace
@@ -44,6 +45,7 @@ int main(int argc, char** argv) {
   int prefault_mb = 64;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
+  msgs::addRouteOption(p, &o.routes);
   p.option("--lcm-url", &o.lcm_url)
       .option("--prefault-mb", &prefault_mb, 0, 1 << 20)
       .option("--rgbd-channel", &o.rgbd_channel)
@@ -71,8 +73,8 @@ int main(int argc, char** argv) {
   prefaultForStreaming(static_cast<size_t>(prefault_mb));  // before the LCM threads start
   try {
     msgs::installShutdownHandlers();
-    auto lcm = msgs::openLcm(o.lcm_url);
-    nodes::FrontendNode node(o, *lcm);
+    msgs::BusConnections lcm(o.lcm_url, o.routes);
+    nodes::FrontendNode node(o, lcm.bus());
     std::fprintf(stderr, "[pplvo-frontend] %s + %s -> %s; %s -> %s; features %s\n",
                  o.rgbd_channel.c_str(), o.cgm_channel.c_str(), o.features_channel.c_str(),
                  o.fused_channel.c_str(), o.features_3d_channel.c_str(),
@@ -80,7 +82,7 @@ int main(int argc, char** argv) {
     // Checked between messages (at most 50 ms apart): a stage 2D whose predecessor's fused depth
     // never came goes out once computed.
     msgs::spin(
-        *lcm,
+        lcm.bus(),
         [&] {
           node.poll();
           return false;

@@ -24,16 +24,16 @@ int64_t trim(Q& q, int max) {
 
 }  // namespace
 
-FrontendNode::FrontendNode(const FrontendNodeOptions& options, lcm::LCM& lcm)
-    : options_(options), lcm_(lcm), frontend_(options.frontend) {
+FrontendNode::FrontendNode(const FrontendNodeOptions& options, msgs::Bus bus)
+    : options_(options), bus_(std::move(bus)), frontend_(options.frontend) {
   if (options_.max_pending < 1) options_.max_pending = 1;
-  subscriptions_.push_back(lcm_.subscribe(options_.rgbd_channel, &FrontendNode::onFrame, this));
-  subscriptions_.push_back(lcm_.subscribe(options_.cgm_channel, &FrontendNode::onCgm, this));
-  subscriptions_.push_back(lcm_.subscribe(options_.fused_channel, &FrontendNode::onFused, this));
+  subscriptions_.push_back(bus_.subscribe(options_.rgbd_channel, &FrontendNode::onFrame, this));
+  subscriptions_.push_back(bus_.subscribe(options_.cgm_channel, &FrontendNode::onCgm, this));
+  subscriptions_.push_back(bus_.subscribe(options_.fused_channel, &FrontendNode::onFused, this));
 }
 
 FrontendNode::~FrontendNode() {
-  for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+  for (const msgs::BusSubscription& s : subscriptions_) bus_.unsubscribe(s);
 }
 
 void FrontendNode::onFrame(const lcm::ReceiveBuffer*, const std::string&,
@@ -147,7 +147,7 @@ void FrontendNode::publishExtracted(Extracted extracted) {
     ScopedStageTimer t(timings_, "encode");
     const pplvo_msgs::features_t m =
         msgs::toMsg(extracted.features, pplvo_msgs::features_t::STAGE_2D);
-    lcm_.publish(options_.features_channel, &m);
+    bus_.publish(options_.features_channel, &m);
   }
   awaiting_3d_.push_back(std::move(extracted.features));
   if (const int64_t n = trim(awaiting_3d_, options_.max_pending)) {
@@ -207,7 +207,7 @@ void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
   {
     ScopedStageTimer t(timings_, "encode");
     const pplvo_msgs::features_t m = msgs::toMsg(features, pplvo_msgs::features_t::STAGE_3D);
-    lcm_.publish(options_.features_3d_channel, &m);
+    bus_.publish(options_.features_3d_channel, &m);
   }
   ++counters_.frames_out;
 }
@@ -220,7 +220,7 @@ StageTimings FrontendNode::allTimings() const {
 void FrontendNode::publishStatus(int64_t utime) {
   msgs::guarded(counters_, kName, [&] {
     const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, allTimings(), utime);
-    lcm_.publish(options_.status_channel, &m);
+    bus_.publish(options_.status_channel, &m);
   });
 }
 

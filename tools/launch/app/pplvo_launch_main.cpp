@@ -183,12 +183,13 @@ int main(int argc, char** argv) {
   }
   BusMonitor bus(lcm);
   say("LCM " + url.url + ", programs from " + bin_dir + ", process logs in " + log_dir);
+  for (const std::string& r : url.routes) say("route " + r);
 
   LaunchReport report;
   report.lockstep = o.lockstep;
   report.url = url.url;
   report.trajectory_path = o.output;
-  const std::vector<ProcessSpec> specs = buildProcessSpecs(o, url.url, bin_dir, log_dir);
+  const std::vector<ProcessSpec> specs = buildProcessSpecs(o, url, bin_dir, log_dir);
   const auto deadline = t0 + std::chrono::duration<double>(o.timeout_s);
   auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
 

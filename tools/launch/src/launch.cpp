@@ -44,6 +44,9 @@ std::string launchUsage() {
          "  --summary FILE          logger's YAML run summary\n"
          "  --lcm-url URL           udpm URL (default $LCM_DEFAULT_URL; with --isolated\n"
          "                          udpm://239.255.76.67:7667?ttl=0)\n"
+         "  --single-url            frame channels on the main URL too (default: RGB-D\n"
+         "                          frames and depth maps each on the next port, joined only\n"
+         "                          by their subscribers)\n"
          "  --isolated              run everything in a private network namespace (only lo);\n"
          "                          a URL with ttl > 0 is refused\n"
          "  --bin-dir DIR           where the node programs are (default: next to pplvo-launch)\n"
@@ -191,6 +194,8 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
       next(&o.lcm_url);
     else if (key == "--isolated")
       flag(&o.isolated);
+    else if (key == "--single-url")
+      flag(&o.single_url);
     else if (key == "--bin-dir")
       next(&o.bin_dir);
     else if (key == "--node-logs")
@@ -333,6 +338,11 @@ UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url
                            "maps are sent compressed (lossless; raise rmem_max to avoid this)");
     }
   }
+  if (!o.single_url) {
+    std::string error;
+    d.routes = frameChannelRoutes(d.url, &error);
+    if (!error.empty()) d.errors.push_back(error + " (or use --single-url)");
+  }
   if (o.isolated && u.ttl > 0) {
     d.errors.push_back("--isolated needs a loopback URL (udpm with ttl=0), not '" + d.url + "'");
   } else if (!o.isolated && u.ttl > 0) {
@@ -342,14 +352,37 @@ UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url
   return d;
 }
 
-std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::string& url,
+std::vector<std::string> frameChannelRoutes(const std::string& udpm_url, std::string* error) {
+  const LcmUrl u = parseLcmUrl(udpm_url);
+  if (!u.valid || u.provider != "udpm") {
+    *error = "frame channel routes need a udpm URL, not '" + udpm_url + "'";
+    return {};
+  }
+  const char* channels[] = {"PPLVO_RGBD", "PPLVO_DEPTH_CGM", "PPLVO_DEPTH_FUSED"};
+  if (u.port + 3 > 65535) {
+    *error = "port " + std::to_string(u.port) + " leaves no room for the frame channels' ports";
+    return {};
+  }
+  const size_t q = udpm_url.find('?');
+  const std::string options = q == std::string::npos ? "" : udpm_url.substr(q);
+  std::vector<std::string> routes;
+  for (int i = 0; i < 3; ++i) {
+    routes.push_back(std::string(channels[i]) + "=udpm://" + u.address + ":" +
+                     std::to_string(u.port + 1 + i) + options);
+  }
+  return routes;
+}
+
+std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const UrlDecision& url,
                                            const std::string& bin_dir, const std::string& log_dir) {
   auto make = [&](const std::string& name) {
     ProcessSpec s;
     s.name = name;
     s.path = bin_dir + "/" + name;
-    s.args = {"--lcm-url", url};
-    s.env["LCM_DEFAULT_URL"] = url;
+    s.args = {"--lcm-url", url.url};
+    // Every process: one that never touches a routed channel never joins its port.
+    for (const std::string& r : url.routes) s.args.insert(s.args.end(), {"--route", r});
+    s.env["LCM_DEFAULT_URL"] = url.url;
     if (!log_dir.empty()) s.log_path = log_dir + "/" + name + ".log";
     return s;
   };

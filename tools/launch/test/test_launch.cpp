@@ -159,7 +159,7 @@ TEST(LaunchUrl, ReceiveBufferFromRmemMax) {
   EXPECT_EQ(d.url, "udpm://239.255.76.67:7667?recv_buf_size=4194304");
   o.lcm_url.clear();
   o.compress = true;
-  const auto specs = buildProcessSpecs(o, d.url, "/B", "");
+  const auto specs = buildProcessSpecs(o, d, "/B", "");
   EXPECT_EQ(specs[0].args.back(), "--compress");
   EXPECT_EQ(specs[4].args.back(), "zlib");
   EXPECT_TRUE(specs[4].log_path.empty());
@@ -178,7 +178,9 @@ TEST(LaunchSpecs, CommandLines) {
   o.max_frames = 7;
   o.fps = 30;
   o.log = "run.lcmlog";
-  const auto specs = buildProcessSpecs(o, kIsolatedUrl, "/B", "/L");
+  o.single_url = true;
+  UrlDecision url = decideLcmUrl(o, nullptr);
+  const auto specs = buildProcessSpecs(o, url, "/B", "/L");
   ASSERT_EQ(specs.size(), 5u);
   EXPECT_EQ(specs.back().name, kPlayer);  // started last
   auto joined = [](const ProcessSpec& s) {
@@ -200,6 +202,39 @@ TEST(LaunchSpecs, CommandLines) {
   }
   EXPECT_EQ(specs[1].log_path, "/L/pplvo-frontend.log");
   EXPECT_EQ(specs[1].env.at("LCM_DEFAULT_URL"), kIsolatedUrl);
+
+  // By default each frame channel gets its own port, handed to every process.
+  o.single_url = false;
+  o.isolated = true;
+  url = decideLcmUrl(o, nullptr, 4194304);
+  ASSERT_TRUE(url.errors.empty());
+  const std::string options = "?ttl=0&recv_buf_size=4194304";
+  ASSERT_EQ(url.routes, (std::vector<std::string>{
+                            "PPLVO_RGBD=udpm://239.255.76.67:7668" + options,
+                            "PPLVO_DEPTH_CGM=udpm://239.255.76.67:7669" + options,
+                            "PPLVO_DEPTH_FUSED=udpm://239.255.76.67:7670" + options}));
+  for (const ProcessSpec& s : buildProcessSpecs(o, url, "/B", "/L")) {
+    const std::string j = joined(s);
+    for (const std::string& r : url.routes) {
+      EXPECT_NE(j.find("--route " + r), std::string::npos) << s.name;
+    }
+  }
+}
+
+TEST(LaunchUrl, FrameChannelRoutesNeedFreePorts) {
+  std::string error;
+  EXPECT_TRUE(frameChannelRoutes("udpm://239.255.76.67:65534", &error).empty());
+  EXPECT_NE(error.find("65534"), std::string::npos);
+  error.clear();
+  EXPECT_TRUE(frameChannelRoutes("memq://", &error).empty());
+  EXPECT_FALSE(error.empty());
+  LaunchOptions o;
+  o.lcm_url = "udpm://239.255.76.67:65534?ttl=0";
+  const UrlDecision d = decideLcmUrl(o, nullptr);
+  ASSERT_EQ(d.errors.size(), 1u);
+  EXPECT_NE(d.errors[0].find("--single-url"), std::string::npos);
+  o.single_url = true;
+  EXPECT_TRUE(decideLcmUrl(o, nullptr).errors.empty());
 }
 
 // ---------------------------------------------------------------- report pieces
@@ -601,12 +636,12 @@ TEST_F(LaunchProgram, StockKernelReceiveBufferSmallFrames) {
   const fs::path traj = *dir_ / "small_launch.txt";
   const CommandRun l =
       runCommand(launch("small") +
-                     "--lockstep --compress "
+                     "--lockstep --compress --single-url "
                      "--lcm-url 'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=212992' "
                      "--dataset " +
                      small.string() + " --output " + traj.string(),
                  *dir_, "small_launch");
-  std::printf("pplvo-launch, 208 KiB receive buffers, 160x120: %.1f s wall\n%s", l.seconds,
+  std::printf("pplvo-launch --single-url, 208 KiB receive buffers, 160x120: %.1f s wall\n%s", l.seconds,
               l.out.c_str());
   ASSERT_EQ(l.code, 0) << l.out << l.err;
   EXPECT_EQ(reportValue(l.out, "launch.lockstep_timeouts"), 0);

@@ -10,6 +10,7 @@
 
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/dataset/dataset.h"
+#include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
 
@@ -19,6 +20,7 @@ struct PlayerOptions {
   std::string dataset_dir;                     ///< --dataset (required)
   std::string camera_file;                     ///< --camera: YAML (or .xml) camera file
   std::string lcm_url;                         ///< --lcm-url; empty: $LCM_DEFAULT_URL
+  std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string channel = channels::kRgbd;       ///< --channel
   std::string pose_channel = channels::kPose;  ///< --pose-channel (lockstep replies)
   std::string stream_channel = channels::kStream;
@@ -80,7 +82,7 @@ class PlayerNode {
  public:
   /// Opens the dataset (throws dataset::DatasetError on a missing folder, index or camera)
   /// and subscribes to the pose channel when in lockstep.
-  PlayerNode(const PlayerOptions& options, lcm::LCM& lcm);
+  PlayerNode(const PlayerOptions& options, msgs::Bus bus);
   PlayerNode(const PlayerNode&) = delete;
   PlayerNode& operator=(const PlayerNode&) = delete;
   ~PlayerNode();
@@ -106,9 +108,9 @@ class PlayerNode {
   double nowS() const;
 
   PlayerOptions options_;
-  lcm::LCM& lcm_;
+  msgs::Bus bus_;
   dataset::Dataset dataset_;
-  lcm::Subscription* pose_sub_ = nullptr;
+  msgs::BusSubscription pose_sub_;
   msgs::NodeCounters counters_;
   StageTimings timings_;
   int64_t last_pose_seq_ = -1;

@@ -21,6 +21,7 @@
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/depth_model.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
+#include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
 
@@ -31,6 +32,7 @@ using depth_filter::parseDepthModel;
 
 struct DepthFilterNodeOptions {
   std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string rgbd_channel = channels::kRgbd;
   std::string pose_channel = channels::kPose;
   std::string cgm_channel = channels::kDepthCgm;
@@ -53,7 +55,7 @@ class DepthFilterNode {
  public:
   static constexpr const char* kName = "pplvo-depth-filter";
 
-  DepthFilterNode(const DepthFilterNodeOptions& options, lcm::LCM& lcm);
+  DepthFilterNode(const DepthFilterNodeOptions& options, msgs::Bus bus);
   ~DepthFilterNode();
   DepthFilterNode(const DepthFilterNode&) = delete;
   DepthFilterNode& operator=(const DepthFilterNode&) = delete;
@@ -92,8 +94,8 @@ class DepthFilterNode {
                     int8_t stage);
 
   DepthFilterNodeOptions options_;
-  lcm::LCM& lcm_;
-  std::vector<lcm::Subscription*> subscriptions_;
+  msgs::Bus bus_;
+  std::vector<msgs::BusSubscription> subscriptions_;
   depth_filter::QuadraticSensorModel sensor_;
   depth_filter::CgmFilter cgm_;
   depth_filter::OgmFusion ogm_;

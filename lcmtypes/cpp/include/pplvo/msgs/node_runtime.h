@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/convert.h"
 
 namespace pplvo::msgs {
@@ -21,9 +22,10 @@ void requestShutdown();
 /// naming the URL when LCM cannot be initialised.
 std::unique_ptr<lcm::LCM> openLcm(const std::string& url);
 
-/// Handles messages until shutdown is requested or `done()` returns true, calling `periodic`
-/// about every `period_s` seconds. Returns the number of handled messages.
-int64_t spin(lcm::LCM& lcm, const std::function<bool()>& done,
+/// Handles messages (on every instance of `bus` this process subscribed on) until shutdown is
+/// requested or `done()` returns true, calling `periodic` about every `period_s` seconds.
+/// Returns the number of handled messages.
+int64_t spin(const Bus& bus, const std::function<bool()>& done,
              const std::function<void()>& periodic, double period_s = 1.0);
 
 /// Notes the arrival of frame `seq` from a source that numbers its published frames

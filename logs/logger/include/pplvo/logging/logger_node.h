@@ -9,6 +9,7 @@
 
 #include "pplvo/logging/event_log.h"
 #include "pplvo/logging/run_record.h"
+#include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
 
@@ -16,6 +17,7 @@ namespace pplvo::logging {
 
 struct LoggerOptions {
   std::string lcm_url;                             ///< --lcm-url; empty: $LCM_DEFAULT_URL
+  std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string output;                              ///< --output FILE.lcmlog (event log)
   bool force = false;                              ///< --force: overwrite an existing log
   std::string channels = "PPLVO_.*";               ///< --channels: LCM regex (whole name)
@@ -57,7 +59,7 @@ struct LoggerResult {
 class LoggerNode {
  public:
   /// Opens the outputs (throws LogWriteError naming the file) and subscribes.
-  LoggerNode(const LoggerOptions& options, lcm::LCM& lcm);
+  LoggerNode(const LoggerOptions& options, msgs::Bus bus);
   ~LoggerNode();
   LoggerNode(const LoggerNode&) = delete;
   LoggerNode& operator=(const LoggerNode&) = delete;
@@ -77,10 +79,10 @@ class LoggerNode {
   double nowS() const;
 
   LoggerOptions options_;
-  lcm::LCM& lcm_;
+  msgs::Bus bus_;
   std::unique_ptr<EventLogWriter> log_;
   std::unique_ptr<TrajectoryWriter> trajectory_;
-  std::vector<lcm::Subscription*> subs_;
+  std::vector<msgs::BusSubscription> subs_;
   RunSummary summary_;
   msgs::NodeCounters counters_;
   std::string fatal_;

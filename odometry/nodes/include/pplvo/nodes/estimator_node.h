@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/pipeline/frame_odometry.h"
@@ -29,6 +30,7 @@ namespace pplvo::nodes {
 
 struct EstimatorNodeOptions {
   std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string features_channel = channels::kFeatures;
   std::string features_3d_channel = channels::kFeatures3d;
   std::string pose_channel = channels::kPose;
@@ -50,7 +52,7 @@ class EstimatorNode {
  public:
   static constexpr const char* kName = "pplvo-estimator";
 
-  EstimatorNode(const EstimatorNodeOptions& options, lcm::LCM& lcm);
+  EstimatorNode(const EstimatorNodeOptions& options, msgs::Bus bus);
   ~EstimatorNode();
   EstimatorNode(const EstimatorNode&) = delete;
   EstimatorNode& operator=(const EstimatorNode&) = delete;
@@ -74,8 +76,8 @@ class EstimatorNode {
                const pipeline::FrameOdometryStats& stats);
 
   EstimatorNodeOptions options_;
-  lcm::LCM& lcm_;
-  std::vector<lcm::Subscription*> subscriptions_;
+  msgs::Bus bus_;
+  std::vector<msgs::BusSubscription> subscriptions_;
   pipeline::FrameOdometry odometry_;
   std::deque<FrameFeatures> waiting_;  ///< stage 2D, oldest first
   FrameFeatures reference_;            ///< stage 3D of the newest posed frame received

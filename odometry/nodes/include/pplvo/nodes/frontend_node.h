@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/pipeline/frontend.h"
@@ -33,6 +34,7 @@ namespace pplvo::nodes {
 
 struct FrontendNodeOptions {
   std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string rgbd_channel = channels::kRgbd;
   std::string cgm_channel = channels::kDepthCgm;
   std::string fused_channel = channels::kDepthFused;
@@ -57,7 +59,7 @@ class FrontendNode {
  public:
   static constexpr const char* kName = "pplvo-frontend";
 
-  FrontendNode(const FrontendNodeOptions& options, lcm::LCM& lcm);
+  FrontendNode(const FrontendNodeOptions& options, msgs::Bus bus);
   ~FrontendNode();
   FrontendNode(const FrontendNode&) = delete;
   FrontendNode& operator=(const FrontendNode&) = delete;
@@ -103,8 +105,8 @@ class FrontendNode {
   void warn(const std::string& what);
 
   FrontendNodeOptions options_;
-  lcm::LCM& lcm_;
-  std::vector<lcm::Subscription*> subscriptions_;
+  msgs::Bus bus_;
+  std::vector<msgs::BusSubscription> subscriptions_;
   pipeline::Frontend frontend_;
   std::deque<RgbdFrame> frames_;           ///< colour in, C-GM depth not yet
   std::deque<PendingDepth> cgm_;           ///< C-GM depth in, colour not yet

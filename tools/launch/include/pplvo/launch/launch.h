@@ -51,6 +51,7 @@ struct LaunchOptions {
   double stop_grace_s = 5.0;         ///< --stop-grace: SIGINT -> SIGKILL delay
   std::string test_kill;             ///< --test-kill NODE:POSES: SIGKILL NODE after POSES poses
   bool compress = false;             ///< --compress: lossless compressed images and depth maps
+  bool single_url = false;           ///< --single-url: frame channels on the main URL too
   bool quiet = false;                ///< --quiet: report only
 };
 
@@ -78,6 +79,9 @@ LcmUrl parseLcmUrl(const std::string& url);
 /// URL: traffic stays on lo of the private namespace); otherwise a ttl > 0 gives a warning.
 struct UrlDecision {
   std::string url;                    ///< URL handed to every process
+  /// "CHANNEL=URL" for each frame-sized channel (see frameChannelRoutes); empty with
+  /// --single-url.
+  std::vector<std::string> routes;
   bool compress = false;              ///< the receive buffers are too small for raw frames
   std::vector<std::string> errors;    ///< refuse to run
   std::vector<std::string> warnings;  ///< print and run
@@ -88,6 +92,14 @@ struct UrlDecision {
 /// `rmem_max_bytes` < 0: unknown, the URL is left alone.
 UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url,
                          int64_t rmem_max_bytes = -1);
+/// The frame-sized channels (PPLVO_RGBD, PPLVO_DEPTH_CGM, PPLVO_DEPTH_FUSED), each on the
+/// next port of `udpm_url`'s group (port + 1, + 2, + 3), with the same options, as
+/// "CHANNEL=URL". Only the processes that subscribe to a channel join its port: the estimator,
+/// player, logger and launcher then never receive the ~6.5 MB of images and depth maps of a
+/// 640x480 frame, nor the depth filter its own maps. Empty with an error when the ports would
+/// pass 65535.
+std::vector<std::string> frameChannelRoutes(const std::string& udpm_url, std::string* error);
+
 /// net.core.rmem_max of the current network namespace (-1 if unreadable).
 int64_t readRmemMax();
 /// Receive buffer below which raw 640x480 frames lose fragments (measured: 2 MiB worked,
@@ -98,7 +110,8 @@ inline constexpr int64_t kMinCompressedRecvBufBytes = 1 << 20;
 
 /// Builds the five process specs (binaries in `bin_dir`, logs in `log_dir`), start order:
 /// depth filter, frontend, estimator, logger, player.
-std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const std::string& url,
+/// Every process gets `--lcm-url url.url` and one `--route` per entry of `url.routes`.
+std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const UrlDecision& url,
                                            const std::string& bin_dir, const std::string& log_dir);
 
 /// Counters of one node: its final node_status_t or its "done:" line.

@@ -1,0 +1,127 @@
+#pragma once
+/// Channel routing over several LCM instances.
+///
+/// On udpm every process that joined a multicast group receives every datagram sent to it,
+/// whether or not it subscribed to the channel: a 640x480 frame puts ~6.5 MB of images and
+/// depth maps on the bus, and the estimator, player, logger and launcher would copy all of it
+/// out of the kernel only to drop it. A route sends one channel over its own URL (another
+/// multicast port), so only the processes that subscribe to that channel join it.
+///
+/// `Bus` is a cheap handle (copies share one routing table): nodes take a Bus, and an
+/// `lcm::LCM&` converts to a Bus that carries every channel, so tests and the one-process
+/// runner keep a single memq:// instance.
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "pplvo/core/args.h"
+
+namespace pplvo::msgs {
+
+/// "CHANNEL=URL" -> {CHANNEL, URL}; empty error on success.
+struct ChannelRoute {
+  std::string channel;
+  std::string url;
+};
+std::string parseChannelRoute(const std::string& text, ChannelRoute* route);
+
+/// True when `channel` is an LCM regular expression rather than one channel name.
+bool isChannelPattern(const std::string& channel);
+
+/// The subscriptions one Bus::subscribe made (one per instance for a pattern).
+struct BusSubscription {
+  std::vector<std::pair<lcm::LCM*, lcm::Subscription*>> parts;
+};
+
+class Bus {
+ public:
+  /// Every channel on `lcm` (not owned).
+  Bus(lcm::LCM& lcm);  // NOLINT(google-explicit-constructor): the common case, on purpose
+
+  /// From now on `channel` goes over `lcm` (not owned). Route before subscribing.
+  void route(const std::string& channel, lcm::LCM& lcm);
+
+  /// The instance that carries `channel`.
+  lcm::LCM& instanceFor(const std::string& channel) const;
+
+  /// Subscribes on the channel's instance; a pattern subscribes on every instance.
+  template <class MessageT, class Handler>
+  BusSubscription subscribe(const std::string& channel,
+                            void (Handler::*method)(const lcm::ReceiveBuffer*, const std::string&,
+                                                    const MessageT*),
+                            Handler* handler) const {
+    BusSubscription s;
+    for (lcm::LCM* l : receiveOn(channel)) s.parts.emplace_back(l, l->subscribe(channel, method, handler));
+    return s;
+  }
+  /// Raw subscription (undecoded bytes).
+  template <class Handler>
+  BusSubscription subscribe(const std::string& channel,
+                            void (Handler::*method)(const lcm::ReceiveBuffer*, const std::string&),
+                            Handler* handler) const {
+    BusSubscription s;
+    for (lcm::LCM* l : receiveOn(channel)) s.parts.emplace_back(l, l->subscribe(channel, method, handler));
+    return s;
+  }
+  void unsubscribe(const BusSubscription& s) const;
+
+  template <class MessageT>
+  int publish(const std::string& channel, const MessageT* msg) const {
+    return instanceFor(channel).publish(channel, msg);
+  }
+  int publish(const std::string& channel, const void* data, unsigned int size) const {
+    return instanceFor(channel).publish(channel, data, size);
+  }
+
+  /// Waits up to `timeout_ms` for a message on any instance this process subscribed on and
+  /// handles what is ready (one message per ready instance). Returns the number handled, 0 on
+  /// timeout, < 0 on error (as lcm::LCM::handleTimeout; EINTR is an error, as there).
+  /// Instances that were only published on are never waited on: on udpm, asking for their
+  /// file descriptor would join their multicast group.
+  int handleTimeout(int timeout_ms) const;
+
+  /// Number of distinct instances (1 without routes).
+  size_t instanceCount() const;
+
+ private:
+  struct Routing {
+    lcm::LCM* fallback = nullptr;
+    std::map<std::string, lcm::LCM*> routes;
+    std::vector<lcm::LCM*> receiving;  // in order of first subscription
+  };
+  std::vector<lcm::LCM*> receiveOn(const std::string& channel) const;
+  std::shared_ptr<Routing> routing_;
+};
+
+/// The LCM instances of one process: the default URL and one instance per distinct routed
+/// URL, opened together and closed together.
+class BusConnections {
+ public:
+  /// Opens `default_url` (empty: $LCM_DEFAULT_URL) and each route's URL; a route whose URL is
+  /// the default's, or another route's, shares that instance. Throws std::runtime_error naming
+  /// the URL that failed.
+  BusConnections(const std::string& default_url, const std::vector<ChannelRoute>& routes);
+  BusConnections(const BusConnections&) = delete;
+  BusConnections& operator=(const BusConnections&) = delete;
+
+  const Bus& bus() const { return bus_; }
+  lcm::LCM& defaultInstance() { return *instances_.front().second; }
+
+ private:
+  std::vector<std::pair<std::string, std::unique_ptr<lcm::LCM>>> instances_;  // url, instance
+  Bus bus_;
+};
+
+/// Declares the repeatable `--route CHANNEL=URL` option of every process: each one is checked
+/// and appended to `routes` (a later route of the same channel replaces the earlier one).
+ArgParser& addRouteOption(ArgParser& parser, std::vector<ChannelRoute>* routes);
+
+/// The usage line of --route, for the processes' help texts.
+inline constexpr const char* kRouteUsage =
+    "  --route CHANNEL=URL      carry CHANNEL over URL instead of --lcm-url (repeatable;\n"
+    "                           docs/channels.md: frame-sized channels on their own port)\n";
+
+}  // namespace pplvo::msgs

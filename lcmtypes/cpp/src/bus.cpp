@@ -1,0 +1,129 @@
+#include "pplvo/msgs/bus.h"
+
+#include <poll.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <stdexcept>
+
+#include "pplvo/msgs/node_runtime.h"
+
+namespace pplvo::msgs {
+
+std::string parseChannelRoute(const std::string& text, ChannelRoute* route) {
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == text.size()) {
+    return "expected CHANNEL=URL, got '" + text + "'";
+  }
+  ChannelRoute r{text.substr(0, eq), text.substr(eq + 1)};
+  if (isChannelPattern(r.channel)) {
+    return "a route needs one channel name, not a pattern: '" + r.channel + "'";
+  }
+  if (r.url.find("://") == std::string::npos) {
+    return "route of " + r.channel + ": '" + r.url + "' is not an LCM URL (provider://...)";
+  }
+  *route = r;
+  return "";
+}
+
+ArgParser& addRouteOption(ArgParser& parser, std::vector<ChannelRoute>* routes) {
+  return parser.option("--route", [routes](const std::string& text) -> std::string {
+    ChannelRoute r;
+    const std::string error = parseChannelRoute(text, &r);
+    if (!error.empty()) return "--route: " + error;
+    auto same = std::find_if(routes->begin(), routes->end(),
+                             [&](const ChannelRoute& o) { return o.channel == r.channel; });
+    if (same != routes->end()) {
+      *same = r;
+    } else {
+      routes->push_back(r);
+    }
+    return "";
+  });
+}
+
+bool isChannelPattern(const std::string& channel) {
+  return channel.find_first_of(".*+?[](){}|^$\\") != std::string::npos;
+}
+
+Bus::Bus(lcm::LCM& lcm) : routing_(std::make_shared<Routing>()) { routing_->fallback = &lcm; }
+
+void Bus::route(const std::string& channel, lcm::LCM& lcm) { routing_->routes[channel] = &lcm; }
+
+lcm::LCM& Bus::instanceFor(const std::string& channel) const {
+  auto it = routing_->routes.find(channel);
+  return it == routing_->routes.end() ? *routing_->fallback : *it->second;
+}
+
+std::vector<lcm::LCM*> Bus::receiveOn(const std::string& channel) const {
+  std::vector<lcm::LCM*> on;
+  if (isChannelPattern(channel)) {
+    on.push_back(routing_->fallback);
+    for (const auto& [name, l] : routing_->routes) {
+      if (std::find(on.begin(), on.end(), l) == on.end()) on.push_back(l);
+    }
+  } else {
+    on.push_back(&instanceFor(channel));
+  }
+  for (lcm::LCM* l : on) {
+    auto& r = routing_->receiving;
+    if (std::find(r.begin(), r.end(), l) == r.end()) r.push_back(l);
+  }
+  return on;
+}
+
+void Bus::unsubscribe(const BusSubscription& s) const {
+  for (const auto& [l, sub] : s.parts) {
+    if (sub) l->unsubscribe(sub);
+  }
+}
+
+size_t Bus::instanceCount() const {
+  std::vector<lcm::LCM*> all{routing_->fallback};
+  for (const auto& [name, l] : routing_->routes) {
+    if (std::find(all.begin(), all.end(), l) == all.end()) all.push_back(l);
+  }
+  return all.size();
+}
+
+int Bus::handleTimeout(int timeout_ms) const {
+  const std::vector<lcm::LCM*>& receiving = routing_->receiving;
+  // Nothing subscribed: as before routes existed, the default instance (memq:// must be
+  // handled for its queue to drain).
+  if (receiving.size() <= 1) {
+    return (receiving.empty() ? routing_->fallback : receiving.front())->handleTimeout(timeout_ms);
+  }
+  std::vector<pollfd> fds(receiving.size());
+  for (size_t i = 0; i < receiving.size(); ++i) fds[i] = {receiving[i]->getFileno(), POLLIN, 0};
+  const int ready = ::poll(fds.data(), fds.size(), timeout_ms);
+  if (ready <= 0) return ready;  // 0 timeout, -1 error or EINTR (a signal: shutdown)
+  int handled = 0;
+  for (size_t i = 0; i < fds.size(); ++i) {
+    if (!(fds[i].revents & (POLLIN | POLLERR | POLLHUP))) continue;
+    const int rc = receiving[i]->handleTimeout(0);
+    if (rc < 0) return rc;
+    handled += rc;
+  }
+  return handled;
+}
+
+BusConnections::BusConnections(const std::string& default_url,
+                               const std::vector<ChannelRoute>& routes)
+    : instances_([&] {
+        std::vector<std::pair<std::string, std::unique_ptr<lcm::LCM>>> v;
+        v.emplace_back(default_url, openLcm(default_url));
+        return v;
+      }()),
+      bus_(*instances_.front().second) {
+  for (const ChannelRoute& r : routes) {
+    auto it = std::find_if(instances_.begin(), instances_.end(),
+                           [&](const auto& i) { return i.first == r.url; });
+    if (it == instances_.end()) {
+      instances_.emplace_back(r.url, openLcm(r.url));
+      it = std::prev(instances_.end());
+    }
+    bus_.route(r.channel, *it->second);
+  }
+}
+
+}  // namespace pplvo::msgs

@@ -1,0 +1,150 @@
+// msgs::Bus: channel routes over several LCM instances (memq:// here: one process).
+#include <gtest/gtest.h>
+
+#include <lcm/lcm-cpp.hpp>
+#include <pplvo_msgs/node_status_t.hpp>
+#include <string>
+#include <vector>
+
+#include "pplvo/core/args.h"
+#include "pplvo/msgs/bus.h"
+#include "pplvo/msgs/node_runtime.h"
+
+namespace pplvo::msgs {
+namespace {
+
+struct Received {
+  std::vector<std::string> channels;
+  void onStatus(const lcm::ReceiveBuffer*, const std::string& channel,
+                const pplvo_msgs::node_status_t*) {
+    channels.push_back(channel);
+  }
+  void onRaw(const lcm::ReceiveBuffer*, const std::string& channel) { channels.push_back(channel); }
+};
+
+pplvo_msgs::node_status_t status() { return toStatusMsg("test", NodeCounters{}, {}, 1); }
+
+int drain(const Bus& bus) {
+  int n = 0;
+  for (int rc; (rc = bus.handleTimeout(0)) > 0;) n += rc;
+  return n;
+}
+
+TEST(ChannelRoute, ParseAndOption) {
+  ChannelRoute r;
+  EXPECT_EQ(parseChannelRoute("PPLVO_RGBD=udpm://239.255.76.67:7668?ttl=0", &r), "");
+  EXPECT_EQ(r.channel, "PPLVO_RGBD");
+  EXPECT_EQ(r.url, "udpm://239.255.76.67:7668?ttl=0");  // '=' in the URL's options stay
+  EXPECT_NE(parseChannelRoute("PPLVO_RGBD", &r), "");
+  EXPECT_NE(parseChannelRoute("=memq://", &r), "");
+  EXPECT_NE(parseChannelRoute("PPLVO_RGBD=", &r), "");
+  EXPECT_NE(parseChannelRoute("PPLVO_.*=memq://", &r).find("pattern"), std::string::npos);
+  EXPECT_NE(parseChannelRoute("PPLVO_RGBD=239.255.76.67", &r).find("URL"), std::string::npos);
+
+  std::vector<ChannelRoute> routes;
+  ArgParser p;
+  addRouteOption(p, &routes);
+  p.parse({"--route", "A=memq://", "--route", "B=udpm://239.255.76.67:7668", "--route",
+           "A=udpm://239.255.76.67:7669", "--route", "bad"});
+  ASSERT_EQ(p.errors().size(), 1u);
+  EXPECT_NE(p.errors()[0].find("--route"), std::string::npos);
+  ASSERT_EQ(routes.size(), 2u);  // the later route of A replaced the earlier one
+  EXPECT_EQ(routes[0].channel, "A");
+  EXPECT_EQ(routes[0].url, "udpm://239.255.76.67:7669");
+  EXPECT_EQ(routes[1].channel, "B");
+}
+
+TEST(Bus, OneInstanceCarriesEverything) {
+  lcm::LCM lcm("memq://");
+  Bus bus(lcm);
+  EXPECT_EQ(bus.instanceCount(), 1u);
+  Received r;
+  const BusSubscription s = bus.subscribe("A", &Received::onStatus, &r);
+  const auto m = status();
+  bus.publish("A", &m);
+  lcm.publish("A", &m);  // the same instance
+  EXPECT_EQ(drain(bus), 2);
+  EXPECT_EQ(r.channels.size(), 2u);
+  bus.unsubscribe(s);
+  bus.publish("A", &m);
+  drain(bus);
+  EXPECT_EQ(r.channels.size(), 2u);
+}
+
+TEST(Bus, RoutedChannelTravelsOnItsOwnInstance) {
+  lcm::LCM main_lcm("memq://"), frames("memq://");
+  Bus bus(main_lcm);
+  bus.route("FRAMES", frames);
+  EXPECT_EQ(&bus.instanceFor("FRAMES"), &frames);
+  EXPECT_EQ(&bus.instanceFor("POSE"), &main_lcm);
+  EXPECT_EQ(bus.instanceCount(), 2u);
+
+  // A copy shares the routing table and the set of instances to wait on.
+  const Bus copy = bus;
+  Received r;
+  copy.subscribe("FRAMES", &Received::onStatus, &r);
+  bus.subscribe("POSE", &Received::onStatus, &r);
+  const auto m = status();
+  bus.publish("FRAMES", &m);
+  bus.publish("POSE", &m);
+  EXPECT_EQ(drain(bus), 2);  // both instances were waited on
+  EXPECT_EQ(r.channels, (std::vector<std::string>{"FRAMES", "POSE"}));
+
+  // A pattern listens on every instance.
+  Received all;
+  const BusSubscription s = bus.subscribe(".*", &Received::onRaw, &all);
+  EXPECT_EQ(s.parts.size(), 2u);
+  bus.publish("FRAMES", &m);
+  bus.publish("POSE", &m);
+  drain(bus);
+  EXPECT_EQ(all.channels.size(), 2u);
+}
+
+TEST(Bus, InstancesOnlyPublishedOnAreNotWaitedOn) {
+  // On udpm, waiting on an instance joins its multicast group: a process that only publishes
+  // frames must never receive them. Here: a message on the publish-only instance stays queued.
+  lcm::LCM main_lcm("memq://"), frames("memq://"), other("memq://");
+  Bus bus(main_lcm);
+  bus.route("FRAMES", frames);
+  bus.route("OTHER", other);
+  Received r;
+  bus.subscribe("POSE", &Received::onStatus, &r);
+  bus.subscribe("OTHER", &Received::onStatus, &r);
+  Received direct;  // behind the bus's back (memq drops messages nobody subscribed to)
+  frames.subscribe("FRAMES", &Received::onStatus, &direct);
+  const auto m = status();
+  bus.publish("FRAMES", &m);
+  bus.publish("OTHER", &m);
+  EXPECT_EQ(drain(bus), 1);
+  EXPECT_TRUE(direct.channels.empty());   // the bus never handled that instance
+  EXPECT_EQ(frames.handleTimeout(0), 1);  // still queued there
+}
+
+TEST(Bus, SpinHandlesEveryInstanceUntilDone) {
+  lcm::LCM main_lcm("memq://"), frames("memq://");
+  Bus bus(main_lcm);
+  bus.route("FRAMES", frames);
+  Received r;
+  bus.subscribe("FRAMES", &Received::onStatus, &r);
+  bus.subscribe("POSE", &Received::onStatus, &r);
+  const auto m = status();
+  for (int i = 0; i < 3; ++i) {
+    bus.publish("FRAMES", &m);
+    bus.publish("POSE", &m);
+  }
+  int periodic = 0;
+  spin(bus, [&] { return r.channels.size() >= 6; }, [&] { ++periodic; }, 10.0);
+  EXPECT_EQ(r.channels.size(), 6u);
+  EXPECT_EQ(periodic, 1);  // once at the end
+}
+
+TEST(BusConnections, SameUrlSharesOneInstance) {
+  BusConnections c("memq://", {{"FRAMES", "memq://"}, {"MAPS", "memq://?x=1"}});
+  EXPECT_EQ(c.bus().instanceCount(), 2u);  // FRAMES shares the default instance
+  EXPECT_EQ(&c.bus().instanceFor("FRAMES"), &c.defaultInstance());
+  EXPECT_NE(&c.bus().instanceFor("MAPS"), &c.defaultInstance());
+  EXPECT_THROW(BusConnections("nonsense://", {}), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace pplvo::msgs
