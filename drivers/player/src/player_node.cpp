@@ -61,6 +61,10 @@ calib_params.xml) as pplvo_msgs.rgbd_frame_t.
   --jpeg-quality Q         JPEG quality 1..100 (default 90)
   --depth-encoding E       raw | zlib | png (default raw)
   --loop                   start over at the end (seq keeps counting; utime keeps increasing)
+  --preload                decode every frame (up to --max-frames) before publishing the first:
+                           no PNG decoding competes with the pipeline while it runs, as with a
+                           camera (memory: width x height x 5 bytes per frame)
+  --preload-max-mb N       refuse --preload beyond N MiB of decoded frames (4096)
   --progress / --no-progress   progress line on stderr (default: when stderr is a terminal)
   -h, --help               this text
 
@@ -118,6 +122,8 @@ ParseResult parsePlayerArgs(const std::vector<std::string>& args) {
       .flag("--lockstep", &o.lockstep)
       .flag("--skip-bad", &o.skip_bad)
       .flag("--loop", &o.loop)
+      .flag("--preload", &o.preload)
+      .option("--preload-max-mb", &o.preload_max_mb, int64_t{1})
       .flag("--progress", &o.progress)
       .flag("--no-progress", &o.progress, false);
   p.parse(args);
@@ -309,14 +315,50 @@ void PlayerNode::runLoop(PlayerResult& result) {
     f.load_ms = watch.elapsedMs();
     return f;
   };
-  std::future<Fetched> pending = std::async(std::launch::async, fetch);
+  // --preload: every frame decoded now, then served from memory (the end marker or a load
+  // error last, so that it surfaces at the same point of the stream as without --preload).
+  std::vector<Fetched> preloaded;
+  size_t next_preloaded = 0;
+  if (options_.preload) {
+    ScopedStageTimer t(timings_, "preload");
+    const int64_t limit_bytes = options_.preload_max_mb << 20;
+    int64_t bytes = 0, frames = 0;
+    while (!msgs::shutdownRequested()) {
+      Fetched f = fetch();
+      const bool last = !f.item || f.error;
+      if (f.item) {
+        const dataset::RawFrame& raw = f.item->frame;
+        bytes += static_cast<int64_t>(raw.bgr.total() * raw.bgr.elemSize() +
+                                      raw.depth_units.total() * raw.depth_units.elemSize());
+        ++frames;
+      }
+      preloaded.push_back(std::move(f));
+      if (last || (options_.max_frames > 0 && frames >= options_.max_frames)) break;
+      if (bytes > limit_bytes) {
+        throw std::runtime_error("--preload: " + std::to_string(frames) + " decoded frames take " +
+                                 std::to_string(bytes >> 20) + " MiB, more than --preload-max-mb " +
+                                 std::to_string(options_.preload_max_mb) +
+                                 "; use --max-frames or play without --preload");
+      }
+    }
+  }
+  std::future<Fetched> pending;
+  auto fetchNext = [&] {
+    if (!options_.preload) pending = std::async(std::launch::async, fetch);
+  };
+  auto takeFetched = [&]() -> Fetched {
+    if (!options_.preload) return pending.get();
+    if (next_preloaded < preloaded.size()) return preloaded[next_preloaded++];
+    return Fetched{};  // the end
+  };
+  fetchNext();
 
   while (!msgs::shutdownRequested()) {
     if (options_.max_frames > 0 && published_ >= options_.max_frames) break;
     Fetched fetched;
     {
       ScopedStageTimer t(timings_, "load_wait");
-      fetched = pending.get();
+      fetched = takeFetched();
     }
     timings_.add("load", fetched.load_ms);
     if (fetched.error) std::rethrow_exception(fetched.error);
@@ -332,14 +374,18 @@ void PlayerNode::runLoop(PlayerResult& result) {
     }
     if (!fetched.item) {
       if (!options_.loop || published_this_pass == 0) break;
-      reader.seek(start);
-      pending = std::async(std::launch::async, fetch);
+      if (options_.preload) {
+        next_preloaded = 0;
+      } else {
+        reader.seek(start);
+      }
+      fetchNext();
       loop_offset_us += pass_us;
       published_this_pass = 0;
       ++result.loops;
       continue;
     }
-    pending = std::async(std::launch::async, fetch);
+    fetchNext();
     std::optional<dataset::DatasetReader::Item> item = std::move(fetched.item);
     ++counters_.frames_in;
     const dataset::DatasetEntry& entry = dataset_.entry(item->index);

@@ -302,21 +302,52 @@ TEST(Player, RealTimePacingFollowsStampsAndFps) {
 }
 
 TEST(Player, LoopKeepsSeqAndUtimeIncreasing) {
+  for (const bool preload : {false, true}) {
+    SCOPED_TRACE(preload ? "--preload" : "streaming");
+    lcm::LCM lcm("memq://");
+    Recorder rec(lcm);
+    rec.keep_images = true;
+    PlayerOptions o = baseOptions();
+    o.start = 248;  // 3 frames per pass
+    o.loop = true;
+    o.max_frames = 7;
+    o.preload = preload;
+    PlayerNode node(o, lcm);
+    const auto r = node.run();
+    ASSERT_EQ(rec.frames.size(), 7u);
+    EXPECT_EQ(r.loops, 2);
+    for (size_t i = 1; i < rec.frames.size(); ++i) {
+      EXPECT_EQ(rec.frames[i].seq, rec.frames[i - 1].seq + 1);
+      EXPECT_GT(rec.frames[i].utime, rec.frames[i - 1].utime);
+    }
+    EXPECT_EQ(rec.frames[3].stamp, "248");
+    // Each pass publishes the same pixels (preloaded frames are served again, unchanged).
+    EXPECT_EQ(rec.frames[3].rgb.data, rec.frames[0].rgb.data);
+    EXPECT_EQ(rec.frames[4].depth.data, rec.frames[1].depth.data);
+    const cv::Mat depth = msgs::decodeImage(rec.frames[5].depth);
+    EXPECT_EQ(cv::norm(depth, cv::imread(iclDir() + "/depth/250.png", cv::IMREAD_UNCHANGED),
+                       cv::NORM_INF),
+              0.0);
+  }
+}
+
+TEST(Player, PreloadIsBoundedAndClearWhenTooLarge) {
   lcm::LCM lcm("memq://");
   Recorder rec(lcm);
   PlayerOptions o = baseOptions();
-  o.start = 248;  // 3 frames per pass
-  o.loop = true;
-  o.max_frames = 7;
+  o.preload = true;
+  o.preload_max_mb = 2;  // a 640x480 frame decodes to 1.5 MiB
   PlayerNode node(o, lcm);
   const auto r = node.run();
-  ASSERT_EQ(rec.frames.size(), 7u);
-  EXPECT_EQ(r.loops, 2);
-  for (size_t i = 1; i < rec.frames.size(); ++i) {
-    EXPECT_EQ(rec.frames[i].seq, rec.frames[i - 1].seq + 1);
-    EXPECT_GT(rec.frames[i].utime, rec.frames[i - 1].utime);
-  }
-  EXPECT_EQ(rec.frames[3].stamp, "248");
+  EXPECT_TRUE(r.failed);
+  EXPECT_NE(r.error.find("--preload-max-mb 2"), std::string::npos) << r.error;
+  EXPECT_EQ(r.published, 0);  // refused before the first frame went out
+  EXPECT_TRUE(rec.frames.empty());
+  const auto parsed = player::parsePlayerArgs(
+      {"--dataset", "D", "--preload", "--preload-max-mb", "100"});
+  EXPECT_TRUE(parsed.errors.empty());
+  EXPECT_TRUE(parsed.options.preload);
+  EXPECT_EQ(parsed.options.preload_max_mb, 100);
 }
 
 TEST(Player, CorruptFrameIsFatalUnlessSkipBad) {
@@ -335,11 +366,14 @@ TEST(Player, CorruptFrameIsFatalUnlessSkipBad) {
   assoc.close();
   fs::copy_file(iclDir() + "/calib_params.xml", dir / "calib_params.xml");
   std::ofstream(dir / "rgb" / "3.png") << "garbage, not a PNG";
-  {
+  for (const bool preload : {false, true}) {
+    // With --preload the error surfaces at the same point of the stream.
+    SCOPED_TRACE(preload ? "--preload" : "streaming");
     lcm::LCM lcm("memq://");
     Recorder rec(lcm);
     PlayerOptions o = baseOptions();
     o.dataset_dir = dir.string();
+    o.preload = preload;
     PlayerNode node(o, lcm);
     const auto r = node.run();
     EXPECT_TRUE(r.failed);

@@ -44,6 +44,9 @@ std::string launchUsage() {
          "  --summary FILE          logger's YAML run summary\n"
          "  --lcm-url URL           udpm URL (default $LCM_DEFAULT_URL; with --isolated\n"
          "                          udpm://239.255.76.67:7667?ttl=0)\n"
+         "  --preload               player decodes every frame before publishing the first\n"
+         "                          (no PNG decoding competes with the pipeline, as with a\n"
+         "                          camera)\n"
          "  --single-url            frame channels on the main URL too (default: RGB-D\n"
          "                          frames and depth maps each on the next port, joined only\n"
          "                          by their subscribers)\n"
@@ -196,6 +199,8 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
       flag(&o.isolated);
     else if (key == "--single-url")
       flag(&o.single_url);
+    else if (key == "--preload")
+      flag(&o.preload);
     else if (key == "--bin-dir")
       next(&o.bin_dir);
     else if (key == "--node-logs")
@@ -416,6 +421,7 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const UrlDeci
   if (o.max_frames > 0)
     pl.args.insert(pl.args.end(), {"--max-frames", std::to_string(o.max_frames)});
   if (o.fps > 0) pl.args.insert(pl.args.end(), {"--fps", fmtDouble(o.fps)});
+  if (o.preload) pl.args.push_back("--preload");
   if (o.compress) {
     pl.args.insert(pl.args.end(), {"--rgb-encoding", "png", "--depth-encoding", "zlib"});
   }

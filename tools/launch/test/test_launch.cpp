@@ -179,6 +179,7 @@ TEST(LaunchSpecs, CommandLines) {
   o.fps = 30;
   o.log = "run.lcmlog";
   o.single_url = true;
+  o.preload = true;
   UrlDecision url = decideLcmUrl(o, nullptr);
   const auto specs = buildProcessSpecs(o, url, "/B", "/L");
   ASSERT_EQ(specs.size(), 5u);
@@ -197,7 +198,8 @@ TEST(LaunchSpecs, CommandLines) {
   EXPECT_NE(joined(specs[3]).find("--trajectory traj.txt"), std::string::npos);
   EXPECT_NE(joined(specs[3]).find("--output run.lcmlog"), std::string::npos);
   const std::string player = joined(specs[4]);
-  for (const char* a : {"--dataset DATA", "--rate 0", "--lockstep", "--max-frames 7", "--fps 30"}) {
+  for (const char* a : {"--dataset DATA", "--rate 0", "--lockstep", "--max-frames 7", "--fps 30",
+                       "--preload"}) {
     EXPECT_NE(player.find(a), std::string::npos) << a << " in " << player;
   }
   EXPECT_EQ(specs[1].log_path, "/L/pplvo-frontend.log");

@@ -52,6 +52,7 @@ struct LaunchOptions {
   std::string test_kill;             ///< --test-kill NODE:POSES: SIGKILL NODE after POSES poses
   bool compress = false;             ///< --compress: lossless compressed images and depth maps
   bool single_url = false;           ///< --single-url: frame channels on the main URL too
+  bool preload = false;              ///< --preload: player decodes every frame before the first
   bool quiet = false;                ///< --quiet: report only
 };
 
