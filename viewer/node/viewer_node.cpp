@@ -22,7 +22,8 @@ double secondsSince(std::chrono::steady_clock::time_point t) {
 }
 }  // namespace
 
-ViewerNode::ViewerNode(const ViewerOptions& options, msgs::Bus bus) : options_(options), bus_(std::move(bus)) {
+ViewerNode::ViewerNode(const ViewerOptions& options, msgs::Bus bus)
+    : options_(options), bus_(std::move(bus)) {
   if (!(options_.max_fps > 0)) throw std::invalid_argument("max_fps must be > 0");
   if (options_.every < 1) throw std::invalid_argument("every must be >= 1");
   if (options_.frame_ring < 1) options_.frame_ring = 1;

@@ -156,9 +156,7 @@ PlayerNode::PlayerNode(const PlayerOptions& options, msgs::Bus bus)
   }
 }
 
-PlayerNode::~PlayerNode() {
-  bus_.unsubscribe(pose_sub_);
-}
+PlayerNode::~PlayerNode() { bus_.unsubscribe(pose_sub_); }
 
 double PlayerNode::nowS() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();

@@ -343,8 +343,8 @@ TEST(Player, PreloadIsBoundedAndClearWhenTooLarge) {
   EXPECT_NE(r.error.find("--preload-max-mb 2"), std::string::npos) << r.error;
   EXPECT_EQ(r.published, 0);  // refused before the first frame went out
   EXPECT_TRUE(rec.frames.empty());
-  const auto parsed = player::parsePlayerArgs(
-      {"--dataset", "D", "--preload", "--preload-max-mb", "100"});
+  const auto parsed =
+      player::parsePlayerArgs({"--dataset", "D", "--preload", "--preload-max-mb", "100"});
   EXPECT_TRUE(parsed.errors.empty());
   EXPECT_TRUE(parsed.options.preload);
   EXPECT_EQ(parsed.options.preload_max_mb, 100);

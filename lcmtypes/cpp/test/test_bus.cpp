@@ -133,7 +133,8 @@ TEST(Bus, SpinHandlesEveryInstanceUntilDone) {
     bus.publish("POSE", &m);
   }
   int periodic = 0;
-  spin(bus, [&] { return r.channels.size() >= 6; }, [&] { ++periodic; }, 10.0);
+  spin(
+      bus, [&] { return r.channels.size() >= 6; }, [&] { ++periodic; }, 10.0);
   EXPECT_EQ(r.channels.size(), 6u);
   EXPECT_EQ(periodic, 1);  // once at the end
 }

@@ -146,7 +146,8 @@ std::string LoggerResult::summaryLine() const {
   return s;
 }
 
-LoggerNode::LoggerNode(const LoggerOptions& options, msgs::Bus bus) : options_(options), bus_(std::move(bus)) {
+LoggerNode::LoggerNode(const LoggerOptions& options, msgs::Bus bus)
+    : options_(options), bus_(std::move(bus)) {
   if (!options_.output.empty()) {
     std::error_code ec;
     if (!options_.force && std::filesystem::exists(options_.output, ec) &&

@@ -198,8 +198,8 @@ TEST(LaunchSpecs, CommandLines) {
   EXPECT_NE(joined(specs[3]).find("--trajectory traj.txt"), std::string::npos);
   EXPECT_NE(joined(specs[3]).find("--output run.lcmlog"), std::string::npos);
   const std::string player = joined(specs[4]);
-  for (const char* a : {"--dataset DATA", "--rate 0", "--lockstep", "--max-frames 7", "--fps 30",
-                       "--preload"}) {
+  for (const char* a :
+       {"--dataset DATA", "--rate 0", "--lockstep", "--max-frames 7", "--fps 30", "--preload"}) {
     EXPECT_NE(player.find(a), std::string::npos) << a << " in " << player;
   }
   EXPECT_EQ(specs[1].log_path, "/L/pplvo-frontend.log");
@@ -211,10 +211,10 @@ TEST(LaunchSpecs, CommandLines) {
   url = decideLcmUrl(o, nullptr, 4194304);
   ASSERT_TRUE(url.errors.empty());
   const std::string options = "?ttl=0&recv_buf_size=4194304";
-  ASSERT_EQ(url.routes, (std::vector<std::string>{
-                            "PPLVO_RGBD=udpm://239.255.76.67:7668" + options,
-                            "PPLVO_DEPTH_CGM=udpm://239.255.76.67:7669" + options,
-                            "PPLVO_DEPTH_FUSED=udpm://239.255.76.67:7670" + options}));
+  ASSERT_EQ(url.routes,
+            (std::vector<std::string>{"PPLVO_RGBD=udpm://239.255.76.67:7668" + options,
+                                      "PPLVO_DEPTH_CGM=udpm://239.255.76.67:7669" + options,
+                                      "PPLVO_DEPTH_FUSED=udpm://239.255.76.67:7670" + options}));
   for (const ProcessSpec& s : buildProcessSpecs(o, url, "/B", "/L")) {
     const std::string j = joined(s);
     for (const std::string& r : url.routes) {
@@ -643,8 +643,8 @@ TEST_F(LaunchProgram, StockKernelReceiveBufferSmallFrames) {
                      "--dataset " +
                      small.string() + " --output " + traj.string(),
                  *dir_, "small_launch");
-  std::printf("pplvo-launch --single-url, 208 KiB receive buffers, 160x120: %.1f s wall\n%s", l.seconds,
-              l.out.c_str());
+  std::printf("pplvo-launch --single-url, 208 KiB receive buffers, 160x120: %.1f s wall\n%s",
+              l.seconds, l.out.c_str());
   ASSERT_EQ(l.code, 0) << l.out << l.err;
   EXPECT_EQ(reportValue(l.out, "launch.lockstep_timeouts"), 0);
   EXPECT_EQ(reportValue(l.out, "launch.frames_not_received"), 0);

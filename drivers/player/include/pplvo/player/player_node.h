@@ -20,7 +20,7 @@ struct PlayerOptions {
   std::string dataset_dir;                     ///< --dataset (required)
   std::string camera_file;                     ///< --camera: YAML (or .xml) camera file
   std::string lcm_url;                         ///< --lcm-url; empty: $LCM_DEFAULT_URL
-  std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
+  std::vector<msgs::ChannelRoute> routes;      ///< --route: channels carried by other URLs
   std::string channel = channels::kRgbd;       ///< --channel
   std::string pose_channel = channels::kPose;  ///< --pose-channel (lockstep replies)
   std::string stream_channel = channels::kStream;

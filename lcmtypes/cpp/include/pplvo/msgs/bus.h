@@ -36,6 +36,8 @@ struct BusSubscription {
   std::vector<std::pair<lcm::LCM*, lcm::Subscription*>> parts;
 };
 
+/// Routes channels to LCM instances. Like lcm::LCM: subscribe and handle from one thread;
+/// publishing follows LCM's own rules for its instances.
 class Bus {
  public:
   /// Every channel on `lcm` (not owned).
@@ -54,7 +56,9 @@ class Bus {
                                                     const MessageT*),
                             Handler* handler) const {
     BusSubscription s;
-    for (lcm::LCM* l : receiveOn(channel)) s.parts.emplace_back(l, l->subscribe(channel, method, handler));
+    for (lcm::LCM* l : receiveOn(channel)) {
+      s.parts.emplace_back(l, l->subscribe(channel, method, handler));
+    }
     return s;
   }
   /// Raw subscription (undecoded bytes).
@@ -63,7 +67,9 @@ class Bus {
                             void (Handler::*method)(const lcm::ReceiveBuffer*, const std::string&),
                             Handler* handler) const {
     BusSubscription s;
-    for (lcm::LCM* l : receiveOn(channel)) s.parts.emplace_back(l, l->subscribe(channel, method, handler));
+    for (lcm::LCM* l : receiveOn(channel)) {
+      s.parts.emplace_back(l, l->subscribe(channel, method, handler));
+    }
     return s;
   }
   void unsubscribe(const BusSubscription& s) const;

@@ -17,7 +17,7 @@ namespace pplvo::logging {
 
 struct LoggerOptions {
   std::string lcm_url;                             ///< --lcm-url; empty: $LCM_DEFAULT_URL
-  std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
+  std::vector<msgs::ChannelRoute> routes;          ///< --route: channels carried by other URLs
   std::string output;                              ///< --output FILE.lcmlog (event log)
   bool force = false;                              ///< --force: overwrite an existing log
   std::string channels = "PPLVO_.*";               ///< --channels: LCM regex (whole name)
