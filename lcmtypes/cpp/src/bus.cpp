@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "pplvo/msgs/node_runtime.h"
@@ -107,15 +108,66 @@ int Bus::handleTimeout(int timeout_ms) const {
   return handled;
 }
 
+std::vector<ChannelRoute> parseRoutesVariable(const std::string& value,
+                                              std::vector<std::string>* errors) {
+  std::vector<ChannelRoute> routes;
+  size_t begin = 0;
+  while (begin <= value.size()) {
+    const size_t end = std::min(value.find(';', begin), value.size());
+    std::string entry = value.substr(begin, end - begin);
+    const size_t first = entry.find_first_not_of(" \t\n");
+    const size_t last = entry.find_last_not_of(" \t\n");
+    entry = first == std::string::npos ? "" : entry.substr(first, last - first + 1);
+    if (!entry.empty()) {
+      ChannelRoute r;
+      const std::string error = parseChannelRoute(entry, &r);
+      if (error.empty()) {
+        routes.push_back(r);
+      } else {
+        errors->push_back(std::string(kRoutesVariable) + ": " + error);
+      }
+    }
+    begin = end + 1;
+  }
+  return routes;
+}
+
+namespace {
+
+/// `explicit_routes` over those of the environment when the URL comes from there too.
+std::vector<ChannelRoute> effectiveRoutes(const std::string& default_url,
+                                          const std::vector<ChannelRoute>& explicit_routes) {
+  const char* env = default_url.empty() ? std::getenv(kRoutesVariable) : nullptr;
+  if (env == nullptr) return explicit_routes;
+  std::vector<std::string> errors;
+  std::vector<ChannelRoute> routes = parseRoutesVariable(env, &errors);
+  if (!errors.empty()) throw std::runtime_error(errors.front());
+  for (const ChannelRoute& r : explicit_routes) {
+    auto same = std::find_if(routes.begin(), routes.end(),
+                             [&](const ChannelRoute& o) { return o.channel == r.channel; });
+    if (same != routes.end()) {
+      *same = r;
+    } else {
+      routes.push_back(r);
+    }
+  }
+  return routes;
+}
+
+}  // namespace
+
 BusConnections::BusConnections(const std::string& default_url,
-                               const std::vector<ChannelRoute>& routes)
+                               const std::vector<ChannelRoute>& explicit_routes)
     : instances_([&] {
         std::vector<std::pair<std::string, std::unique_ptr<lcm::LCM>>> v;
-        v.emplace_back(default_url, openLcm(default_url));
+        // Keyed by the URL actually used, so that a route to the same URL shares the instance.
+        const char* env = std::getenv("LCM_DEFAULT_URL");
+        const std::string key = default_url.empty() && env != nullptr ? env : default_url;
+        v.emplace_back(key, openLcm(default_url));
         return v;
       }()),
       bus_(*instances_.front().second) {
-  for (const ChannelRoute& r : routes) {
+  for (const ChannelRoute& r : effectiveRoutes(default_url, explicit_routes)) {
     auto it = std::find_if(instances_.begin(), instances_.end(),
                            [&](const auto& i) { return i.first == r.url; });
     if (it == instances_.end()) {

@@ -1,7 +1,9 @@
 // msgs::Bus: channel routes over several LCM instances (memq:// here: one process).
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <lcm/lcm-cpp.hpp>
+#include <optional>
 #include <pplvo_msgs/node_status_t.hpp>
 #include <string>
 #include <vector>
@@ -137,6 +139,59 @@ TEST(Bus, SpinHandlesEveryInstanceUntilDone) {
       bus, [&] { return r.channels.size() >= 6; }, [&] { ++periodic; }, 10.0);
   EXPECT_EQ(r.channels.size(), 6u);
   EXPECT_EQ(periodic, 1);  // once at the end
+}
+
+/// Sets an environment variable for the scope of one test.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    ::setenv(name, value, 1);
+  }
+  ~ScopedEnv() {
+    if (old_) {
+      ::setenv(name_, old_->c_str(), 1);
+    } else {
+      ::unsetenv(name_);
+    }
+  }
+
+ private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
+
+TEST(BusConnections, RoutesFromTheEnvironmentOnlyWithTheEnvironmentsUrl) {
+  std::vector<std::string> errors;
+  const auto parsed = parseRoutesVariable(" A=memq://?a=1 ;;B=memq://?b=1;bad", &errors);
+  ASSERT_EQ(parsed.size(), 2u);
+  EXPECT_EQ(parsed[0].channel, "A");
+  EXPECT_EQ(parsed[0].url, "memq://?a=1");
+  EXPECT_EQ(parsed[1].channel, "B");
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find(kRoutesVariable), std::string::npos);
+
+  ScopedEnv url("LCM_DEFAULT_URL", "memq://");
+  ScopedEnv routes(kRoutesVariable, "FRAMES=memq://?frames=1;MAPS=memq://?maps=1");
+  {
+    // URL and routes from the environment; an explicit route overrides one of them.
+    BusConnections c("", {{"MAPS", "memq://"}});
+    EXPECT_EQ(c.bus().instanceCount(), 2u);
+    EXPECT_NE(&c.bus().instanceFor("FRAMES"), &c.defaultInstance());
+    EXPECT_EQ(&c.bus().instanceFor("MAPS"), &c.defaultInstance());  // same URL: shared
+  }
+  {
+    // An explicit URL (a replay, say) is never mixed with the environment's bus.
+    BusConnections c("memq://", {});
+    EXPECT_EQ(c.bus().instanceCount(), 1u);
+  }
+  ScopedEnv bad(kRoutesVariable, "FRAMES");
+  try {
+    BusConnections c("", {});
+    FAIL() << "a bad variable must be refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(kRoutesVariable), std::string::npos) << e.what();
+  }
 }
 
 TEST(BusConnections, SameUrlSharesOneInstance) {

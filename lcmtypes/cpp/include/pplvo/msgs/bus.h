@@ -102,13 +102,25 @@ class Bus {
   std::shared_ptr<Routing> routing_;
 };
 
+/// The environment variable with the routes of the bus, as LCM_DEFAULT_URL is its URL:
+/// "CHANNEL=URL;CHANNEL=URL..." (scripts/isolated.sh sets both).
+inline constexpr const char* kRoutesVariable = "PPLVO_LCM_ROUTES";
+
+/// Parses a kRoutesVariable value (';'-separated "CHANNEL=URL", blanks around entries
+/// ignored); errors are appended to `errors`.
+std::vector<ChannelRoute> parseRoutesVariable(const std::string& value,
+                                              std::vector<std::string>* errors);
+
 /// The LCM instances of one process: the default URL and one instance per distinct routed
 /// URL, opened together and closed together.
 class BusConnections {
  public:
-  /// Opens `default_url` (empty: $LCM_DEFAULT_URL) and each route's URL; a route whose URL is
-  /// the default's, or another route's, shares that instance. Throws std::runtime_error naming
-  /// the URL that failed.
+  /// Opens `default_url` and each route's URL; a route whose URL is the default's, or another
+  /// route's, shares that instance. An empty `default_url` takes the bus from the environment:
+  /// $LCM_DEFAULT_URL and the routes of $PPLVO_LCM_ROUTES (`routes` override those of the
+  /// same channel). An explicit URL ignores $PPLVO_LCM_ROUTES, so that e.g. a file:// replay
+  /// is never mixed with a live bus. Throws std::runtime_error naming the URL or the variable
+  /// that failed.
   BusConnections(const std::string& default_url, const std::vector<ChannelRoute>& routes);
   BusConnections(const BusConnections&) = delete;
   BusConnections& operator=(const BusConnections&) = delete;
