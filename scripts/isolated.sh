@@ -4,8 +4,8 @@
 # network. Usage: scripts/isolated.sh COMMAND [ARGS...]
 # Inside, LCM_DEFAULT_URL defaults to udpm://239.255.76.67:7667?ttl=0 (loopback only) with
 # recv_buf_size = min(net.core.rmem_max, 16 MiB) (LCM's default, the kernel's 208 KiB, loses
-# the fragments of 640x480 frames), and PPLVO_LCM_ROUTES puts the frame channels on ports
-# 7668-7670, as pplvo-launch does (docs/channels.md: only their subscribers receive them).
+# the fragments of 640x480 frames), and PPLVO_LCM_ROUTES puts the per-frame data channels on
+# ports 7668-7671, as pplvo-launch does (docs/channels.md: only their subscribers receive them).
 # LCM_DEFAULT_URL_ISOLATED replaces the URL (and then no routes are set unless
 # PPLVO_LCM_ROUTES is given).
 set -euo pipefail
@@ -28,7 +28,10 @@ else
   group="udpm://239.255.76.67"
   export LCM_DEFAULT_URL="$group:7667$options"
   if [ -z "${PPLVO_LCM_ROUTES+set}" ]; then
-    export PPLVO_LCM_ROUTES="PPLVO_RGBD=$group:7668$options;PPLVO_DEPTH_CGM=$group:7669$options;PPLVO_DEPTH_FUSED=$group:7670$options"
+    routes="PPLVO_RGBD=$group:7668$options;PPLVO_DEPTH_CGM=$group:7669$options"
+    routes="$routes;PPLVO_DEPTH_FUSED=$group:7670$options"
+    routes="$routes;PPLVO_FEATURES=$group:7671$options;PPLVO_FEATURES_3D=$group:7671$options"
+    export PPLVO_LCM_ROUTES="$routes"
   fi
 fi
 exec "$@"

@@ -61,10 +61,11 @@ calib_params.xml) as pplvo_msgs.rgbd_frame_t.
   --jpeg-quality Q         JPEG quality 1..100 (default 90)
   --depth-encoding E       raw | zlib | png (default raw)
   --loop                   start over at the end (seq keeps counting; utime keeps increasing)
-  --preload                decode every frame (up to --max-frames) before publishing the first:
-                           no PNG decoding competes with the pipeline while it runs, as with a
-                           camera (memory: width x height x 5 bytes per frame)
-  --preload-max-mb N       refuse --preload beyond N MiB of decoded frames (4096)
+  --preload                decode frames (up to --max-frames and --preload-max-mb) before
+                           publishing the first: no PNG decoding competes with the pipeline
+                           while they play, as with a camera (width x height x 5 bytes each);
+                           frames beyond the bound are decoded while playing
+  --preload-max-mb N       memory for --preload, MiB (2048)
   --progress / --no-progress   progress line on stderr (default: when stderr is a terminal)
   -h, --help               this text
 
@@ -313,10 +314,14 @@ void PlayerNode::runLoop(PlayerResult& result) {
     f.load_ms = watch.elapsedMs();
     return f;
   };
-  // --preload: every frame decoded now, then served from memory (the end marker or a load
-  // error last, so that it surfaces at the same point of the stream as without --preload).
+  // --preload: frames decoded now, up to --preload-max-mb, then served from memory; the rest
+  // (if any) is decoded while playing, from `resume_index` on. When everything fitted, the
+  // end marker or a load error is the last entry, so that it surfaces at the same point of the
+  // stream as without --preload.
   std::vector<Fetched> preloaded;
   size_t next_preloaded = 0;
+  bool preloaded_all = false;
+  size_t resume_index = start;
   if (options_.preload) {
     ScopedStageTimer t(timings_, "preload");
     const int64_t limit_bytes = options_.preload_max_mb << 20;
@@ -329,25 +334,33 @@ void PlayerNode::runLoop(PlayerResult& result) {
         bytes += static_cast<int64_t>(raw.bgr.total() * raw.bgr.elemSize() +
                                       raw.depth_units.total() * raw.depth_units.elemSize());
         ++frames;
+        resume_index = f.item->index + 1;
       }
       preloaded.push_back(std::move(f));
-      if (last || (options_.max_frames > 0 && frames >= options_.max_frames)) break;
-      if (bytes > limit_bytes) {
-        throw std::runtime_error("--preload: " + std::to_string(frames) + " decoded frames take " +
-                                 std::to_string(bytes >> 20) + " MiB, more than --preload-max-mb " +
-                                 std::to_string(options_.preload_max_mb) +
-                                 "; use --max-frames or play without --preload");
+      if (last || (options_.max_frames > 0 && frames >= options_.max_frames)) {
+        preloaded_all = true;
+        break;
+      }
+      if (bytes >= limit_bytes) {
+        std::fprintf(stderr,
+                     "[%s] preloaded %lld frames (%lld MiB, --preload-max-mb); the rest is "
+                     "decoded while playing\n",
+                     options_.node_name.c_str(), static_cast<long long>(frames),
+                     static_cast<long long>(bytes >> 20));
+        break;
       }
     }
   }
   std::future<Fetched> pending;
   auto fetchNext = [&] {
-    if (!options_.preload) pending = std::async(std::launch::async, fetch);
+    // Frames left in memory, or nothing beyond them: no decoding.
+    if (next_preloaded < preloaded.size() || preloaded_all) return;
+    pending = std::async(std::launch::async, fetch);
   };
   auto takeFetched = [&]() -> Fetched {
-    if (!options_.preload) return pending.get();
     if (next_preloaded < preloaded.size()) return preloaded[next_preloaded++];
-    return Fetched{};  // the end
+    if (!pending.valid()) return Fetched{};  // interrupted while preloading: the end
+    return pending.get();
   };
   fetchNext();
 
@@ -372,11 +385,9 @@ void PlayerNode::runLoop(PlayerResult& result) {
     }
     if (!fetched.item) {
       if (!options_.loop || published_this_pass == 0) break;
-      if (options_.preload) {
-        next_preloaded = 0;
-      } else {
-        reader.seek(start);
-      }
+      next_preloaded = 0;
+      // Without --preload from the start; with it after the frames held in memory.
+      reader.seek(resume_index);
       fetchNext();
       loop_offset_us += pass_us;
       published_this_pass = 0;

@@ -302,8 +302,9 @@ TEST(Player, RealTimePacingFollowsStampsAndFps) {
 }
 
 TEST(Player, LoopKeepsSeqAndUtimeIncreasing) {
-  for (const bool preload : {false, true}) {
-    SCOPED_TRACE(preload ? "--preload" : "streaming");
+  // Streaming, all 3 frames of a pass preloaded, and 2 of 3 preloaded (bound of 2 MiB).
+  for (const int64_t preload_mb : {int64_t{0}, int64_t{2048}, int64_t{2}}) {
+    SCOPED_TRACE("--preload-max-mb " + std::to_string(preload_mb));
     lcm::LCM lcm("memq://");
     Recorder rec(lcm);
     rec.keep_images = true;
@@ -311,7 +312,8 @@ TEST(Player, LoopKeepsSeqAndUtimeIncreasing) {
     o.start = 248;  // 3 frames per pass
     o.loop = true;
     o.max_frames = 7;
-    o.preload = preload;
+    o.preload = preload_mb > 0;
+    if (o.preload) o.preload_max_mb = preload_mb;
     PlayerNode node(o, lcm);
     const auto r = node.run();
     ASSERT_EQ(rec.frames.size(), 7u);
@@ -320,7 +322,9 @@ TEST(Player, LoopKeepsSeqAndUtimeIncreasing) {
       EXPECT_EQ(rec.frames[i].seq, rec.frames[i - 1].seq + 1);
       EXPECT_GT(rec.frames[i].utime, rec.frames[i - 1].utime);
     }
-    EXPECT_EQ(rec.frames[3].stamp, "248");
+    for (size_t i = 0; i < rec.frames.size(); ++i) {
+      EXPECT_EQ(rec.frames[i].stamp, std::to_string(248 + i % 3)) << i;
+    }
     // Each pass publishes the same pixels (preloaded frames are served again, unchanged).
     EXPECT_EQ(rec.frames[3].rgb.data, rec.frames[0].rgb.data);
     EXPECT_EQ(rec.frames[4].depth.data, rec.frames[1].depth.data);
@@ -331,18 +335,29 @@ TEST(Player, LoopKeepsSeqAndUtimeIncreasing) {
   }
 }
 
-TEST(Player, PreloadIsBoundedAndClearWhenTooLarge) {
+TEST(Player, PreloadBeyondItsBoundDecodesTheRestWhilePlaying) {
   lcm::LCM lcm("memq://");
   Recorder rec(lcm);
+  rec.keep_images = true;
   PlayerOptions o = baseOptions();
   o.preload = true;
-  o.preload_max_mb = 2;  // a 640x480 frame decodes to 1.5 MiB
+  o.preload_max_mb = 2;  // a 640x480 frame decodes to 1.5 MiB: 2 frames held, then streaming
+  o.max_frames = 6;
   PlayerNode node(o, lcm);
   const auto r = node.run();
-  EXPECT_TRUE(r.failed);
-  EXPECT_NE(r.error.find("--preload-max-mb 2"), std::string::npos) << r.error;
-  EXPECT_EQ(r.published, 0);  // refused before the first frame went out
-  EXPECT_TRUE(rec.frames.empty());
+  EXPECT_FALSE(r.failed) << r.error;
+  ASSERT_EQ(rec.frames.size(), 6u);
+  for (size_t i = 0; i < rec.frames.size(); ++i) {
+    EXPECT_EQ(rec.frames[i].seq, static_cast<int64_t>(i));
+    EXPECT_EQ(rec.frames[i].stamp, std::to_string(i));
+  }
+  for (const int i : {1, 4}) {  // one preloaded, one decoded while playing
+    const cv::Mat png =
+        cv::imread(iclDir() + "/depth/" + std::to_string(i) + ".png", cv::IMREAD_UNCHANGED);
+    EXPECT_EQ(cv::norm(msgs::decodeImage(rec.frames[static_cast<size_t>(i)].depth), png,
+                       cv::NORM_INF),
+              0.0);
+  }
   const auto parsed =
       player::parsePlayerArgs({"--dataset", "D", "--preload", "--preload-max-mb", "100"});
   EXPECT_TRUE(parsed.errors.empty());

@@ -89,8 +89,13 @@ size_t Bus::instanceCount() const {
 
 int Bus::handleTimeout(int timeout_ms) const {
   const std::vector<lcm::LCM*>& receiving = routing_->receiving;
-  // Nothing subscribed: as before routes existed, the default instance (memq:// must be
-  // handled for its queue to drain).
+  if (receiving.empty() && !routing_->routes.empty()) {
+    // Nothing subscribed on a routed bus (a free-running player): just wait, joining no group.
+    ::poll(nullptr, 0, timeout_ms);
+    return 0;
+  }
+  // Nothing subscribed on one instance: handle it anyway, as before routes existed (in one
+  // process over memq:// the player's handling dispatches every node's messages).
   if (receiving.size() <= 1) {
     return (receiving.empty() ? routing_->fallback : receiving.front())->handleTimeout(timeout_ms);
   }

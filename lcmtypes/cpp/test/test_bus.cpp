@@ -1,6 +1,7 @@
 // msgs::Bus: channel routes over several LCM instances (memq:// here: one process).
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <lcm/lcm-cpp.hpp>
 #include <optional>
@@ -120,6 +121,27 @@ TEST(Bus, InstancesOnlyPublishedOnAreNotWaitedOn) {
   EXPECT_EQ(drain(bus), 1);
   EXPECT_TRUE(direct.channels.empty());   // the bus never handled that instance
   EXPECT_EQ(frames.handleTimeout(0), 1);  // still queued there
+}
+
+TEST(Bus, RoutedBusWithoutSubscriptionsOnlyWaits) {
+  lcm::LCM main_lcm("memq://"), frames("memq://");
+  Bus bus(main_lcm);
+  bus.route("FRAMES", frames);
+  Received direct;
+  main_lcm.subscribe("STATUS", &Received::onStatus, &direct);  // behind the bus's back
+  const auto m = status();
+  bus.publish("STATUS", &m);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(bus.handleTimeout(30), 0);  // waited, handled nothing, joined nothing
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(25));
+  EXPECT_TRUE(direct.channels.empty());
+  EXPECT_EQ(main_lcm.handleTimeout(0), 1);  // still queued
+
+  // Without routes the one instance is handled, as lcm::LCM would (pplvo-run's player).
+  Bus single(main_lcm);
+  bus.publish("STATUS", &m);
+  EXPECT_EQ(single.handleTimeout(0), 1);
+  EXPECT_EQ(direct.channels.size(), 2u);
 }
 
 TEST(Bus, SpinHandlesEveryInstanceUntilDone) {

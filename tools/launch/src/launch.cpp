@@ -44,9 +44,9 @@ std::string launchUsage() {
          "  --summary FILE          logger's YAML run summary\n"
          "  --lcm-url URL           udpm URL (default $LCM_DEFAULT_URL; with --isolated\n"
          "                          udpm://239.255.76.67:7667?ttl=0)\n"
-         "  --preload               player decodes every frame before publishing the first\n"
+         "  --preload, --no-preload player decodes the frames before publishing the first\n"
          "                          (no PNG decoding competes with the pipeline, as with a\n"
-         "                          camera)\n"
+         "                          camera; up to 2 GiB); default: on unless --lockstep\n"
          "  --single-url            frame channels on the main URL too (default: RGB-D\n"
          "                          frames and depth maps each on the next port, joined only\n"
          "                          by their subscribers)\n"
@@ -199,8 +199,11 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
       flag(&o.isolated);
     else if (key == "--single-url")
       flag(&o.single_url);
-    else if (key == "--preload")
-      flag(&o.preload);
+    else if (key == "--preload" || key == "--no-preload") {
+      bool on = false;
+      flag(&on);
+      o.preload = key == "--preload";
+    }
     else if (key == "--bin-dir")
       next(&o.bin_dir);
     else if (key == "--node-logs")
@@ -363,17 +366,22 @@ std::vector<std::string> frameChannelRoutes(const std::string& udpm_url, std::st
     *error = "frame channel routes need a udpm URL, not '" + udpm_url + "'";
     return {};
   }
-  const char* channels[] = {"PPLVO_RGBD", "PPLVO_DEPTH_CGM", "PPLVO_DEPTH_FUSED"};
-  if (u.port + 3 > 65535) {
+  // Channel and port offset; both feature channels go to the estimator (one group).
+  const std::pair<const char*, int> channels[] = {{"PPLVO_RGBD", 1},
+                                                  {"PPLVO_DEPTH_CGM", 2},
+                                                  {"PPLVO_DEPTH_FUSED", 3},
+                                                  {"PPLVO_FEATURES", 4},
+                                                  {"PPLVO_FEATURES_3D", 4}};
+  if (u.port + 4 > 65535) {
     *error = "port " + std::to_string(u.port) + " leaves no room for the frame channels' ports";
     return {};
   }
   const size_t q = udpm_url.find('?');
   const std::string options = q == std::string::npos ? "" : udpm_url.substr(q);
   std::vector<std::string> routes;
-  for (int i = 0; i < 3; ++i) {
-    routes.push_back(std::string(channels[i]) + "=udpm://" + u.address + ":" +
-                     std::to_string(u.port + 1 + i) + options);
+  for (const auto& [channel, offset] : channels) {
+    routes.push_back(std::string(channel) + "=udpm://" + u.address + ":" +
+                     std::to_string(u.port + offset) + options);
   }
   return routes;
 }
@@ -421,7 +429,7 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const UrlDeci
   if (o.max_frames > 0)
     pl.args.insert(pl.args.end(), {"--max-frames", std::to_string(o.max_frames)});
   if (o.fps > 0) pl.args.insert(pl.args.end(), {"--fps", fmtDouble(o.fps)});
-  if (o.preload) pl.args.push_back("--preload");
+  if (o.preload.value_or(!o.lockstep)) pl.args.push_back("--preload");
   if (o.compress) {
     pl.args.insert(pl.args.end(), {"--rgb-encoding", "png", "--depth-encoding", "zlib"});
   }

@@ -80,6 +80,11 @@ TEST(LaunchArgs, LockstepDefaultsToFullSpeedAndValuesParse) {
   EXPECT_EQ(p.options.rate, 2.0);
   p = parseLaunchArgs({"--dataset", "D", "--output", "T"});
   EXPECT_EQ(p.options.rate, 1.0);
+  EXPECT_FALSE(p.options.preload.has_value());  // decided by the mode
+  p = parseLaunchArgs({"--dataset", "D", "--output", "T", "--no-preload", "--preload=x"});
+  EXPECT_EQ(p.errors.size(), 1u);  // a flag takes no value
+  p = parseLaunchArgs({"--dataset", "D", "--output", "T", "--preload", "--no-preload"});
+  EXPECT_EQ(p.options.preload, std::optional<bool>(false));  // the last one wins
   EXPECT_GT(p.options.timeout_s, 0.0);  // always bounded
   p = parseLaunchArgs({"--dataset", "D", "--output", "T", "--test-kill", "nobody:3"});
   EXPECT_EQ(p.errors.size(), 1u);
@@ -214,7 +219,16 @@ TEST(LaunchSpecs, CommandLines) {
   ASSERT_EQ(url.routes,
             (std::vector<std::string>{"PPLVO_RGBD=udpm://239.255.76.67:7668" + options,
                                       "PPLVO_DEPTH_CGM=udpm://239.255.76.67:7669" + options,
-                                      "PPLVO_DEPTH_FUSED=udpm://239.255.76.67:7670" + options}));
+                                      "PPLVO_DEPTH_FUSED=udpm://239.255.76.67:7670" + options,
+                                      "PPLVO_FEATURES=udpm://239.255.76.67:7671" + options,
+                                      "PPLVO_FEATURES_3D=udpm://239.255.76.67:7671" + options}));
+  // The player preloads when free-running, not in lockstep, unless told.
+  o.preload.reset();
+  EXPECT_EQ(joined(buildProcessSpecs(o, url, "/B", "/L")[4]).find("--preload"), std::string::npos);
+  o.lockstep = false;
+  EXPECT_NE(joined(buildProcessSpecs(o, url, "/B", "/L")[4]).find("--preload"), std::string::npos);
+  o.preload = false;
+  EXPECT_EQ(joined(buildProcessSpecs(o, url, "/B", "/L")[4]).find("--preload"), std::string::npos);
   for (const ProcessSpec& s : buildProcessSpecs(o, url, "/B", "/L")) {
     const std::string j = joined(s);
     for (const std::string& r : url.routes) {
@@ -225,13 +239,16 @@ TEST(LaunchSpecs, CommandLines) {
 
 TEST(LaunchUrl, FrameChannelRoutesNeedFreePorts) {
   std::string error;
-  EXPECT_TRUE(frameChannelRoutes("udpm://239.255.76.67:65534", &error).empty());
-  EXPECT_NE(error.find("65534"), std::string::npos);
+  EXPECT_TRUE(frameChannelRoutes("udpm://239.255.76.67:65532", &error).empty());
+  EXPECT_NE(error.find("65532"), std::string::npos);
+  error.clear();
+  EXPECT_EQ(frameChannelRoutes("udpm://239.255.76.67:65531", &error).size(), 5u);
+  EXPECT_TRUE(error.empty());
   error.clear();
   EXPECT_TRUE(frameChannelRoutes("memq://", &error).empty());
   EXPECT_FALSE(error.empty());
   LaunchOptions o;
-  o.lcm_url = "udpm://239.255.76.67:65534?ttl=0";
+  o.lcm_url = "udpm://239.255.76.67:65532?ttl=0";
   const UrlDecision d = decideLcmUrl(o, nullptr);
   ASSERT_EQ(d.errors.size(), 1u);
   EXPECT_NE(d.errors[0].find("--single-url"), std::string::npos);

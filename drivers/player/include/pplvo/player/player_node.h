@@ -46,11 +46,11 @@ struct PlayerOptions {
   int8_t depth_encoding = pplvo_msgs::image_t::ENCODING_RAW_U16;  ///< --depth-encoding raw|zlib|png
   int jpeg_quality = 90;                                          ///< --jpeg-quality
   bool loop = false;                                              ///< --loop
-  /// --preload: decode every frame (up to --max-frames) before publishing the first, so that
-  /// PNG decoding does not compete with the pipeline for the CPU (a camera delivers decoded
-  /// frames). Refused beyond `preload_max_mb` of decoded images.
+  /// --preload: decode frames (up to --max-frames) before publishing the first, so that PNG
+  /// decoding does not compete with the pipeline for the CPU (a camera delivers decoded
+  /// frames); beyond `preload_max_mb` of decoded images the rest is decoded while playing.
   bool preload = false;
-  int64_t preload_max_mb = 4096;  ///< --preload-max-mb
+  int64_t preload_max_mb = 2048;  ///< --preload-max-mb
   bool progress = false;         ///< progress line on stderr (main: isatty)
   double status_period_s = 1.0;  ///< node_status_t period
   /// A frame later than this behind schedule re-anchors the clock (no catch-up burst), s.

@@ -86,7 +86,8 @@ class Bus {
   /// handles what is ready (one message per ready instance). Returns the number handled, 0 on
   /// timeout, < 0 on error (as lcm::LCM::handleTimeout; EINTR is an error, as there).
   /// Instances that were only published on are never waited on: on udpm, asking for their
-  /// file descriptor would join their multicast group.
+  /// file descriptor would join their multicast group. With routes and no subscription at all
+  /// it only waits; without routes it handles the one instance as lcm::LCM would.
   int handleTimeout(int timeout_ms) const;
 
   /// Number of distinct instances (1 without routes).

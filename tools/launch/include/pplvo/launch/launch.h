@@ -52,7 +52,9 @@ struct LaunchOptions {
   std::string test_kill;             ///< --test-kill NODE:POSES: SIGKILL NODE after POSES poses
   bool compress = false;             ///< --compress: lossless compressed images and depth maps
   bool single_url = false;           ///< --single-url: frame channels on the main URL too
-  bool preload = false;              ///< --preload: player decodes every frame before the first
+  /// --preload / --no-preload: the player decodes the frames before publishing the first
+  /// (default: on when free-running, where decoding would compete with the pipeline).
+  std::optional<bool> preload;
   bool quiet = false;                ///< --quiet: report only
 };
 
@@ -80,7 +82,7 @@ LcmUrl parseLcmUrl(const std::string& url);
 /// URL: traffic stays on lo of the private namespace); otherwise a ttl > 0 gives a warning.
 struct UrlDecision {
   std::string url;                    ///< URL handed to every process
-  /// "CHANNEL=URL" for each frame-sized channel (see frameChannelRoutes); empty with
+  /// "CHANNEL=URL" for each per-frame data channel (see frameChannelRoutes); empty with
   /// --single-url.
   std::vector<std::string> routes;
   bool compress = false;              ///< the receive buffers are too small for raw frames
@@ -93,12 +95,13 @@ struct UrlDecision {
 /// `rmem_max_bytes` < 0: unknown, the URL is left alone.
 UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url,
                          int64_t rmem_max_bytes = -1);
-/// The frame-sized channels (PPLVO_RGBD, PPLVO_DEPTH_CGM, PPLVO_DEPTH_FUSED), each on the
-/// next port of `udpm_url`'s group (port + 1, + 2, + 3), with the same options, as
-/// "CHANNEL=URL". Only the processes that subscribe to a channel join its port: the estimator,
-/// player, logger and launcher then never receive the ~6.5 MB of images and depth maps of a
-/// 640x480 frame, nor the depth filter its own maps. Empty with an error when the ports would
-/// pass 65535.
+/// The per-frame data channels on ports of their own in `udpm_url`'s group, with the same
+/// options, as "CHANNEL=URL": PPLVO_RGBD on port + 1, PPLVO_DEPTH_CGM + 2, PPLVO_DEPTH_FUSED
+/// + 3, PPLVO_FEATURES and PPLVO_FEATURES_3D + 4. Only the processes that subscribe to a
+/// channel join its port: the estimator, player, logger and launcher then never receive the
+/// ~6.5 MB of images and depth maps of a 640x480 frame, nor the depth filter its own maps or
+/// the ~290 KB of features; the main URL keeps poses, statuses and stream events. Empty with
+/// an error when the ports would pass 65535.
 std::vector<std::string> frameChannelRoutes(const std::string& udpm_url, std::string* error);
 
 /// net.core.rmem_max of the current network namespace (-1 if unreadable).
