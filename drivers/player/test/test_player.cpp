@@ -354,9 +354,9 @@ TEST(Player, PreloadBeyondItsBoundDecodesTheRestWhilePlaying) {
   for (const int i : {1, 4}) {  // one preloaded, one decoded while playing
     const cv::Mat png =
         cv::imread(iclDir() + "/depth/" + std::to_string(i) + ".png", cv::IMREAD_UNCHANGED);
-    EXPECT_EQ(cv::norm(msgs::decodeImage(rec.frames[static_cast<size_t>(i)].depth), png,
-                       cv::NORM_INF),
-              0.0);
+    EXPECT_EQ(
+        cv::norm(msgs::decodeImage(rec.frames[static_cast<size_t>(i)].depth), png, cv::NORM_INF),
+        0.0);
   }
   const auto parsed =
       player::parsePlayerArgs({"--dataset", "D", "--preload", "--preload-max-mb", "100"});

@@ -200,11 +200,10 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
     else if (key == "--single-url")
       flag(&o.single_url);
     else if (key == "--preload" || key == "--no-preload") {
-      bool on = false;
-      flag(&on);
+      bool given = false;
+      flag(&given);  // refuses "--preload=x"
       o.preload = key == "--preload";
-    }
-    else if (key == "--bin-dir")
+    } else if (key == "--bin-dir")
       next(&o.bin_dir);
     else if (key == "--node-logs")
       next(&o.node_log_dir);
