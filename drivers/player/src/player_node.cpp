@@ -337,10 +337,12 @@ void PlayerNode::runLoop(PlayerResult& result) {
         resume_index = f.item->index + 1;
       }
       preloaded.push_back(std::move(f));
-      if (last || (options_.max_frames > 0 && frames >= options_.max_frames)) {
+      if (last) {
         preloaded_all = true;
         break;
       }
+      // Enough for --max-frames (unless one fails to encode: then the rest streams).
+      if (options_.max_frames > 0 && frames >= options_.max_frames) break;
       if (bytes >= limit_bytes) {
         std::fprintf(stderr,
                      "[%s] preloaded %lld frames (%lld MiB, --preload-max-mb); the rest is "
