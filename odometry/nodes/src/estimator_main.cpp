@@ -24,7 +24,7 @@ void usage() {
       "  --features-3d-channel NAME in, features_t stage 3D (PPLVO_FEATURES_3D)\n"
       "  --pose-channel NAME        out, pose_t (PPLVO_POSE)\n"
       "  --status-channel NAME      out, node_status_t (PPLVO_STATUS)\n"
-      "  --max-waiting N            frames waiting for their reference (3)\n"
+      "  --max-waiting N            frames waiting for their reference (5)\n"
       "pipeline options (the odometry section is used):\n%s",
       pplvo::msgs::kRouteUsage, pplvo::pipeline::pipelineOptionsUsage());
 }

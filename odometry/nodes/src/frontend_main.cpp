@@ -30,7 +30,7 @@ void usage() {
       "  --no-extract-ahead         extract 2D features in the message handler, not on a\n"
       "                             worker thread while the previous frame is lifted\n"
       "  --max-unlifted N           frames extracted but not yet lifted beyond which a new\n"
-      "                             frame is dropped before extraction (3; 0 = never)\n"
+      "                             frame is dropped before extraction (5; 0 = never)\n"
       "pipeline options (the frontend section is used):\n%s",
       pplvo::msgs::kRouteUsage, pplvo::pipeline::pipelineOptionsUsage());
 }

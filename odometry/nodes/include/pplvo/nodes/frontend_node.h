@@ -49,9 +49,10 @@ struct FrontendNodeOptions {
   bool extract_ahead = true;
   /// Frames extracted but not yet lifted (their fused depth has not come) beyond which a new
   /// frame is dropped before extraction, counted: the loop through the estimator and the depth
-  /// filter is behind, and the estimator would drop it anyway. 0 = never. 3 never drops in
-  /// lockstep with up to 3 frames in flight.
-  int max_unlifted = 3;
+  /// filter is behind, and the estimator would drop it anyway. 0 = never. Never drops in
+  /// lockstep with up to max_unlifted frames in flight; 5 absorbs a loop late by a few frame
+  /// periods at 30 Hz (fewer drops than 3, docs/launch.md) and bounds the latency to ~170 ms.
+  int max_unlifted = 5;
   pipeline::FrontendOptions frontend;
 };
 
