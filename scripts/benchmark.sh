@@ -38,18 +38,9 @@ mkdir -p "$out"
 
 # Sequences: name -> folder; ICL-NUIM stamps are frame indices (30 Hz).
 declare -a names dirs fpss
-if [ ! -f "$out/synth_room/groundtruth.txt" ]; then
-  "$bin/pplvo-synth" --output "$out/synth_room" --frames "$synth_frames" --seed 1 >/dev/null
-fi
-names+=(synth_room); dirs+=("$out/synth_room"); fpss+=(0)
-for d in "$shared"/*/; do
-  [ -f "$d/groundtruth.txt" ] || continue
-  n="$(basename "$d")"
-  fps=0
-  # Integer stamps in the first data line of groundtruth.txt: frame indices at 30 Hz.
-  if awk '!/^#/ && NF { exit !($1 ~ /^[0-9]+$/) }' "$d/groundtruth.txt"; then fps=30; fi
-  names+=("$n"); dirs+=("${d%/}"); fpss+=("$fps")
-done
+# shellcheck source=benchmark_sequences.sh
+. "$here/scripts/benchmark_sequences.sh"
+benchmark_sequences "$bin" "$out/synth_room" "$synth_frames" "$shared"
 
 # Configurations: label | pplvo-run arguments (the peer rows are handled separately).
 configs=(

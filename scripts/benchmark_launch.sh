@@ -39,17 +39,9 @@ out="${out:-$build/benchmark_launch}"
 mkdir -p "$out"
 
 declare -a names dirs fpss
-if [ ! -f "$build/benchmark/synth_room/groundtruth.txt" ]; then
-  mkdir -p "$build/benchmark"
-  "$bin/pplvo-synth" --output "$build/benchmark/synth_room" --frames 150 --seed 1 >/dev/null
-fi
-names+=(synth_room); dirs+=("$build/benchmark/synth_room"); fpss+=(0)
-for d in "$shared"/*/; do
-  [ -f "$d/groundtruth.txt" ] || continue
-  fps=0
-  if awk '!/^#/ && NF { exit !($1 ~ /^[0-9]+$/) }' "$d/groundtruth.txt"; then fps=30; fi
-  names+=("$(basename "$d")"); dirs+=("${d%/}"); fpss+=("$fps")
-done
+# shellcheck source=benchmark_sequences.sh
+. "$here/scripts/benchmark_sequences.sh"
+benchmark_sequences "$bin" "$build/benchmark/synth_room" 150 "$shared"
 
 value() { awk -v k="$1" '$1 == k":" { print $2; exit }' "$2"; }
 table="$out/table.md"

@@ -27,18 +27,27 @@ std::string parseChannelRoute(const std::string& text, ChannelRoute* route) {
   return "";
 }
 
+namespace {
+
+/// Adds `route`, replacing an earlier route of the same channel (the later one wins).
+void setRoute(std::vector<ChannelRoute>* routes, const ChannelRoute& route) {
+  auto same = std::find_if(routes->begin(), routes->end(),
+                           [&](const ChannelRoute& o) { return o.channel == route.channel; });
+  if (same != routes->end()) {
+    *same = route;
+  } else {
+    routes->push_back(route);
+  }
+}
+
+}  // namespace
+
 ArgParser& addRouteOption(ArgParser& parser, std::vector<ChannelRoute>* routes) {
   return parser.option("--route", [routes](const std::string& text) -> std::string {
     ChannelRoute r;
     const std::string error = parseChannelRoute(text, &r);
     if (!error.empty()) return "--route: " + error;
-    auto same = std::find_if(routes->begin(), routes->end(),
-                             [&](const ChannelRoute& o) { return o.channel == r.channel; });
-    if (same != routes->end()) {
-      *same = r;
-    } else {
-      routes->push_back(r);
-    }
+    setRoute(routes, r);
     return "";
   });
 }
@@ -147,15 +156,7 @@ std::vector<ChannelRoute> effectiveRoutes(const std::string& default_url,
   std::vector<std::string> errors;
   std::vector<ChannelRoute> routes = parseRoutesVariable(env, &errors);
   if (!errors.empty()) throw std::runtime_error(errors.front());
-  for (const ChannelRoute& r : explicit_routes) {
-    auto same = std::find_if(routes.begin(), routes.end(),
-                             [&](const ChannelRoute& o) { return o.channel == r.channel; });
-    if (same != routes.end()) {
-      *same = r;
-    } else {
-      routes.push_back(r);
-    }
-  }
+  for (const ChannelRoute& r : explicit_routes) setRoute(&routes, r);
   return routes;
 }
 

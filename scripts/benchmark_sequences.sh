@@ -1,0 +1,21 @@
+# Sourced by scripts/benchmark.sh and scripts/benchmark_launch.sh: the benchmark's sequences.
+#   benchmark_sequences BIN SYNTH_DIR SYNTH_FRAMES SHARED_DIR
+# fills the arrays names, dirs and fpss: the synthetic room (generated into SYNTH_DIR by
+# pplvo-synth, seed 1, when missing) and every folder of SHARED_DIR with a groundtruth.txt; fps
+# is 30 for ICL-NUIM-style integer stamps (frame indices), 0 for real stamps.
+benchmark_sequences() {
+  local bin=$1 synth=$2 synth_frames=$3 shared=$4 d fps
+  names=(); dirs=(); fpss=()
+  if [ ! -f "$synth/groundtruth.txt" ]; then
+    mkdir -p "$(dirname "$synth")"
+    "$bin/pplvo-synth" --output "$synth" --frames "$synth_frames" --seed 1 > /dev/null
+  fi
+  names+=(synth_room); dirs+=("$synth"); fpss+=(0)
+  for d in "$shared"/*/; do
+    [ -f "$d/groundtruth.txt" ] || continue
+    fps=0
+    # Integer stamps in the first data line of groundtruth.txt: frame indices at 30 Hz.
+    if awk '!/^#/ && NF { exit !($1 ~ /^[0-9]+$/) }' "$d/groundtruth.txt"; then fps=30; fi
+    names+=("$(basename "$d")"); dirs+=("${d%/}"); fpss+=("$fps")
+  done
+}
