@@ -29,17 +29,15 @@ while [ $# -gt 0 ]; do
   esac
 done
 bin="$build/bin"
-for tool in pplvo-run pplvo-eval pplvo-synth pplvo-peer-odometry pplvo-plot; do
-  [ -x "$bin/$tool" ] || { echo "benchmark.sh: $bin/$tool missing (build first: cmake --build build)" >&2; exit 1; }
-done
+# shellcheck source=benchmark_sequences.sh
+. "$here/scripts/benchmark_sequences.sh"
+benchmark_require_tools benchmark.sh "$bin" pplvo-run pplvo-eval pplvo-synth pplvo-peer-odometry pplvo-plot
 shared="${PPLVO_SHARED_DATA:-$here/../shared/data}"
 out="${out:-$build/benchmark}"
 mkdir -p "$out"
 
 # Sequences: name -> folder; ICL-NUIM stamps are frame indices (30 Hz).
 declare -a names dirs fpss
-# shellcheck source=benchmark_sequences.sh
-. "$here/scripts/benchmark_sequences.sh"
 benchmark_sequences "$bin" "$out/synth_room" "$synth_frames" "$shared"
 
 # Configurations: label | pplvo-run arguments (the peer rows are handled separately).

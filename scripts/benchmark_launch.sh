@@ -31,16 +31,14 @@ while [ $# -gt 0 ]; do
   esac
 done
 bin="$build/bin"
-for tool in pplvo-launch pplvo-run pplvo-eval pplvo-synth; do
-  [ -x "$bin/$tool" ] || { echo "benchmark_launch.sh: $bin/$tool missing (build first)" >&2; exit 1; }
-done
+# shellcheck source=benchmark_sequences.sh
+. "$here/scripts/benchmark_sequences.sh"
+benchmark_require_tools benchmark_launch.sh "$bin" pplvo-launch pplvo-run pplvo-eval pplvo-synth
 shared="${PPLVO_SHARED_DATA:-$here/../shared/data}"
 out="${out:-$build/benchmark_launch}"
 mkdir -p "$out"
 
 declare -a names dirs fpss
-# shellcheck source=benchmark_sequences.sh
-. "$here/scripts/benchmark_sequences.sh"
 benchmark_sequences "$bin" "$build/benchmark/synth_room" 150 "$shared"
 
 value() { awk -v k="$1" '$1 == k":" { print $2; exit }' "$2"; }

@@ -1,8 +1,18 @@
-# Sourced by scripts/benchmark.sh and scripts/benchmark_launch.sh: the benchmark's sequences.
+# Sourced by scripts/benchmark.sh and scripts/benchmark_launch.sh: their tool check and the
+# benchmark's sequences.
 #   benchmark_sequences BIN SYNTH_DIR SYNTH_FRAMES SHARED_DIR
 # fills the arrays names, dirs and fpss: the synthetic room (generated into SYNTH_DIR by
 # pplvo-synth, seed 1, when missing) and every folder of SHARED_DIR with a groundtruth.txt; fps
 # is 30 for ICL-NUIM-style integer stamps (frame indices), 0 for real stamps.
+# benchmark_require_tools SCRIPT BIN TOOL...: exits 1 naming the first TOOL missing from BIN.
+benchmark_require_tools() {
+  local script=$1 bin=$2 tool
+  shift 2
+  for tool in "$@"; do
+    [ -x "$bin/$tool" ] || { echo "$script: $bin/$tool missing (build first: cmake --build build)" >&2; exit 1; }
+  done
+}
+
 benchmark_sequences() {
   local bin=$1 synth=$2 synth_frames=$3 shared=$4 d fps
   names=(); dirs=(); fpss=()

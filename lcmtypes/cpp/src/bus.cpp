@@ -77,7 +77,10 @@ std::vector<lcm::LCM*> Bus::receiveOn(const std::string& channel) const {
   }
   for (lcm::LCM* l : on) {
     auto& r = routing_->receiving;
-    if (std::find(r.begin(), r.end(), l) == r.end()) r.push_back(l);
+    if (std::find(r.begin(), r.end(), l) != r.end()) continue;
+    r.push_back(l);
+    // On udpm this joins the instance's group: the caller subscribes on it right after.
+    routing_->wait_fds.push_back({l->getFileno(), POLLIN, 0});
   }
   return on;
 }
@@ -108,8 +111,7 @@ int Bus::handleTimeout(int timeout_ms) const {
   if (receiving.size() <= 1) {
     return (receiving.empty() ? routing_->fallback : receiving.front())->handleTimeout(timeout_ms);
   }
-  std::vector<pollfd> fds(receiving.size());
-  for (size_t i = 0; i < receiving.size(); ++i) fds[i] = {receiving[i]->getFileno(), POLLIN, 0};
+  std::vector<pollfd>& fds = routing_->wait_fds;
   const int ready = ::poll(fds.data(), fds.size(), timeout_ms);
   if (ready <= 0) return ready;  // 0 timeout, -1 error or EINTR (a signal: shutdown)
   int handled = 0;

@@ -7,6 +7,8 @@
 #include <regex>
 #include <sstream>
 
+#include "pplvo/msgs/channels.h"
+
 namespace pplvo::launch {
 
 const std::vector<std::string>& statusNodes() {
@@ -366,11 +368,11 @@ std::vector<std::string> frameChannelRoutes(const std::string& udpm_url, std::st
     return {};
   }
   // Channel and port offset; both feature channels go to the estimator (one group).
-  const std::pair<const char*, int> channels[] = {{"PPLVO_RGBD", 1},
-                                                  {"PPLVO_DEPTH_CGM", 2},
-                                                  {"PPLVO_DEPTH_FUSED", 3},
-                                                  {"PPLVO_FEATURES", 4},
-                                                  {"PPLVO_FEATURES_3D", 4}};
+  const std::pair<const char*, int> channels[] = {{channels::kRgbd, 1},
+                                                  {channels::kDepthCgm, 2},
+                                                  {channels::kDepthFused, 3},
+                                                  {channels::kFeatures, 4},
+                                                  {channels::kFeatures3d, 4}};
   if (u.port + 4 > 65535) {
     *error = "port " + std::to_string(u.port) + " leaves no room for the frame channels' ports";
     return {};

@@ -10,6 +10,8 @@
 /// `Bus` is a cheap handle (copies share one routing table): nodes take a Bus, and an
 /// `lcm::LCM&` converts to a Bus that carries every channel, so tests and the one-process
 /// runner keep a single memq:// instance.
+#include <poll.h>
+
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
@@ -98,6 +100,7 @@ class Bus {
     lcm::LCM* fallback = nullptr;
     std::map<std::string, lcm::LCM*> routes;
     std::vector<lcm::LCM*> receiving;  // in order of first subscription
+    std::vector<pollfd> wait_fds;      // one per receiving instance, for handleTimeout
   };
   std::vector<lcm::LCM*> receiveOn(const std::string& channel) const;
   std::shared_ptr<Routing> routing_;
@@ -138,9 +141,9 @@ class BusConnections {
 /// and appended to `routes` (a later route of the same channel replaces the earlier one).
 ArgParser& addRouteOption(ArgParser& parser, std::vector<ChannelRoute>* routes);
 
-/// The usage line of --route, for the processes' help texts.
+/// The usage lines of --route, for the processes' help texts (options in column 28).
 inline constexpr const char* kRouteUsage =
     "  --route CHANNEL=URL      carry CHANNEL over URL instead of --lcm-url (repeatable;\n"
-    "                           docs/channels.md: frame-sized channels on their own port)\n";
+    "                           docs/channels.md: per-frame data on ports of its own)\n";
 
 }  // namespace pplvo::msgs
