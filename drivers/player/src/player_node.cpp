@@ -35,7 +35,8 @@ calib_params.xml) as pplvo_msgs.rgbd_frame_t.
   --camera FILE.yaml       camera file (keys: width height fx fy cx cy distortion depth_scale);
                            default: DIR/calib_params.xml
   --lcm-url URL            LCM URL (default: $LCM_DEFAULT_URL, else LCM's default)
-)" + std::string(msgs::kRouteUsage) + R"(  --channel NAME           frame channel (default PPLVO_RGBD)
+)" + std::string(msgs::kRouteUsage) +
+         R"(  --channel NAME           frame channel (default PPLVO_RGBD)
   --pose-channel NAME      pose channel for --lockstep (default PPLVO_POSE)
   --stream-channel NAME    START/END events (default PPLVO_STREAM)
   --status-channel NAME    node_status_t (default PPLVO_STATUS)

@@ -77,7 +77,8 @@ the estimated trajectory (pose_t) as TUM lines, and a YAML run summary at exit.
   --timeout S              stop after S seconds
   --idle-timeout S         stop after S seconds without any message
   --lcm-url URL            LCM URL (default: $LCM_DEFAULT_URL, else LCM's default)
-)" + std::string(msgs::kRouteUsage) + R"(  --progress / --no-progress   progress line on stderr (default: when stderr is a terminal)
+)" + std::string(msgs::kRouteUsage) +
+         R"(  --progress / --no-progress   progress line on stderr (default: when stderr is a terminal)
   -h, --help               this text
 At least one of --output, --trajectory, --summary is required.
 
