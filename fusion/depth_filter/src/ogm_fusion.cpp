@@ -240,7 +240,7 @@ OgmResult OgmFusion::fuse(int64_t seq, const Pose3& T_w_c) {
   return result;
 }
 
-void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
+void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr, int window_limit) {
   OgmResult& result = *result_ptr;
   result.ok = false;
   result.warning.clear();
@@ -272,6 +272,10 @@ void OgmFusion::fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result_ptr) {
     if (s.used && s.has_pose && s.seq < seq) past.push_back(&s);
   }
   std::sort(past.begin(), past.end(), [](const Slot* a, const Slot* b) { return a->seq > b->seq; });
+  if (window_limit > 0 && past.size() + 1 > static_cast<size_t>(window_limit)) {
+    past.resize(static_cast<size_t>(window_limit - 1));  // the oldest ones wait for later
+    ++stats_.frames_fused_limited;
+  }
   const Pose3 T_c_w = T_w_c.inverse();
   frames_.clear();
   for (size_t j = 0; j < past.size(); ++j) {

@@ -402,6 +402,29 @@ std::vector<DepthWithVariance>* SceneTest::cgm_ = nullptr;
 FusedRun* SceneTest::ogm5_ = nullptr;
 FusedRun* SceneTest::ogm10_ = nullptr;
 
+/// A fusion limited to W frames of a longer window is the O-GM_W fusion of that frame, bit for
+/// bit (frames are fused newest to oldest), and the frames it left out stay in the window: the
+/// next unlimited fusion is the O-GM_10 one again.
+TEST_F(SceneTest, WindowLimitFusesTheNewestFramesAndKeepsTheRest) {
+  OgmFusion ogm;  // max_window 10
+  const int limited = kFirstEval + 1;
+  for (int i = 0; i < kFrames; ++i) {
+    ASSERT_TRUE(ogm.addFrame(i, scene_->camera(), (*cgm_)[i]));
+    OgmResult r;
+    ogm.fuse(i, (*frames_)[i].T_w_c, &r, i == limited ? 5 : 0);
+    ASSERT_TRUE(r.ok);
+    const DepthWithVariance& want = (i == limited ? ogm5_ : ogm10_)->out[static_cast<size_t>(i)];
+    EXPECT_EQ(r.depth.window_length, want.window_length) << "frame " << i;
+    EXPECT_EQ(cv::countNonZero(r.depth.depth_m != want.depth_m), 0) << "frame " << i;
+    EXPECT_EQ(cv::countNonZero(r.depth.var_m2 != want.var_m2), 0) << "frame " << i;
+    EXPECT_EQ(ogm.windowSize(), std::min(i + 1, 10));
+  }
+  EXPECT_EQ(ogm.stats().frames_fused_limited, 1);
+  // Not vacuous: the shorter window gives another result.
+  const size_t f = static_cast<size_t>(limited);
+  EXPECT_GT(cv::countNonZero(ogm5_->out[f].depth_m != ogm10_->out[f].depth_m), 1000);
+}
+
 TEST_F(SceneTest, ThreadCountDoesNotChangeResults) {
   std::vector<Pose3> poses;
   for (const SceneFrame& f : *frames_) poses.push_back(f.T_w_c);

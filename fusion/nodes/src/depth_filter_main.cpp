@@ -29,6 +29,11 @@ void usage() {
       "  --depth-model MODEL      sensor | cgm | ogm (ogm)\n"
       "  --max-translation-variance M2  window eviction threshold, m^2 (1e-4)\n"
       "  --max-pending N          frames waiting for their pose (30)\n"
+      "  --overload-backlog N     when more than N newer frames wait for their pose, fuse\n"
+      "                           over a shorter window (depth_filter.overload.backlog, 3;\n"
+      "                           0 = never)\n"
+      "  --overload-step N        frames the window shortens per frame of backlog beyond\n"
+      "                           that, down to 2 (depth_filter.overload.window_step, 2)\n"
       "  --compress               zlib-compress published maps\n"
       "  --config FILE            pipeline YAML (config/pplvo.yaml): its depth_filter section\n"
       "  --set KEY=VALUE          one configuration value (repeatable), e.g.\n"
@@ -46,6 +51,7 @@ int main(int argc, char** argv) {
   int window = 0;
   double max_translation_variance_m2 = 0;
   int prefault_mb = 64;
+  int overload_backlog = -1, overload_step = 0;  // unset: the configuration's
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);  // --config, --set, --features (unused), --depth-model
   msgs::addRouteOption(p, &o.routes);
@@ -58,6 +64,8 @@ int main(int argc, char** argv) {
       .option("--status-channel", &o.status_channel)
       .option("--window", &window, 1, 100)
       .option("--max-pending", &o.max_pending, 1)
+      .option("--overload-backlog", &overload_backlog, 0)
+      .option("--overload-step", &overload_step, 1, 100)
       .option("--max-translation-variance",
               [&](const std::string& v) -> std::string {
                 double m2 = 0;
@@ -81,6 +89,8 @@ int main(int argc, char** argv) {
   o.cgm = pl.depth_filter.cgm;
   o.ogm = pl.depth_filter.ogm;
   if (window > 0) o.ogm.max_window = window;
+  o.overload_backlog = overload_backlog >= 0 ? overload_backlog : pl.depth_filter.overload.backlog;
+  o.overload_step = overload_step > 0 ? overload_step : pl.depth_filter.overload.window_step;
   if (max_translation_variance_m2 > 0)
     o.ogm.max_translation_variance_m2 = max_translation_variance_m2;
   const std::vector<std::string>& errors = p.errors();
@@ -105,6 +115,13 @@ int main(int argc, char** argv) {
         static_cast<long long>(node.counters().frames_out),
         static_cast<long long>(node.counters().frames_dropped),
         static_cast<long long>(node.counters().frames_skipped), node.timings().table().c_str());
+    if (o.model == depth_filter::DepthModel::kOgm && o.overload_backlog > 0) {
+      std::fprintf(stderr,
+                   "[pplvo-depth-filter] overload: %lld fusions over a shortened window (more "
+                   "than %d newer frames waiting: %d frames shorter per frame)\n",
+                   static_cast<long long>(node.overloadFusions()), o.overload_backlog,
+                   o.overload_step);
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pplvo-depth-filter: %s\n", e.what());
     return 1;

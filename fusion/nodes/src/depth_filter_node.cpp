@@ -1,5 +1,6 @@
 #include "pplvo/nodes/depth_filter_node.h"
 
+#include <algorithm>
 #include <optional>
 #include <pplvo_msgs/depth_map_t.hpp>
 #include <utility>
@@ -90,6 +91,15 @@ std::optional<DepthFilterNode::Pending> DepthFilterNode::takePending(int64_t seq
   return p;
 }
 
+int overloadWindow(int backlog, const DepthFilterNodeOptions& o) {
+  if (o.overload_backlog <= 0 || o.overload_step <= 0 || backlog <= o.overload_backlog) return 0;
+  // Proportional to how far behind: a loop slower than the sensor must catch up before the
+  // frontend's queue of frames waiting for fused depth overflows.
+  const int64_t behind = backlog - o.overload_backlog;
+  const int64_t window = std::max<int64_t>(2, o.ogm.max_window - behind * o.overload_step);
+  return window < o.ogm.max_window ? static_cast<int>(window) : 0;
+}
+
 void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
   FramePose pose;
   try {
@@ -125,7 +135,9 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
       ogm_.setWindowUncertainty(w.seq, w.max_translation_variance_m2);
     }
     ogm_.addFrame(p.seq, p.camera, p.depth);
-    ogm_.fuse(p.seq, pose.T_w_c, &result);
+    // Frames newer than this one already wait for their poses: the loop is behind the sensor.
+    const int limit = overloadWindow(static_cast<int>(pending_.size()), options_);
+    ogm_.fuse(p.seq, pose.T_w_c, &result, limit);
   }
   if (!result.ok) {
     // Downstream still gets a depth map: the frame's own stage-2 output.

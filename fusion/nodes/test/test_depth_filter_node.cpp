@@ -159,6 +159,72 @@ TEST(DepthFilterNode, MemqFramesAndPosesGiveCgmAndFusedMaps) {
   drain(lcm);
 }
 
+TEST(DepthFilterNode, OverloadWindowRule) {
+  DepthFilterNodeOptions o;  // window 10; more than 3 newer frames waiting: 2 shorter per frame
+  ASSERT_EQ(o.ogm.max_window, 10);
+  EXPECT_EQ(overloadWindow(0, o), 0);
+  EXPECT_EQ(overloadWindow(3, o), 0);
+  EXPECT_EQ(overloadWindow(4, o), 8);
+  EXPECT_EQ(overloadWindow(5, o), 6);
+  EXPECT_EQ(overloadWindow(7, o), 2);
+  EXPECT_EQ(overloadWindow(1000000, o), 2);  // never below the frame and one past frame
+  o.overload_step = 5;
+  EXPECT_EQ(overloadWindow(4, o), 5);
+  o.ogm.max_window = 2;  // nothing to shorten
+  EXPECT_EQ(overloadWindow(1000, o), 0);
+  o.ogm.max_window = 10;
+  o.overload_backlog = 0;  // never
+  EXPECT_EQ(overloadWindow(1000, o), 0);
+}
+
+/// Poses that come while newer frames wait (a live loop slower than the sensor) fuse fewer
+/// frames until the backlog is gone; the frames left out still serve later fusions.
+TEST(DepthFilterNode, BacklogOfFramesShortensTheWindowUntilCaughtUp) {
+  AnalyticScene scene(smallScene());
+  DepthFilterNodeOptions o;
+  o.ogm.max_window = 10;
+  o.overload_backlog = 2;
+  o.overload_step = 4;
+  // Frames 0-5 each with its pose at once, then frames 6-10 before the pose of frame 6.
+  auto run = [&](const DepthFilterNodeOptions& options, int64_t* shortened) {
+    lcm::LCM lcm("memq://");
+    EXPECT_TRUE(lcm.good());
+    DepthFilterNode node(options, lcm);
+    Collector c;
+    lcm.subscribe(channels::kDepthFused, &Collector::onDepth, &c);
+    std::vector<int> windows;
+    auto frame = [&](int i) {
+      pplvo_msgs::rgbd_frame_t f = frameMsg(scene, i);
+      lcm.publish(channels::kRgbd, &f);
+      drain(lcm);
+    };
+    auto pose = [&](int i) {
+      pplvo_msgs::pose_t p = poseMsg(scene, i);
+      lcm.publish(channels::kPose, &p);
+      drain(lcm);
+      windows.push_back(c.fused.back().window_length);
+    };
+    for (int i = 0; i < 6; ++i) {
+      frame(i);
+      pose(i);
+    }
+    for (int i = 6; i < 11; ++i) frame(i);
+    for (int i = 6; i < 11; ++i) pose(i);
+    EXPECT_EQ(node.counters().frames_out, 11);
+    EXPECT_EQ(node.counters().frames_dropped, 0);
+    *shortened = node.overloadFusions();
+    return windows;
+  };
+  int64_t shortened = 0;
+  // Pose 6 with 4 newer frames waiting: 10 - 2 * 4 = 2 frames; pose 7 with 3: 10 - 4 = 6; then
+  // caught up: frames 0-8, 0-9, 1-10.
+  EXPECT_EQ(run(o, &shortened), (std::vector<int>{1, 2, 3, 4, 5, 6, 2, 6, 9, 10, 10}));
+  EXPECT_EQ(shortened, 2);
+  o.overload_backlog = 0;  // off: the same backlog fuses the whole window
+  EXPECT_EQ(run(o, &shortened), (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 10}));
+  EXPECT_EQ(shortened, 0);
+}
+
 TEST(DepthFilterNode, CgmModelPublishesCgmAsFused) {
   AnalyticScene scene(smallScene());
   lcm::LCM lcm("memq://");

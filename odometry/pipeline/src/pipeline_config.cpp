@@ -239,6 +239,16 @@ void listFields(V& v, depth_filter::OgmOptions& o) {
 }
 
 template <class V>
+void listFields(V& v, DepthFilterOverloadOptions& o) {
+  v.field("backlog", o.backlog,
+          "when a pose comes while more than this many newer frames wait for theirs, the "
+          "frame is fused over a shorter window (0 = never)",
+          atLeast(0));
+  v.field("window_step", o.window_step,
+          "frames the window shortens per frame of backlog beyond that, down to 2", atLeast(1));
+}
+
+template <class V>
 void listFields(V& v, DepthFilterOptions& o) {
   v.field("model", o.model,
           "depth used downstream: sensor (stage 1, Sec. 3.1), cgm (stages 1-2, Sec. 3.2) or "
@@ -250,6 +260,10 @@ void listFields(V& v, DepthFilterOptions& o) {
   v.section("ogm",
             "Stage 3: Optimal-GM temporal fusion and its constraints (Sec. 3.3-3.4, eqs. 7-8)",
             [&] { listFields(v, o.ogm); });
+  v.section("overload",
+            "Load shedding of pplvo-depth-filter when a live pipeline falls behind the sensor "
+            "(not in the paper; pplvo-run and lockstep launches never shed, docs/depth_filter.md)",
+            [&] { listFields(v, o.overload); });
 }
 
 template <class V>

@@ -338,7 +338,9 @@ int main(int argc, char** argv) {
       p.killed = c.killed;
       p.has_counts = c.spec.name != kLogger;
       if (p.has_counts) {
-        if (auto d = parseDoneLine(readFile(c.spec.log_path), c.spec.name)) p.counts = *d;
+        const std::string log = readFile(c.spec.log_path);
+        if (auto d = parseDoneLine(log, c.spec.name)) p.counts = *d;
+        if (c.spec.name == kDepthFilter) report.overload_fusions = parseOverloadFusions(log);
         if (auto s = bus.status(c.spec.name)) {
           // The final status has errors too; the done line is the final word on the counts.
           if (!p.counts.known) p.counts = *s;

@@ -31,7 +31,8 @@ std::string launchUsage() {
          "  --dataset DIR           TUM-layout folder (player)\n"
          "  --output TRAJ           TUM trajectory written by the logger from PPLVO_POSE\n"
          "  --lockstep              player publishes frame k+2 only after the pose of frame k\n"
-         "                          (trajectory equal to pplvo-run's); default --rate 0 then\n"
+         "                          (trajectory equal to pplvo-run's: the depth filter does\n"
+         "                          not shed load); default --rate 0 then\n"
          "  --lockstep-in-flight N  frames out without their pose in lockstep (2; 1 = one at\n"
          "                          a time)\n"
          "  --rate R                player speed: 1 real time (default), 0 as fast as possible\n"
@@ -406,6 +407,8 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const UrlDeci
   if (o.compress) df.args.push_back("--compress");
   if (!o.config.empty()) df.args.insert(df.args.end(), {"--config", o.config});
   for (const std::string& kv : o.set) df.args.insert(df.args.end(), {"--set", kv});
+  // Lockstep bounds the frames in flight and promises pplvo-run's trajectory: no shedding.
+  if (o.lockstep) df.args.insert(df.args.end(), {"--overload-backlog", "0"});
   specs.push_back(df);
   for (const char* name : {kFrontend, kEstimator}) {
     ProcessSpec s = make(name);
@@ -481,6 +484,17 @@ bool DrainMonitor::drained(double now_s, int64_t poses, int64_t published) {
   return now_s - last_change_s_ >= idle_s_;
 }
 
+int64_t parseOverloadFusions(const std::string& log_text) {
+  int64_t n = -1;
+  std::istringstream in(log_text);
+  const std::regex overload("\\[" + std::string(kDepthFilter) + "\\] overload: ([0-9]+) .*");
+  for (std::string line; std::getline(in, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, overload)) n = std::stoll(m[1].str());
+  }
+  return n;
+}
+
 int64_t LaunchReport::droppedTotal() const {
   int64_t n = 0;
   for (const Process& p : processes) {
@@ -546,6 +560,10 @@ std::string LaunchReport::text() const {
   if (transport_known) {
     out << "launch.frames_not_received: " << not_received
         << "  # player out minus depth-filter/frontend in\n";
+  }
+  if (overload_fusions >= 0) {
+    out << "launch.overload_fusions: " << overload_fusions
+        << "  # frames the depth filter fused over a shortened window to catch up\n";
   }
   if (lockstep && player && player->counts.known) {
     out << "launch.lockstep_timeouts: " << player->counts.errors

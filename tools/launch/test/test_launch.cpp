@@ -196,7 +196,8 @@ TEST(LaunchSpecs, CommandLines) {
   };
   EXPECT_EQ(joined(specs[0]),
             std::string("/B/pplvo-depth-filter --lcm-url ") + kIsolatedUrl +
-                " --depth-model cgm --config c.yaml --set frontend.points.max_points=500");
+                " --depth-model cgm --config c.yaml --set frontend.points.max_points=500"
+                " --overload-backlog 0");
   EXPECT_EQ(joined(specs[2]), std::string("/B/pplvo-estimator --lcm-url ") + kIsolatedUrl +
                                   " --config c.yaml --features points,planes --set "
                                   "frontend.points.max_points=500");
@@ -229,6 +230,9 @@ TEST(LaunchSpecs, CommandLines) {
   EXPECT_NE(joined(buildProcessSpecs(o, url, "/B", "/L")[4]).find("--preload"), std::string::npos);
   o.preload = false;
   EXPECT_EQ(joined(buildProcessSpecs(o, url, "/B", "/L")[4]).find("--preload"), std::string::npos);
+  // Free-running, the depth filter keeps its load shedding (lockstep: off, above).
+  EXPECT_EQ(joined(buildProcessSpecs(o, url, "/B", "/L")[0]).find("--overload-backlog"),
+            std::string::npos);
   for (const ProcessSpec& s : buildProcessSpecs(o, url, "/B", "/L")) {
     const std::string j = joined(s);
     for (const std::string& r : url.routes) {
@@ -279,6 +283,20 @@ TEST(LaunchReport, DoneLines) {
   ASSERT_TRUE(c.has_value());
   EXPECT_EQ(c->frames_out, 251);
   EXPECT_EQ(c->frames_skipped, 3);
+}
+
+TEST(LaunchReport, OverloadLine) {
+  EXPECT_EQ(parseOverloadFusions("[pplvo-depth-filter] done: in 3 out 3 dropped 0 skipped 0\n"),
+            -1);
+  EXPECT_EQ(parseOverloadFusions("[pplvo-depth-filter] done: in 3 out 3 dropped 0 skipped 0\n"
+                                 "[pplvo-depth-filter] overload: 12 fusions over a shortened "
+                                 "window (more than 3 newer frames waiting: 2 frames shorter "
+                                 "per frame)\n"),
+            12);
+  LaunchReport r;
+  EXPECT_EQ(r.text().find("launch.overload_fusions"), std::string::npos);
+  r.overload_fusions = 4;
+  EXPECT_NE(r.text().find("launch.overload_fusions: 4"), std::string::npos) << r.text();
 }
 
 TEST(LaunchReport, DrainRule) {

@@ -169,6 +169,7 @@ RunResult runPipeline(const RunOptions& options) {
     df.sensor = options.pipeline.depth_filter.sensor;
     df.cgm = options.pipeline.depth_filter.cgm;
     df.ogm = options.pipeline.depth_filter.ogm;
+    df.overload_backlog = 0;  // every frame fused over the full window (in_flight is bounded)
     nodes::DepthFilterNode depth_filter(df, lcm);
 
     nodes::FrontendNodeOptions fe;

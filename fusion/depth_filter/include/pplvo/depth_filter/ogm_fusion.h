@@ -27,6 +27,7 @@ struct OgmStats {
   int64_t points_projected = 0;     ///< past-frame points that landed in the image
   int64_t points_gated = 0;         ///< rejected by the consistency gate
   int64_t pixels_filled = 0;        ///< output pixels with no current measurement
+  int64_t frames_fused_limited = 0;  ///< fusions that left past frames out (window_limit)
   int64_t warnings = 0;
   std::string last_warning;
   int last_window_length = 0;
@@ -100,7 +101,11 @@ class OgmFusion {
   OgmResult fuse(int64_t seq, const Pose3& T_w_c);
   /// Same, writing into `result`, whose depth matrices are reused when they already have the
   /// camera's size (no allocation in steady state; they must not share data still in use).
-  void fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result);
+  /// `window_limit` > 0 fuses at most that many frames, the current one and the newest past
+  /// ones (the result of a full fusion stopped early, since frames are fused newest to
+  /// oldest); the window itself keeps every frame for later fusions. A real-time caller that
+  /// falls behind uses it to shed load (docs/depth_filter.md).
+  void fuse(int64_t seq, const Pose3& T_w_c, OgmResult* result, int window_limit = 0);
 
   /// Empties the window (e.g. after tracking loss).
   void reset();

@@ -12,11 +12,20 @@
 
 namespace pplvo::pipeline {
 
+/// Load shedding of the pplvo-depth-filter process when a live pipeline falls behind the sensor
+/// (not in the paper; nodes::DepthFilterNodeOptions::overload_backlog). pplvo-run and lockstep
+/// launches never shed: every frame is fused over the full window there.
+struct DepthFilterOverloadOptions {
+  int backlog = 3;      ///< newer frames waiting for their pose beyond which the window shortens
+  int window_step = 2;  ///< frames shorter per frame of backlog beyond that (at least 2 left)
+};
+
 struct DepthFilterOptions {
   depth_filter::DepthModel model = depth_filter::DepthModel::kOgm;
   depth_filter::QuadraticSensorModel::Options sensor;
   depth_filter::CgmOptions cgm;
   depth_filter::OgmOptions ogm;
+  DepthFilterOverloadOptions overload;
 };
 
 struct PipelineOptions {

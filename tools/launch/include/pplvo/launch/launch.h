@@ -129,6 +129,10 @@ struct NodeCounts {
 /// (the last such line wins); the player's "published N frames, skipped M" line too.
 std::optional<NodeCounts> parseDoneLine(const std::string& log_text, const std::string& node);
 
+/// Parses "[pplvo-depth-filter] overload: N fusions over at most W frames ..." (the depth
+/// filter's load shedding, its last such line); -1 when the log has none.
+int64_t parseOverloadFusions(const std::string& log_text);
+
 /// Decides when the pipeline has drained after the player ended: every published frame has
 /// its pose, or no new pose arrived for `idle_s`.
 class DrainMonitor {
@@ -159,6 +163,7 @@ struct LaunchReport {
   int64_t poses_seen = 0;         ///< pose_t messages the launcher saw
   int64_t trajectory_poses = -1;  ///< lines in the trajectory file (-1: not readable)
   std::string trajectory_path;
+  int64_t overload_fusions = -1;  ///< depth filter's shortened fusions (-1: not reported)
   double wall_s = 0.0;
   bool lockstep = false;
   std::string url;
