@@ -126,6 +126,8 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     return;
   }
   depth_filter::OgmResult& result = fused_;  // buffers reused frame to frame
+  const int64_t shortened_before = ogm_.stats().frames_fused_limited;
+  Stopwatch ogm_watch;
   {
     ScopedStageTimer t(timings_, "ogm");
     if (pose.status == TrackingStatus::kLost || pose.status == TrackingStatus::kReinitialised) {
@@ -138,6 +140,10 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     // Frames newer than this one already wait for their poses: the loop is behind the sensor.
     const int limit = overloadWindow(static_cast<int>(pending_.size()), options_);
     ogm_.fuse(p.seq, pose.T_w_c, &result, limit);
+  }
+  // The shortened ones again on their own: their count shows in every status message.
+  if (ogm_.stats().frames_fused_limited > shortened_before) {
+    timings_.add("ogm_shortened", ogm_watch.elapsedMs());
   }
   if (!result.ok) {
     // Downstream still gets a depth map: the frame's own stage-2 output.

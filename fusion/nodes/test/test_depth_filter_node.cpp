@@ -213,6 +213,8 @@ TEST(DepthFilterNode, BacklogOfFramesShortensTheWindowUntilCaughtUp) {
     EXPECT_EQ(node.counters().frames_out, 11);
     EXPECT_EQ(node.counters().frames_dropped, 0);
     *shortened = node.overloadFusions();
+    const StageStats* st = node.timings().find("ogm_shortened");  // in node_status_t too
+    EXPECT_EQ(st ? st->count : 0, *shortened);
     return windows;
   };
   int64_t shortened = 0;
