@@ -26,6 +26,8 @@ void usage() {
       "  --in-flight N           frames published before the previous one's pose (2: the next\n"
       "                          frame's features are extracted while this one is fused;\n"
       "                          1: one frame at a time; same trajectory either way)\n"
+      "  --preload               decode every frame before the first is published (as from a\n"
+      "                          camera); the throughput then leaves the decoding out\n"
       "  --summary FILE          write the run summary as YAML\n"
       "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
       "  --quiet                 no summary on stdout\n%s",
@@ -51,6 +53,7 @@ int main(int argc, char** argv) {
       .option("--start", &o.start, int64_t{0})
       .option("--fps", &o.fps, 0.0)
       .flag("--skip-bad", &o.skip_bad)
+      .flag("--preload", &o.preload)
       .flag("--quiet", &quiet);
   p.parse(argsFromArgv(argc, argv));
   if (p.help()) {

@@ -121,9 +121,10 @@ std::string RunResult::text() const {
     for (std::string line; std::getline(table, line);) out << "  " << line << "\n";
   }
   std::snprintf(buf, sizeof buf,
-                "throughput: %.1f frames/s end to end (%.2f s wall), pipeline %.1f ms/frame "
+                "throughput: %.1f frames/s end to end (%.2f s wall%s), pipeline %.1f ms/frame "
                 "(sum of stages, excluding the player)\n",
-                framesPerSecond(), elapsed_s, pipelineMsPerFrame());
+                framesPerSecond(), elapsed_s - preload_s,
+                preload_s > 0 ? ", after the frames were decoded" : "", pipelineMsPerFrame());
   out << buf;
   if (failed) out << "FAILED: " << error << "\n";
   return out.str();
@@ -138,6 +139,7 @@ std::string RunResult::yaml() const {
       << ", velocity_model: " << velocity_model << ", lost: " << lost
       << ", reinitialised: " << reinitialised << "}\n"
       << "elapsed_s: " << elapsed_s << "\n"
+      << "preload_s: " << preload_s << "\n"
       << "frames_per_s: " << framesPerSecond() << "\n"
       << "pipeline_ms_per_frame: " << pipelineMsPerFrame() << "\n"
       << "failed: " << (failed ? "true" : "false") << "\n";
@@ -197,6 +199,7 @@ RunResult runPipeline(const RunOptions& options) {
     po.max_frames = options.max_frames;
     po.skip_bad = options.skip_bad;
     po.progress = options.progress;
+    po.preload = options.preload;
     po.status_period_s = 1e9;  // no status messages inside one process
     player::PlayerNode player(po, lcm);
 
@@ -204,6 +207,9 @@ RunResult runPipeline(const RunOptions& options) {
     result.frames_published = pr.published;
     result.frames_skipped = pr.skipped;
     result.elapsed_s = pr.elapsed_s;
+    if (const StageStats* preload = player.timings().find("preload")) {
+      result.preload_s = preload->total_ms / 1000.0;
+    }
     if (pr.failed) {
       result.failed = true;
       result.error = pr.error;
