@@ -90,10 +90,12 @@ int main(int argc, char** argv) {
         [&] { node.publishStatus(hostUtime()); }, 1.0);
     node.publishStatus(hostUtime());
     const msgs::NodeCounters& c = node.counters();
-    std::fprintf(stderr, "[pplvo-frontend] done: in %lld out %lld dropped %lld skipped %lld\n%s",
+    std::fprintf(stderr,
+                 "[pplvo-frontend] done: in %lld out %lld dropped %lld skipped %lld; %lld of the "
+                 "drops before extraction, the pose -> fused depth loop behind\n%s",
                  static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_out),
                  static_cast<long long>(c.frames_dropped), static_cast<long long>(c.frames_skipped),
-                 node.allTimings().table().c_str());
+                 static_cast<long long>(node.droppedLoopBehind()), node.allTimings().table().c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pplvo-frontend: %s\n", e.what());
     return 1;

@@ -122,6 +122,7 @@ void FrontendNode::extractReady() {
       // The pose -> fused depth -> lifting loop is behind: extracting this frame would only
       // delay it further, and the estimator would drop the frame anyway.
       ++counters_.frames_dropped;
+      ++dropped_loop_behind_;
       warn("frame " + std::to_string(frame.seq) + " dropped before extraction: " +
            std::to_string(unlifted) + " frames wait for their fused depth");
       continue;

@@ -194,10 +194,12 @@ TEST(FrontendNode, DropsNewFramesBeforeExtractionWhileTheLoopIsBehind) {
     // Frame 0 went out at once; each later one waits on the worker until the next pairs.
     if (max_unlifted == 3) {
       EXPECT_EQ(node.counters().frames_dropped, 2);
+      EXPECT_EQ(node.droppedLoopBehind(), 2);
       EXPECT_EQ(f2d.msgs.size(), 2u);  // frames 0 and 1; frame 2 still on the worker
       EXPECT_NE(node.counters().last_warning.find("dropped before extraction"), std::string::npos);
     } else {
       EXPECT_EQ(node.counters().frames_dropped, 0);
+      EXPECT_EQ(node.droppedLoopBehind(), 0);
       EXPECT_EQ(f2d.msgs.size(), 4u);  // frames 0-3; frame 4 still on the worker
     }
   }

@@ -70,6 +70,9 @@ class FrontendNode {
   /// frame's fused depth (which may never come): call it from the idle loop. Never blocks.
   void poll();
   const msgs::NodeCounters& counters() const { return counters_; }
+  /// Of counters().frames_dropped, the frames dropped before extraction because max_unlifted
+  /// frames waited for their fused depth (the loop through estimator and depth filter behind).
+  int64_t droppedLoopBehind() const { return dropped_loop_behind_; }
   const StageTimings& timings() const { return timings_; }
   /// Decode/encode times of this node and the frontend's own stages, in one table.
   StageTimings allTimings() const;
@@ -113,6 +116,7 @@ class FrontendNode {
   std::deque<PendingDepth> cgm_;           ///< C-GM depth in, colour not yet
   std::deque<FrameFeatures> awaiting_3d_;  ///< stage 2D published, fused depth not yet
   int64_t last_extracted_seq_ = -1;
+  int64_t dropped_loop_behind_ = 0;
   /// Stage 2D under way on the worker (result invalid: none; destroyed, i.e. joined, before
   /// frontend_).
   struct InFlight {
