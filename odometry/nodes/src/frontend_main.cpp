@@ -95,7 +95,8 @@ int main(int argc, char** argv) {
                  "drops before extraction, the pose -> fused depth loop behind\n%s",
                  static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_out),
                  static_cast<long long>(c.frames_dropped), static_cast<long long>(c.frames_skipped),
-                 static_cast<long long>(node.droppedLoopBehind()), node.allTimings().table().c_str());
+                 static_cast<long long>(node.droppedLoopBehind()),
+                 node.allTimings().table().c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pplvo-frontend: %s\n", e.what());
     return 1;
