@@ -127,24 +127,21 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
   }
   depth_filter::OgmResult& result = fused_;  // buffers reused frame to frame
   const int64_t shortened_before = ogm_.stats().frames_fused_limited;
-  Stopwatch ogm_watch;
-  {
-    ScopedStageTimer t(timings_, "ogm");
-    if (pose.status == TrackingStatus::kLost || pose.status == TrackingStatus::kReinitialised) {
-      ogm_.reset();  // poses across a tracking loss cannot register the window
-    }
-    for (const WindowUncertainty& w : pose.window) {
-      ogm_.setWindowUncertainty(w.seq, w.max_translation_variance_m2);
-    }
-    ogm_.addFrame(p.seq, p.camera, p.depth);
-    // Frames newer than this one already wait for their poses: the loop is behind the sensor.
-    const int limit = overloadWindow(static_cast<int>(pending_.size()), options_);
-    ogm_.fuse(p.seq, pose.T_w_c, &result, limit);
+  const Stopwatch ogm_watch;
+  if (pose.status == TrackingStatus::kLost || pose.status == TrackingStatus::kReinitialised) {
+    ogm_.reset();  // poses across a tracking loss cannot register the window
   }
+  for (const WindowUncertainty& w : pose.window) {
+    ogm_.setWindowUncertainty(w.seq, w.max_translation_variance_m2);
+  }
+  ogm_.addFrame(p.seq, p.camera, p.depth);
+  // Frames newer than this one already wait for their poses: the loop is behind the sensor.
+  const int limit = overloadWindow(static_cast<int>(pending_.size()), options_);
+  ogm_.fuse(p.seq, pose.T_w_c, &result, limit);
+  const double ogm_ms = ogm_watch.elapsedMs();
+  timings_.add("ogm", ogm_ms);
   // The shortened ones again on their own: their count shows in every status message.
-  if (ogm_.stats().frames_fused_limited > shortened_before) {
-    timings_.add("ogm_shortened", ogm_watch.elapsedMs());
-  }
+  if (ogm_.stats().frames_fused_limited > shortened_before) timings_.add("ogm_shortened", ogm_ms);
   if (!result.ok) {
     // Downstream still gets a depth map: the frame's own stage-2 output.
     ++counters_.frames_skipped;

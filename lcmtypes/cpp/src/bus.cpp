@@ -138,7 +138,7 @@ std::vector<ChannelRoute> parseRoutesVariable(const std::string& value,
       ChannelRoute r;
       const std::string error = parseChannelRoute(entry, &r);
       if (error.empty()) {
-        routes.push_back(r);
+        setRoute(&routes, r);
       } else {
         errors->push_back(std::string(kRoutesVariable) + ": " + error);
       }

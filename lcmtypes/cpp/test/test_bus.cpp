@@ -192,6 +192,12 @@ TEST(BusConnections, RoutesFromTheEnvironmentOnlyWithTheEnvironmentsUrl) {
   EXPECT_EQ(parsed[1].channel, "B");
   ASSERT_EQ(errors.size(), 1u);
   EXPECT_NE(errors[0].find(kRoutesVariable), std::string::npos);
+  // A later entry of the same channel wins, as with --route.
+  const auto twice = parseRoutesVariable("A=memq://?a=1;B=memq://;A=memq://?a=2", &errors);
+  ASSERT_EQ(twice.size(), 2u);
+  EXPECT_EQ(twice[0].channel, "A");
+  EXPECT_EQ(twice[0].url, "memq://?a=2");
+  EXPECT_EQ(errors.size(), 1u);
 
   ScopedEnv url("LCM_DEFAULT_URL", "memq://");
   ScopedEnv routes(kRoutesVariable, "FRAMES=memq://?frames=1;MAPS=memq://?maps=1");

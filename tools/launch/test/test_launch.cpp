@@ -260,6 +260,34 @@ TEST(LaunchUrl, FrameChannelRoutesNeedFreePorts) {
   EXPECT_TRUE(decideLcmUrl(o, nullptr).errors.empty());
 }
 
+/// scripts/isolated.sh writes the same routes into PPLVO_LCM_ROUTES for processes started by
+/// hand (README: a live camera): they must stay the layout pplvo-launch hands its processes.
+TEST(LaunchUrl, IsolatedScriptRoutesEqualTheLaunchLayout) {
+  const char* source = std::getenv("PPLVO_SOURCE_DIR");
+  if (source == nullptr) GTEST_SKIP() << "PPLVO_SOURCE_DIR not set (run through ctest)";
+  const std::string command = "env -u PPLVO_LCM_ROUTES -u LCM_DEFAULT_URL_ISOLATED " +
+                              std::string(source) +
+                              "/scripts/isolated.sh sh -c 'printf \"%s\\n%s\\n\" "
+                              "\"$LCM_DEFAULT_URL\" \"$PPLVO_LCM_ROUTES\"' 2>/dev/null";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr) out += buf;
+  const int status = ::pclose(pipe);
+  if (status != 0) GTEST_SKIP() << "no private network namespace here (unshare refused)";
+  std::istringstream lines(out);
+  std::string url, routes;
+  ASSERT_TRUE(std::getline(lines, url) && std::getline(lines, routes)) << out;
+  std::string error;
+  std::string expected;
+  for (const std::string& r : frameChannelRoutes(url, &error)) {
+    expected += (expected.empty() ? "" : ";") + r;
+  }
+  ASSERT_TRUE(error.empty()) << error;
+  EXPECT_EQ(routes, expected) << "isolated.sh's URL: " << url;
+}
+
 // ---------------------------------------------------------------- report pieces
 
 TEST(LaunchReport, DoneLines) {

@@ -129,7 +129,7 @@ struct NodeCounts {
 /// (the last such line wins); the player's "published N frames, skipped M" line too.
 std::optional<NodeCounts> parseDoneLine(const std::string& log_text, const std::string& node);
 
-/// Parses "[pplvo-depth-filter] overload: N fusions over at most W frames ..." (the depth
+/// Parses "[pplvo-depth-filter] overload: N fusions over a shortened window ..." (the depth
 /// filter's load shedding, its last such line); -1 when the log has none.
 int64_t parseOverloadFusions(const std::string& log_text);
 
