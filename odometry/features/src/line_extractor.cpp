@@ -17,7 +17,9 @@ Eigen::Vector3d lineEquation(const Eigen::Vector2d& p1, const Eigen::Vector2d& p
 }
 
 LineExtractor::LineExtractor(const LineExtractorOptions& options) : options_(options) {
-  lsd_ = cv::createLineSegmentDetector(options_.lsd_refine, 1.0);
+  // pplvo's LSD without refinement; OpenCV's for the refinements it offers.
+  if (options_.lsd_refine != cv::LSD_REFINE_NONE)
+    opencv_lsd_ = cv::createLineSegmentDetector(options_.lsd_refine, 1.0);
   ld::BinaryDescriptor::Params params;
   params.widthOfBand_ = options_.lbd_band_width;
   params.numOfOctave_ = std::max(1, options_.lbd_octaves);
@@ -47,7 +49,10 @@ LineExtraction LineExtractor::extract(const cv::Mat& image, const PinholeCamera&
       if (small.cols < 8 || small.rows < 8) return result;
     }
     std::vector<cv::Vec4f> segments;
-    lsd_->detect(small, segments);
+    if (opencv_lsd_)
+      opencv_lsd_->detect(small, segments);
+    else
+      segments = detectLineSegments(small);
     // LSD returns pixel-centre coordinates of `small`; map to full resolution (pixel centres
     // (x + 0.5) / scale - 0.5).
     const float s_inv = static_cast<float>(1.0 / scale);

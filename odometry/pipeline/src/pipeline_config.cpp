@@ -322,7 +322,7 @@ void listFields(V& v, features::LineExtractorOptions& o) {
           "compute LBD on the full-resolution image");
   v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)", atLeast(0));
   v.field("max_lines", o.max_lines, "segments kept per frame, longest first", atLeast(1));
-  v.field("lsd_refine", o.lsd_refine, "LSD refinement: 0 none, 1 standard, 2 advanced",
+  v.field("lsd_refine", o.lsd_refine, "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)",
           between(0, 2));
   v.field("lbd_band_width", o.lbd_band_width, "LBD band width (OpenCV 7)", atLeast(1));
   v.field("lbd_octaves", o.lbd_octaves, "LBD pyramid octaves (1 = one resolution)", atLeast(1));

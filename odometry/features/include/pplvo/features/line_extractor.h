@@ -10,6 +10,7 @@
 
 #include "pplvo/core/camera.h"
 #include "pplvo/core/features.h"
+#include "pplvo/features/lsd.h"
 
 namespace pplvo::features {
 
@@ -25,8 +26,9 @@ struct LineExtractorOptions {
   double min_length_px = 25.0;
   /// Keep at most this many segments, longest first.
   int max_lines = 150;
-  /// LSD refinement: cv::LSD_REFINE_NONE (fast, default) or cv::LSD_REFINE_STD (splits
-  /// curved segments).
+  /// LSD refinement: cv::LSD_REFINE_NONE (default: pplvo's LSD, pplvo/features/lsd.h) or
+  /// cv::LSD_REFINE_STD / cv::LSD_REFINE_ADV (OpenCV's LSD, which splits curved segments and,
+  /// with ADV, validates them; about 3x slower before refining).
   int lsd_refine = cv::LSD_REFINE_NONE;
   /// LBD band width (OpenCV default 7) and number of pyramid octaves (1: full resolution).
   int lbd_band_width = 7;
@@ -81,7 +83,7 @@ class LineExtractor {
 
  private:
   LineExtractorOptions options_;
-  cv::Ptr<cv::LineSegmentDetector> lsd_;
+  cv::Ptr<cv::LineSegmentDetector> opencv_lsd_;  ///< only with a refinement
   cv::Ptr<cv::line_descriptor::BinaryDescriptor> lbd_;
 };
 
