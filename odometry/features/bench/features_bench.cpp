@@ -1,7 +1,7 @@
 // Per-stage timing and ground-truth accuracy of the 2D feature front end on the shared
 // sequences (VGA, one thread). Not a unit test: prints figures for docs/features.md.
 //
-//   pplvo_features_bench [--detectors orb,orb-nogrid,akaze,sift,brisk] [--lines 0.4,0.5,0.5f,1]
+//   pplvo_features_bench [--detectors orb,orb-nogrid,akaze,sift,brisk] [--lines 0.4,0.4o,0.5f,1]
 //                        [--oversample 2] [--orb-levels 4] [--orb-fast 12] [--ratio 0.85]
 //                        [--gate 40] [--min-sep 0] [--max-lines 150] [--min-line-px 25]
 //                        [--max-points 800] [--max-frames N] [--no-lines] [--no-points]
@@ -198,7 +198,9 @@ int main(int argc, char** argv) {
       for (const auto& lc : line_cfgs) {
         LineExtractorOptions lo;
         lo.detection_scale = std::atof(lc.c_str());
-        lo.describe_full_resolution = !lc.empty() && lc.back() == 'f';
+        // Suffixes: f = LBD at full resolution, o = OpenCV's LSD and LBD (e.g. 0.4o, 0.5fo).
+        lo.describe_full_resolution = lc.find('f') != std::string::npos;
+        lo.use_opencv = lc.find('o') != std::string::npos;
         lo.max_lines = max_lines;
         lo.min_length_px = min_line_px;
         LineExtractor ex(lo);

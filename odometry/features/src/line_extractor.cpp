@@ -17,13 +17,58 @@ Eigen::Vector3d lineEquation(const Eigen::Vector2d& p1, const Eigen::Vector2d& p
 }
 
 LineExtractor::LineExtractor(const LineExtractorOptions& options) : options_(options) {
-  // pplvo's LSD without refinement; OpenCV's for the refinements it offers.
-  if (options_.lsd_refine != cv::LSD_REFINE_NONE)
+  // pplvo's LSD and LBD unless OpenCV's are asked for or needed: LSD's refinements and LBD
+  // over several octaves are OpenCV's only.
+  if (options_.use_opencv || options_.lsd_refine != cv::LSD_REFINE_NONE)
     opencv_lsd_ = cv::createLineSegmentDetector(options_.lsd_refine, 1.0);
-  ld::BinaryDescriptor::Params params;
-  params.widthOfBand_ = options_.lbd_band_width;
-  params.numOfOctave_ = std::max(1, options_.lbd_octaves);
-  lbd_ = ld::BinaryDescriptor::createBinaryDescriptor(params);
+  if (options_.use_opencv || options_.lbd_octaves > 1) {
+    ld::BinaryDescriptor::Params params;
+    params.widthOfBand_ = options_.lbd_band_width;
+    params.numOfOctave_ = std::max(1, options_.lbd_octaves);
+    opencv_lbd_ = ld::BinaryDescriptor::createBinaryDescriptor(params);
+  }
+  lbd_.band_width = options_.lbd_band_width;
+}
+
+std::vector<ld::KeyLine> toKeyLines(const std::vector<cv::Vec4f>& segments, cv::Size image) {
+  const float max_side = static_cast<float>(std::max(image.width, image.height));
+  std::vector<ld::KeyLine> keylines;
+  keylines.reserve(segments.size());
+  for (const auto& s : segments) {
+    ld::KeyLine kl;
+    kl.startPointX = kl.sPointInOctaveX = s[0];
+    kl.startPointY = kl.sPointInOctaveY = s[1];
+    kl.endPointX = kl.ePointInOctaveX = s[2];
+    kl.endPointY = kl.ePointInOctaveY = s[3];
+    kl.lineLength = std::hypot(s[2] - s[0], s[3] - s[1]);
+    kl.angle = std::atan2(s[3] - s[1], s[2] - s[0]);
+    kl.octave = 0;
+    kl.class_id = static_cast<int>(keylines.size());
+    kl.numOfPixels = static_cast<int>(std::ceil(kl.lineLength));
+    kl.response = max_side > 0 ? kl.lineLength / max_side : 0.f;
+    kl.size = std::abs((s[2] - s[0]) * (s[3] - s[1]));
+    kl.pt = cv::Point2f(0.5f * (s[0] + s[2]), 0.5f * (s[1] + s[3]));
+    keylines.push_back(kl);
+  }
+  return keylines;
+}
+
+cv::Mat LineExtractor::describeWithOpenCv(const cv::Mat& image,
+                                          const std::vector<cv::Vec4f>& segments) const {
+  std::vector<ld::KeyLine> keylines = toKeyLines(segments, image.size());
+  cv::Mat computed;
+  opencv_lbd_->compute(image, keylines, computed);
+  if (computed.rows != static_cast<int>(keylines.size())) return {};
+  // Rows in the order of `segments` (compute() reports each row's class_id).
+  cv::Mat descriptors(computed.rows, computed.cols, computed.type());
+  std::vector<char> seen(segments.size(), 0);
+  for (int k = 0; k < computed.rows; ++k) {
+    const int id = keylines[k].class_id;
+    if (id < 0 || id >= static_cast<int>(segments.size()) || seen[id]) return {};
+    seen[id] = 1;
+    computed.row(k).copyTo(descriptors.row(id));
+  }
+  return descriptors;
 }
 
 LineExtraction LineExtractor::extract(const cv::Mat& image, const PinholeCamera& camera) const {
@@ -81,49 +126,29 @@ LineExtraction LineExtractor::extract(const cv::Mat& image, const PinholeCamera&
       by_length.resize(options_.max_lines);
     if (by_length.empty()) return result;
 
-    // KeyLines at octave 0 of the image LBD runs on; class_id indexes them.
+    // The kept segments in the coordinates of the image LBD runs on.
     const cv::Mat& desc_img = options_.describe_full_resolution ? gray : small;
     const float ds = static_cast<float>(desc_img.cols) / static_cast<float>(gray.cols);
-    const float max_side = static_cast<float>(std::max(desc_img.cols, desc_img.rows));
-    std::vector<ld::KeyLine> keylines;
-    keylines.reserve(by_length.size());
+    const float dd = ds == 1.f ? 0.f : 0.5f * ds - 0.5f;  // full-res centre -> desc_img
+    const float w1 = desc_img.cols - 1.f, h1 = desc_img.rows - 1.f;
+    std::vector<cv::Vec4f> described;
+    described.reserve(by_length.size());
     for (const auto& [len, i] : by_length) {
       const auto& s = segments[i];
-      ld::KeyLine kl;
-      const float w1 = desc_img.cols - 1.f, h1 = desc_img.rows - 1.f;
-      const float dd = ds == 1.f ? 0.f : 0.5f * ds - 0.5f;  // full-res centre -> desc_img
-      kl.startPointX = kl.sPointInOctaveX = std::clamp(s[0] * ds + dd, 0.f, w1);
-      kl.startPointY = kl.sPointInOctaveY = std::clamp(s[1] * ds + dd, 0.f, h1);
-      kl.endPointX = kl.ePointInOctaveX = std::clamp(s[2] * ds + dd, 0.f, w1);
-      kl.endPointY = kl.ePointInOctaveY = std::clamp(s[3] * ds + dd, 0.f, h1);
-      kl.lineLength = std::hypot(kl.endPointX - kl.startPointX, kl.endPointY - kl.startPointY);
-      kl.angle = std::atan2(kl.endPointY - kl.startPointY, kl.endPointX - kl.startPointX);
-      kl.octave = 0;
-      kl.class_id = static_cast<int>(keylines.size());
-      kl.numOfPixels = static_cast<int>(std::ceil(kl.lineLength));
-      kl.response = kl.lineLength / max_side;
-      kl.size = std::abs((kl.endPointX - kl.startPointX) * (kl.endPointY - kl.startPointY));
-      kl.pt = cv::Point2f(0.5f * (kl.startPointX + kl.endPointX),
-                          0.5f * (kl.startPointY + kl.endPointY));
-      keylines.push_back(kl);
+      described.emplace_back(
+          std::clamp(s[0] * ds + dd, 0.f, w1), std::clamp(s[1] * ds + dd, 0.f, h1),
+          std::clamp(s[2] * ds + dd, 0.f, w1), std::clamp(s[3] * ds + dd, 0.f, h1));
     }
-    cv::Mat descriptors;
-    lbd_->compute(desc_img, keylines, descriptors);
-    if (descriptors.rows != static_cast<int>(keylines.size())) {
+    const cv::Mat descriptors = opencv_lbd_ ? describeWithOpenCv(desc_img, described)
+                                            : describeLineSegments(desc_img, described, lbd_);
+    if (descriptors.rows != static_cast<int>(described.size())) {
       result.stats.error = "LBD descriptor count disagrees with segments";
       return result;
     }
     const bool undistort = camera.valid() && camera.hasDistortion();
-    result.lines.reserve(keylines.size());
-    for (int k = 0; k < static_cast<int>(keylines.size()); ++k) {
-      // compute() keeps the order (class_id == index); use the full-resolution segment.
-      const int id = keylines[k].class_id;
-      if (id < 0 || id >= static_cast<int>(by_length.size())) {
-        result = LineExtraction{};
-        result.stats.error = "LBD returned an unknown line id";
-        return result;
-      }
-      const auto& s = segments[by_length[id].second];
+    result.lines.reserve(by_length.size());
+    for (const auto& [len, i] : by_length) {
+      const auto& s = segments[i];  // full resolution
       LineFeature f;
       const Eigen::Vector2d p1(s[0], s[1]), p2(s[2], s[3]);
       f.px1 = undistort ? camera.undistortPixel(p1) : p1;

@@ -441,7 +441,7 @@ TEST(Options, VisitListsEveryField) {
   const LineExtractorOptions lo;
   n = 0;
   lo.visit([&](const char*, const auto&) { ++n; });
-  EXPECT_EQ(n, 8);
+  EXPECT_EQ(n, 9);
   n = 0;
   PointMatchOptions{}.visit([&](const char*, auto&) { ++n; });
   EXPECT_EQ(n, 7);

@@ -7,6 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "pplvo/features/lbd.h"
 #include "pplvo/features/line_extractor.h"
 #include "pplvo/features/lsd.h"
 #include "shared_sequence.h"
@@ -187,15 +188,34 @@ TEST(Lsd, RejectsOtherImageTypesAndBadOptions) {
   EXPECT_THROW(detectLineSegments(img, o), cv::Exception);
 }
 
-TEST(LineExtractor, OpenCvsRefinedLsdRemainsAvailable) {
-  // lsd_refine selects OpenCV's LSD with its refinement; on a rectangle both give its sides.
+TEST(LineExtractor, OpenCvsLsdAndLbdRemainAvailable) {
+  // use_opencv, lsd_refine and lbd_octaves select OpenCV's LSD and LBD; on a rectangle every
+  // combination gives its four sides with a descriptor each, and the sides agree.
   cv::Mat img(480, 640, CV_8UC1, cv::Scalar(50));
   img(cv::Rect(200, 150, 240, 180)).setTo(200);
-  for (int refine : {cv::LSD_REFINE_NONE, cv::LSD_REFINE_STD}) {
-    LineExtractorOptions o;
-    o.lsd_refine = refine;
-    const LineExtraction r = LineExtractor(o).extract(img, pplvo::features::test::vgaCamera());
-    EXPECT_TRUE(r.stats.error.empty()) << r.stats.error;
-    EXPECT_EQ(r.lines.size(), 4u) << "refine " << refine;
+  const LineExtraction ours = LineExtractor().extract(img, pplvo::features::test::vgaCamera());
+  ASSERT_EQ(ours.lines.size(), 4u);
+  for (const bool use_opencv : {false, true}) {
+    for (const int refine : {cv::LSD_REFINE_NONE, cv::LSD_REFINE_STD}) {
+      for (const int octaves : {1, 2}) {
+        LineExtractorOptions o;
+        o.use_opencv = use_opencv;
+        o.lsd_refine = refine;
+        o.lbd_octaves = octaves;
+        const LineExtraction r = LineExtractor(o).extract(img, pplvo::features::test::vgaCamera());
+        const std::string what = "opencv " + std::to_string(use_opencv) + " refine " +
+                                 std::to_string(refine) + " octaves " + std::to_string(octaves);
+        EXPECT_TRUE(r.stats.error.empty()) << what << ": " << r.stats.error;
+        ASSERT_EQ(r.lines.size(), 4u) << what;
+        EXPECT_EQ(r.descriptors.rows, 4) << what;
+        EXPECT_EQ(r.descriptors.cols, kLbdBytes) << what;
+        for (const auto& l : r.lines) {
+          const bool found = std::any_of(ours.lines.begin(), ours.lines.end(), [&](const LineFeature& m) {
+            return (l.px1 - m.px1).norm() < 1.5 && (l.px2 - m.px2).norm() < 1.5;
+          });
+          EXPECT_TRUE(found) << what;
+        }
+      }
+    }
   }
 }

@@ -324,8 +324,11 @@ void listFields(V& v, features::LineExtractorOptions& o) {
   v.field("max_lines", o.max_lines, "segments kept per frame, longest first", atLeast(1));
   v.field("lsd_refine", o.lsd_refine, "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)",
           between(0, 2));
-  v.field("lbd_band_width", o.lbd_band_width, "LBD band width (OpenCV 7)", atLeast(1));
-  v.field("lbd_octaves", o.lbd_octaves, "LBD pyramid octaves (1 = one resolution)", atLeast(1));
+  v.field("lbd_band_width", o.lbd_band_width, "LBD band width (rows per band, LBD's 7)",
+          between(1, 64));
+  v.field("lbd_octaves", o.lbd_octaves,
+          "LBD pyramid octaves (1 = one resolution, pplvo's LBD; more: OpenCV's)", atLeast(1));
+  v.field("use_opencv", o.use_opencv, "LSD and LBD from OpenCV instead of pplvo's (slower)");
   v.field("min_image_side_px", o.min_image_side_px, "smaller images give no lines (px)",
           atLeast(1));
 }

@@ -10,6 +10,7 @@
 
 #include "pplvo/core/camera.h"
 #include "pplvo/core/features.h"
+#include "pplvo/features/lbd.h"
 #include "pplvo/features/lsd.h"
 
 namespace pplvo::features {
@@ -30,9 +31,13 @@ struct LineExtractorOptions {
   /// cv::LSD_REFINE_STD / cv::LSD_REFINE_ADV (OpenCV's LSD, which splits curved segments and,
   /// with ADV, validates them; about 3x slower before refining).
   int lsd_refine = cv::LSD_REFINE_NONE;
-  /// LBD band width (OpenCV default 7) and number of pyramid octaves (1: full resolution).
+  /// LBD band width (LBD's and OpenCV's 7) and number of pyramid octaves (1: the detection
+  /// image only, pplvo's LBD; more: OpenCV's BinaryDescriptor).
   int lbd_band_width = 7;
   int lbd_octaves = 1;
+  /// LSD and LBD from OpenCV instead of pplvo's own (pplvo/features/lsd.h, lbd.h), for
+  /// comparison: the same algorithms, several times slower (docs/features.md).
+  bool use_opencv = false;
   /// Images smaller than this on either side give no lines.
   int min_image_side_px = 32;
 
@@ -49,6 +54,7 @@ struct LineExtractorOptions {
     v("lsd_refine", s.lsd_refine);
     v("lbd_band_width", s.lbd_band_width);
     v("lbd_octaves", s.lbd_octaves);
+    v("use_opencv", s.use_opencv);
     v("min_image_side_px", s.min_image_side_px);
   }
 };
@@ -69,6 +75,11 @@ struct LineExtraction {
 /// Zero vector if the points coincide.
 Eigen::Vector3d lineEquation(const Eigen::Vector2d& p1, const Eigen::Vector2d& p2);
 
+/// OpenCV KeyLines of `segments` ((x1, y1, x2, y2) in pixels of an image of size `image`) at
+/// octave 0, class_id = index: what OpenCV's BinaryDescriptor::compute takes.
+std::vector<cv::line_descriptor::KeyLine> toKeyLines(const std::vector<cv::Vec4f>& segments,
+                                                     cv::Size image);
+
 /// Not thread-safe (holds OpenCV objects): use one instance per thread.
 class LineExtractor {
  public:
@@ -82,9 +93,13 @@ class LineExtractor {
   const LineExtractorOptions& options() const { return options_; }
 
  private:
+  /// OpenCV's LBD on `segments` of `image`, rows in their order; empty on a count mismatch.
+  cv::Mat describeWithOpenCv(const cv::Mat& image, const std::vector<cv::Vec4f>& segments) const;
+
   LineExtractorOptions options_;
-  cv::Ptr<cv::LineSegmentDetector> opencv_lsd_;  ///< only with a refinement
-  cv::Ptr<cv::line_descriptor::BinaryDescriptor> lbd_;
+  LbdOptions lbd_;
+  cv::Ptr<cv::LineSegmentDetector> opencv_lsd_;                ///< use_opencv or a refinement
+  cv::Ptr<cv::line_descriptor::BinaryDescriptor> opencv_lbd_;  ///< use_opencv or octaves > 1
 };
 
 }  // namespace pplvo::features
