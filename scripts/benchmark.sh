@@ -69,8 +69,8 @@ stages="$out/stages.md"
   echo "|---|---|---|---|---|---|---|---|"
 } > "$table"
 {
-  echo "| sequence | depth filter decode+cgm+ogm | points | lines | planes (C-GM + fused) | lift | matching | pose | node I/O | pipeline ms/frame | pplvo-run frames/s | same, frames decoded beforehand |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| sequence | depth filter decode+cgm+ogm | points | lines | planes (C-GM + fused) | lift | matching | pose | node I/O | pipeline ms/frame | pplvo-run frames/s | same, frames decoded beforehand | machine probe s |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } > "$stages"
 
 for i in "${!names[@]}"; do
@@ -82,6 +82,7 @@ for i in "${!names[@]}"; do
     label="${c%%|*}"; args="${c#*|}"
     tag="$(echo "$label" | tr -c 'a-zA-Z0-9\n' '_')"
     est="$out/$n.$tag.txt"
+    [ "$label" = "all" ] && probe="$(benchmark_probe)"
     # shellcheck disable=SC2086
     "$bin/pplvo-run" --dataset "$d" --output "$est" --summary "$out/$n.$tag.yaml" --quiet $args \
       "${fpsarg[@]}" 2>"$out/$n.$tag.log"
@@ -101,7 +102,7 @@ for i in "${!names[@]}"; do
       cmp -s "$est" "$out/$n.$tag.preload.txt" || echo "benchmark.sh: $n: --preload changed the trajectory" >&2
       fp="$(yaml_value "$out/$n.$tag.preload.yaml" frames_per_s)"
       # Per-stage means from the summary (ms per call; planes run twice per frame).
-      awk -v seq="$n" -v fps="$f" -v fpspre="$fp" '
+      awk -v seq="$n" -v fps="$f" -v fpspre="$fp" -v probe="$probe" '
         /^  pplvo-/{node=$1} /stages_mean_ms:/{s=1; next}
         s && $1 ~ /:$/ && NF==2 {k=node $1; v[k]=$2}
         /^  pplvo-/{s=0}
@@ -110,9 +111,9 @@ for i in "${!names[@]}"; do
           io=3*v["pplvo-frontend:decode:"]+2*v["pplvo-frontend:encode:"]+2*v["pplvo-estimator:decode:"]+v["pplvo-estimator:encode:"];
           m=v["pplvo-estimator:match_points:"]+v["pplvo-estimator:match_lines:"]+v["pplvo-estimator:match_planes:"];
           tot=df+v["pplvo-frontend:points:"]+v["pplvo-frontend:lines:"]+2*v["pplvo-frontend:planes:"]+v["pplvo-frontend:lift:"]+m+v["pplvo-estimator:pose:"]+io;
-          printf "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n", seq, df,
+          printf "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %s |\n", seq, df,
             v["pplvo-frontend:points:"], v["pplvo-frontend:lines:"], 2*v["pplvo-frontend:planes:"],
-            v["pplvo-frontend:lift:"], m, v["pplvo-estimator:pose:"], io, tot, fps, fpspre}' "$out/$n.$tag.yaml" >> "$stages"
+            v["pplvo-frontend:lift:"], m, v["pplvo-estimator:pose:"], io, tot, fps, fpspre, probe}' "$out/$n.$tag.yaml" >> "$stages"
     elif [ "$label" = "points" ]; then
       ests+=("$est"); labels+=("pplvo (points)")
     fi
@@ -156,9 +157,12 @@ whose pose came from an accepted estimate (the first frame is the origin). "moti
 `rpe.trans_scale`: the least-squares scale of the estimated 1 s relative translations against
 the ground truth's (1 = unbiased; below 1 = motion under-estimated, see docs/pipeline.md on
 ICL-NUIM). frames/s is end to end: reading and decoding the PNGs (in the player's loader
-thread) included. The last column of the per-stage table is the same run with the frames
-decoded before the first is published (`pplvo-run --preload`, as from a camera, which delivers
-decoded frames; the peer's figure leaves the reading out too); its trajectory is the same.
+thread) included. The per-stage table's "frames decoded beforehand" is the same run with the
+frames decoded before the first is published (`pplvo-run --preload`, as from a camera, which
+delivers decoded frames; the peer's figure leaves the reading out too); its trajectory is the
+same. "machine probe s", measured just before the sequence's 'all' run, is the time two fixed
+loads took at once, one per core (scripts/benchmark_sequences.sh): about 1.1 s when both cores
+are free, more when other tenants of this shared machine were using them.
 
 ## Accuracy
 TEXT

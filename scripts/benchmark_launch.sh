@@ -44,8 +44,8 @@ benchmark_sequences "$bin" "$build/benchmark/synth_room" 150 "$shared"
 value() { awk -v k="$1" '$1 == k":" { print $2; exit }' "$2"; }
 table="$out/table.md"
 {
-  echo "| sequence | run | published | posed | without pose | dropped (depth filter / frontend / estimator) | shortened fusions | wall s | ATE m | RPE m/s | RPE deg/s | = pplvo-run |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| sequence | run | machine probe s | published | posed | without pose | dropped (depth filter / frontend / estimator) | shortened fusions | wall s | ATE m | RPE m/s | RPE deg/s | = pplvo-run |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } > "$table"
 for i in "${!names[@]}"; do
   n="${names[$i]}"; d="${dirs[$i]}"; fps="${fpss[$i]}"
@@ -55,11 +55,12 @@ for i in "${!names[@]}"; do
   for r in $(seq 1 "$runs"); do
     run="$out/$n.$r"
     rm -rf "$run" && mkdir -p "$run/logs"
+    probe="$(benchmark_probe)"
     status=0
     "$bin/pplvo-launch" --isolated --rate 1 --quiet --dataset "$d" --output "$run/traj.txt" \
       --node-logs "$run/logs" "${fpsarg[@]}" "${extra[@]}" > "$run/report.txt" 2>&1 || status=$?
     if [ "$status" != 0 ]; then
-      echo "| $n | $r | launch failed (exit $status): $run/report.txt | | | | | | | | | |" >> "$table"
+      echo "| $n | $r | $probe | launch failed (exit $status): $run/report.txt | | | | | | | | | |" >> "$table"
       continue
     fi
     drops() { awk -v p="$1" '$1 == p { print $(NF - 2) }' "$run/report.txt"; }
@@ -67,7 +68,7 @@ for i in "${!names[@]}"; do
       "${fpsarg[@]}" 2>/dev/null | awk '/^ate.rmse_m /{a=$2} /^rpe.trans_rmse_m_per_s /{t=$2}
         /^rpe.rot_rmse_deg_per_s /{r=$2} END { printf "%.4f %.4f %.3f\n", a, t, r }')
     same=no; cmp -s "$ref" "$run/traj.txt" && same=yes
-    printf '| %s | %d | %s | %s | %s | %s / %s / %s | %s | %.1f | %s | %s | %s | %s |\n' "$n" "$r" \
+    printf '| %s | %d | %s | %s | %s | %s | %s / %s / %s | %s | %.1f | %s | %s | %s | %s |\n' "$n" "$r" "$probe" \
       "$(value launch.frames_published "$run/report.txt")" \
       "$(value launch.trajectory_poses "$run/report.txt")" \
       "$(value launch.frames_without_pose "$run/report.txt")" \
@@ -98,7 +99,9 @@ trajectory; "dropped" = each node's own count (a frame dropped upstream is not s
 downstream). "shortened fusions" = frames the depth filter fused over a shorter O-GM window
 because the loop had fallen behind (its load shedding, docs/depth_filter.md; 0 = every frame
 over the full window). "= pplvo-run": the trajectory file equals the one-process run's byte
-for byte.
+for byte. "machine probe s": just before the run, the time two fixed loads took at once, one per
+core (scripts/benchmark_sequences.sh; about 1.1 s when both cores are free, more when other
+tenants of this shared machine were using them).
 ATE and RPE by `pplvo-eval` as in docs/benchmark.md.
 
 TEXT
