@@ -73,9 +73,15 @@ cv::Mat describeLineSegments(const cv::Mat& gray, const std::vector<cv::Vec4f>& 
   std::vector<std::array<float, 4>> row_sums(rows);
   for (size_t s = 0; s < segments.size(); ++s) {
     const cv::Vec4f& seg = segments[s];
+    // Far outside any image (or NaN): nothing to sample, and the pixel arithmetic below needs
+    // coordinates well inside int range. Such segments keep an all-zero descriptor.
+    constexpr float kMaxCoordinate = 1e5f;
+    if (!(std::abs(seg[0]) < kMaxCoordinate && std::abs(seg[1]) < kMaxCoordinate &&
+          std::abs(seg[2]) < kMaxCoordinate && std::abs(seg[3]) < kMaxCoordinate))
+      continue;
     const float dx = seg[2] - seg[0], dy = seg[3] - seg[1];
     const float length = std::hypot(dx, dy);
-    if (!(length > 0.f) || !std::isfinite(length)) continue;  // all-zero descriptor
+    if (!(length > 0.f)) continue;
     const float ux = dx / length, uy = dy / length;           // along the segment
     const float nx = -uy, ny = ux;                            // across it
     const int samples = static_cast<int>(length) + 1;

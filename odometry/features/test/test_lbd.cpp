@@ -139,13 +139,18 @@ TEST(Lbd, DegenerateInputs) {
   const cv::Mat gray = texturedView();
   EXPECT_EQ(describeLineSegments(gray, {}).rows, 0);
   EXPECT_EQ(describeLineSegments(gray, {}).cols, kLbdBytes);
-  // Zero length, not finite, far outside: all-zero rows, one per segment.
-  const std::vector<cv::Vec4f> odd = {
-      {100, 100, 100, 100}, {NAN, 3, 50, 60}, {-5000, -5000, -4000, -4000}, {100, 100, 200, 150}};
+  // Zero length, not finite, outside the image, beyond int range: all-zero rows, one per
+  // segment.
+  const std::vector<cv::Vec4f> odd = {{100, 100, 100, 100},
+                                      {NAN, 3, 50, 60},
+                                      {-5000, -5000, -4000, -4000},
+                                      {1e30f, 10, 1e30f, 500},
+                                      {10, INFINITY, 20, 30},
+                                      {100, 100, 200, 150}};
   const cv::Mat d = describeLineSegments(gray, odd);
-  ASSERT_EQ(d.rows, 4);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(cv::countNonZero(d.row(i)), 0) << i;
-  EXPECT_GT(cv::countNonZero(d.row(3)), 0);
+  ASSERT_EQ(d.rows, 6);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(cv::countNonZero(d.row(i)), 0) << i;
+  EXPECT_GT(cv::countNonZero(d.row(5)), 0);
   // No image: zero descriptors of the right shape.
   const cv::Mat none = describeLineSegments(cv::Mat(), {{0, 0, 10, 10}});
   EXPECT_EQ(none.rows, 1);
