@@ -104,9 +104,10 @@ cv::Mat describeLineSegments(const cv::Mat& gray, const std::vector<cv::Vec4f>& 
         along_sum += along;
         along_abs += std::fabs(along);
       };
-      // Nearest pixel by truncation of x + 0.5, shifted by kBias to stay positive (truncation
-      // floors positive values only; regions reach at most 9 * 64 / 2 px outside the image);
-      // pixels outside the image contribute nothing.
+      // Nearest pixel by truncation of x + 0.5 + kBias (truncation rounds down only values
+      // >= 0, which the bias makes of every position less than kBias px outside the image;
+      // positions further out truncate to pixels outside it too). Pixels outside the image
+      // contribute nothing.
       constexpr int kBias = 1024;
       const float bx = x0 + 0.5f + kBias, by = y0 + 0.5f + kBias;
       float tf = 0.f;
