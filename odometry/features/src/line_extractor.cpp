@@ -27,7 +27,6 @@ LineExtractor::LineExtractor(const LineExtractorOptions& options) : options_(opt
     params.numOfOctave_ = std::max(1, options_.lbd_octaves);
     opencv_lbd_ = ld::BinaryDescriptor::createBinaryDescriptor(params);
   }
-  lbd_.band_width = options_.lbd_band_width;
 }
 
 std::vector<ld::KeyLine> toKeyLines(const std::vector<cv::Vec4f>& segments, cv::Size image) {
@@ -140,7 +139,8 @@ LineExtraction LineExtractor::extract(const cv::Mat& image, const PinholeCamera&
           std::clamp(s[2] * ds + dd, 0.f, w1), std::clamp(s[3] * ds + dd, 0.f, h1));
     }
     const cv::Mat descriptors = opencv_lbd_ ? describeWithOpenCv(desc_img, described)
-                                            : describeLineSegments(desc_img, described, lbd_);
+                                            : describeLineSegments(desc_img, described,
+                                                                   {options_.lbd_band_width});
     if (descriptors.rows != static_cast<int>(described.size())) {
       result.stats.error = "LBD descriptor count disagrees with segments";
       return result;

@@ -22,17 +22,6 @@ int hamming(const cv::Mat& a, int i, const cv::Mat& b, int j) {
   return static_cast<int>(cv::norm(a.row(i), b.row(j), cv::NORM_HAMMING));
 }
 
-/// The textured test plane seen from a pose of the feature tests.
-cv::Mat texturedView() {
-  pplvo::features::test::PlaneScene scene;
-  scene.texture = pplvo::features::test::makeTexture(1024, 7);
-  cv::Mat gray;
-  scene.render(pplvo::features::test::vgaCamera(),
-               makePose(Eigen::Vector3d(0.05, -0.03, 0.0), Eigen::Quaterniond::Identity()), 2.0, 11,
-               &gray, nullptr);
-  return gray;
-}
-
 /// The LSD segments of `gray` at least `min_length` long whose LBD region (+-32 px) stays
 /// `margin` pixels inside the image.
 std::vector<cv::Vec4f> interiorSegments(const cv::Mat& gray, float min_length, float margin) {
@@ -51,7 +40,7 @@ std::vector<cv::Vec4f> interiorSegments(const cv::Mat& gray, float min_length, f
 }  // namespace
 
 TEST(Lbd, ShiftingOrTurningTheImageLeavesTheDescriptor) {
-  const cv::Mat gray = texturedView();
+  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
   const auto segments = interiorSegments(gray, 20.f, 12.f);
   ASSERT_GT(segments.size(), 20u);
   const cv::Mat d = describeLineSegments(gray, segments);
@@ -90,7 +79,7 @@ TEST(Lbd, ShiftingOrTurningTheImageLeavesTheDescriptor) {
 }
 
 TEST(Lbd, GainAndOffsetOfTheImageBarelyChangeIt) {
-  const cv::Mat gray = texturedView();
+  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
   const auto segments = interiorSegments(gray, 20.f, 0.f);
   ASSERT_GT(segments.size(), 20u);
   cv::Mat dimmer;
@@ -107,7 +96,7 @@ TEST(Lbd, GainAndOffsetOfTheImageBarelyChangeIt) {
 TEST(Lbd, TellsSegmentsApartLikeOpenCvsLbd) {
   // On the same segments, the nearest other segment's descriptor is as far from each one with
   // pplvo's LBD as with OpenCV's: the median distance to the closest different segment.
-  const cv::Mat gray = texturedView();
+  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
   const auto segments = interiorSegments(gray, 15.f, 0.f);
   ASSERT_GT(segments.size(), 30u);
   const cv::Mat ours = describeLineSegments(gray, segments);
@@ -136,7 +125,7 @@ TEST(Lbd, TellsSegmentsApartLikeOpenCvsLbd) {
 }
 
 TEST(Lbd, DegenerateInputs) {
-  const cv::Mat gray = texturedView();
+  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
   EXPECT_EQ(describeLineSegments(gray, {}).rows, 0);
   EXPECT_EQ(describeLineSegments(gray, {}).cols, kLbdBytes);
   // Zero length, not finite, outside the image, beyond int range: all-zero rows, one per

@@ -120,12 +120,7 @@ TEST(Lsd, SlantedEdgeFollowsItsAngle) {
 
 TEST(Lsd, FindsTheSegmentsOfOpenCvsLsdOnATexturedScene) {
   // The feature tests' textured plane, seen at an angle, at full and reduced resolution.
-  pplvo::features::test::PlaneScene scene;
-  scene.texture = pplvo::features::test::makeTexture(1024, 7);
-  cv::Mat gray;
-  scene.render(pplvo::features::test::vgaCamera(),
-               makePose(Eigen::Vector3d(0.05, -0.03, 0.0), Eigen::Quaterniond::Identity()), 2.0,
-               11, &gray, nullptr);
+  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
   ASSERT_FALSE(gray.empty());
   expectSameAsOpenCv(gray, "textured plane, VGA");
   cv::Mat small;

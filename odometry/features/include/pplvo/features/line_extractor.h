@@ -97,7 +97,6 @@ class LineExtractor {
   cv::Mat describeWithOpenCv(const cv::Mat& image, const std::vector<cv::Vec4f>& segments) const;
 
   LineExtractorOptions options_;
-  LbdOptions lbd_;
   cv::Ptr<cv::LineSegmentDetector> opencv_lsd_;                ///< use_opencv or a refinement
   cv::Ptr<cv::line_descriptor::BinaryDescriptor> opencv_lbd_;  ///< use_opencv or octaves > 1
 };
