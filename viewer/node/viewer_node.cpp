@@ -34,14 +34,20 @@ ViewerNode::ViewerNode(const ViewerOptions& options, msgs::Bus bus)
     if (!r.ok) throw std::runtime_error("ground truth: " + r.error);
     groundtruth_ = std::move(r.file);
   }
-  bus_.subscribe(options_.rgbd_channel, &ViewerNode::onRgbd, this);
-  bus_.subscribe(options_.depth_cgm_channel, &ViewerNode::onDepthCgm, this);
-  bus_.subscribe(options_.depth_fused_channel, &ViewerNode::onDepthFused, this);
-  bus_.subscribe(options_.features_channel, &ViewerNode::onFeatures, this);
-  bus_.subscribe(options_.features_3d_channel, &ViewerNode::onFeatures3d, this);
-  bus_.subscribe(options_.pose_channel, &ViewerNode::onPose, this);
-  bus_.subscribe(options_.status_channel, &ViewerNode::onStatus, this);
-  bus_.subscribe(options_.stream_channel, &ViewerNode::onStream, this);
+  bus_.subscribe(options_.rgbd_channel, &ViewerNode::onRgbd, this, counters_, options_.node_name);
+  bus_.subscribe(options_.depth_cgm_channel, &ViewerNode::onDepthCgm, this, counters_,
+                 options_.node_name);
+  bus_.subscribe(options_.depth_fused_channel, &ViewerNode::onDepthFused, this, counters_,
+                 options_.node_name);
+  bus_.subscribe(options_.features_channel, &ViewerNode::onFeatures, this, counters_,
+                 options_.node_name);
+  bus_.subscribe(options_.features_3d_channel, &ViewerNode::onFeatures3d, this, counters_,
+                 options_.node_name);
+  bus_.subscribe(options_.pose_channel, &ViewerNode::onPose, this, counters_, options_.node_name);
+  bus_.subscribe(options_.status_channel, &ViewerNode::onStatus, this, counters_,
+                 options_.node_name);
+  bus_.subscribe(options_.stream_channel, &ViewerNode::onStream, this, counters_,
+                 options_.node_name);
   last_status_ = Clock::now();
   last_draw_ = Clock::now() - std::chrono::hours(1);
 }

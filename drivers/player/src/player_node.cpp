@@ -152,7 +152,8 @@ PlayerNode::PlayerNode(const PlayerOptions& options, msgs::Bus bus)
       bus_(std::move(bus)),
       dataset_(dataset::Dataset::open(options.dataset_dir, datasetOptions(options))) {
   if (options_.lockstep) {
-    pose_sub_ = bus_.subscribe(options_.pose_channel, &PlayerNode::onPose, this);
+    pose_sub_ = bus_.subscribe(options_.pose_channel, &PlayerNode::onPose, this, counters_,
+                               options_.node_name);
   }
 }
 

@@ -18,8 +18,10 @@ DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, msgs::Bu
       cgm_(options.cgm, std::make_shared<depth_filter::QuadraticSensorModel>(options.sensor)),
       ogm_(options.ogm) {
   if (options_.max_pending < 1) options_.max_pending = 1;
-  subscriptions_.push_back(bus_.subscribe(options_.rgbd_channel, &DepthFilterNode::onFrame, this));
-  subscriptions_.push_back(bus_.subscribe(options_.pose_channel, &DepthFilterNode::onPose, this));
+  subscriptions_.push_back(
+      bus_.subscribe(options_.rgbd_channel, &DepthFilterNode::onFrame, this, counters_, kName));
+  subscriptions_.push_back(
+      bus_.subscribe(options_.pose_channel, &DepthFilterNode::onPose, this, counters_, kName));
 }
 
 DepthFilterNode::~DepthFilterNode() {

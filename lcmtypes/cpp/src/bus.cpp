@@ -89,6 +89,8 @@ void Bus::unsubscribe(const BusSubscription& s) const {
   for (const auto& [l, sub] : s.parts) {
     if (sub) l->unsubscribe(sub);
   }
+  auto& adapters = routing_->adapters;
+  adapters.erase(std::remove(adapters.begin(), adapters.end(), s.adapter), adapters.end());
 }
 
 size_t Bus::instanceCount() const {

@@ -36,6 +36,30 @@ std::unique_ptr<lcm::LCM> openLcm(const std::string& url) {
   return lcm;
 }
 
+void reportProblem(NodeCounters& counters, const std::string& node, const std::string& warning) {
+  counters.last_warning = warning;
+  const int64_t n = counters.errors + counters.frames_skipped;
+  if (n <= 5 || n % 100 == 0) {
+    std::fprintf(stderr, "[%s] %s (%lld so far)\n", node.c_str(), warning.c_str(),
+                 static_cast<long long>(n));
+  }
+}
+
+namespace detail {
+
+void countUndecodable(NodeCounters& counters, const std::string& node, const std::string& channel,
+                      const std::string& error) {
+  ++counters.frames_skipped;
+  reportProblem(counters, node, "skipped undecodable packet on " + channel + ": " + error);
+}
+
+void countEscaped(NodeCounters& counters, const std::string& node, const std::string& what) {
+  ++counters.errors;
+  reportProblem(counters, node, "error: " + what);
+}
+
+}  // namespace detail
+
 int64_t spin(const Bus& bus, const std::function<bool()>& done,
              const std::function<void()>& periodic, double period_s) {
   using Clock = std::chrono::steady_clock;

@@ -3,9 +3,11 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <pplvo_msgs/node_status_t.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -23,6 +25,17 @@ struct Received {
     channels.push_back(channel);
   }
   void onRaw(const lcm::ReceiveBuffer*, const std::string& channel) { channels.push_back(channel); }
+  NodeCounters counters;
+};
+
+/// A handler that throws out of itself on every message (what nodes never do: guarded()).
+struct Throwing {
+  int calls = 0;
+  NodeCounters counters;
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::node_status_t*) {
+    ++calls;
+    throw std::runtime_error("handler failed");
+  }
 };
 
 pplvo_msgs::node_status_t status() { return toStatusMsg("test", NodeCounters{}, {}, 1); }
@@ -62,7 +75,7 @@ TEST(Bus, OneInstanceCarriesEverything) {
   Bus bus(lcm);
   EXPECT_EQ(bus.instanceCount(), 1u);
   Received r;
-  const BusSubscription s = bus.subscribe("A", &Received::onStatus, &r);
+  const BusSubscription s = bus.subscribe("A", &Received::onStatus, &r, r.counters, "test");
   const auto m = status();
   bus.publish("A", &m);
   lcm.publish("A", &m);  // the same instance
@@ -85,8 +98,8 @@ TEST(Bus, RoutedChannelTravelsOnItsOwnInstance) {
   // A copy shares the routing table and the set of instances to wait on.
   const Bus copy = bus;
   Received r;
-  copy.subscribe("FRAMES", &Received::onStatus, &r);
-  bus.subscribe("POSE", &Received::onStatus, &r);
+  copy.subscribe("FRAMES", &Received::onStatus, &r, r.counters, "test");
+  bus.subscribe("POSE", &Received::onStatus, &r, r.counters, "test");
   const auto m = status();
   bus.publish("FRAMES", &m);
   bus.publish("POSE", &m);
@@ -111,8 +124,8 @@ TEST(Bus, InstancesOnlyPublishedOnAreNotWaitedOn) {
   bus.route("FRAMES", frames);
   bus.route("OTHER", other);
   Received r;
-  bus.subscribe("POSE", &Received::onStatus, &r);
-  bus.subscribe("OTHER", &Received::onStatus, &r);
+  bus.subscribe("POSE", &Received::onStatus, &r, r.counters, "test");
+  bus.subscribe("OTHER", &Received::onStatus, &r, r.counters, "test");
   Received direct;  // behind the bus's back (memq drops messages nobody subscribed to)
   frames.subscribe("FRAMES", &Received::onStatus, &direct);
   const auto m = status();
@@ -149,8 +162,8 @@ TEST(Bus, SpinHandlesEveryInstanceUntilDone) {
   Bus bus(main_lcm);
   bus.route("FRAMES", frames);
   Received r;
-  bus.subscribe("FRAMES", &Received::onStatus, &r);
-  bus.subscribe("POSE", &Received::onStatus, &r);
+  bus.subscribe("FRAMES", &Received::onStatus, &r, r.counters, "test");
+  bus.subscribe("POSE", &Received::onStatus, &r, r.counters, "test");
   const auto m = status();
   for (int i = 0; i < 3; ++i) {
     bus.publish("FRAMES", &m);
@@ -228,6 +241,48 @@ TEST(BusConnections, SameUrlSharesOneInstance) {
   EXPECT_EQ(&c.bus().instanceFor("FRAMES"), &c.defaultInstance());
   EXPECT_NE(&c.bus().instanceFor("MAPS"), &c.defaultInstance());
   EXPECT_THROW(BusConnections("nonsense://", {}), std::runtime_error);
+}
+
+TEST(Bus, CorruptPacketsAreCountedSkipsAndTheNextMessageIsHandled) {
+  lcm::LCM lcm("memq://");
+  Bus bus(lcm);
+  Received r;
+  bus.subscribe("A", &Received::onStatus, &r, r.counters, "test");
+  auto m = status();
+  m.node = "a node";
+  std::vector<uint8_t> good(static_cast<size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(good.data(), 0, static_cast<int>(good.size())), static_cast<int>(good.size()));
+  // The `node` string's length field follows the 8-byte hash and utime: negative, zero, huge.
+  for (const uint32_t length : {0xffffffffu, 0u, 0x7fffffffu, 0x80000000u}) {
+    std::vector<uint8_t> bad = good;
+    for (int i = 0; i < 4; ++i) bad[16 + i] = static_cast<uint8_t>(length >> (24 - 8 * i));
+    lcm.publish("A", bad.data(), static_cast<unsigned>(bad.size()));
+    lcm.publish("A", good.data(), static_cast<unsigned>(good.size()));
+  }
+  lcm.publish("A", good.data(), 10);  // truncated
+  lcm.publish("A", good.data(), static_cast<unsigned>(good.size()));
+  drain(bus);
+  EXPECT_EQ(r.channels.size(), 5u);  // every good one, after each bad one
+  EXPECT_EQ(r.counters.frames_skipped, 5);
+  EXPECT_EQ(r.counters.errors, 0);
+  EXPECT_NE(r.counters.last_warning.find("undecodable packet on A"), std::string::npos)
+      << r.counters.last_warning;
+}
+
+TEST(Bus, AnExceptionLeavingAHandlerIsCountedAndLcmKeepsHandling) {
+  // In LCM 1.3.1 an exception through lcm_handle leaves its mutex locked: the next handle()
+  // would hang. The bus's decoder catches it; a second message proves handle() still works.
+  lcm::LCM lcm("memq://");
+  Bus bus(lcm);
+  Throwing t;
+  bus.subscribe("A", &Throwing::onStatus, &t, t.counters, "test");
+  const auto m = status();
+  bus.publish("A", &m);
+  bus.publish("A", &m);
+  EXPECT_EQ(drain(bus), 2);
+  EXPECT_EQ(t.calls, 2);
+  EXPECT_EQ(t.counters.errors, 2);
+  EXPECT_NE(t.counters.last_warning.find("handler failed"), std::string::npos);
 }
 
 }  // namespace

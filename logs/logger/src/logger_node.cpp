@@ -34,9 +34,8 @@ int64_t fingerprint(const lcm::ReceiveBuffer* rbuf) {
 template <typename T>
 T decodeAs(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   T msg;
-  if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
-    throw msgs::MessageError("cannot decode " + std::string(T::getTypeName()) + " on " + channel);
-  }
+  const std::string error = msgs::decodeMessage(rbuf->data, rbuf->data_size, &msg);
+  if (!error.empty()) throw msgs::MessageError("cannot decode on " + channel + ": " + error);
   return msg;
 }
 

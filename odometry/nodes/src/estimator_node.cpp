@@ -12,10 +12,10 @@ namespace pplvo::nodes {
 EstimatorNode::EstimatorNode(const EstimatorNodeOptions& options, msgs::Bus bus)
     : options_(options), bus_(std::move(bus)), odometry_(options.odometry) {
   if (options_.max_waiting < 1) options_.max_waiting = 1;
-  subscriptions_.push_back(
-      bus_.subscribe(options_.features_channel, &EstimatorNode::onFeatures, this));
-  subscriptions_.push_back(
-      bus_.subscribe(options_.features_3d_channel, &EstimatorNode::onFeatures3d, this));
+  subscriptions_.push_back(bus_.subscribe(options_.features_channel, &EstimatorNode::onFeatures,
+                                          this, counters_, kName));
+  subscriptions_.push_back(bus_.subscribe(options_.features_3d_channel,
+                                          &EstimatorNode::onFeatures3d, this, counters_, kName));
 }
 
 EstimatorNode::~EstimatorNode() {

@@ -27,9 +27,12 @@ int64_t trim(Q& q, int max) {
 FrontendNode::FrontendNode(const FrontendNodeOptions& options, msgs::Bus bus)
     : options_(options), bus_(std::move(bus)), frontend_(options.frontend) {
   if (options_.max_pending < 1) options_.max_pending = 1;
-  subscriptions_.push_back(bus_.subscribe(options_.rgbd_channel, &FrontendNode::onFrame, this));
-  subscriptions_.push_back(bus_.subscribe(options_.cgm_channel, &FrontendNode::onCgm, this));
-  subscriptions_.push_back(bus_.subscribe(options_.fused_channel, &FrontendNode::onFused, this));
+  subscriptions_.push_back(
+      bus_.subscribe(options_.rgbd_channel, &FrontendNode::onFrame, this, counters_, kName));
+  subscriptions_.push_back(
+      bus_.subscribe(options_.cgm_channel, &FrontendNode::onCgm, this, counters_, kName));
+  subscriptions_.push_back(
+      bus_.subscribe(options_.fused_channel, &FrontendNode::onFused, this, counters_, kName));
 }
 
 FrontendNode::~FrontendNode() {

@@ -20,8 +20,60 @@
 #include <vector>
 
 #include "pplvo/core/args.h"
+#include "pplvo/msgs/decode.h"
 
 namespace pplvo::msgs {
+
+struct NodeCounters;  // pplvo/msgs/convert.h
+
+namespace detail {
+
+/// Counts a packet on `channel` that is not the subscribed type (a skipped frame) and notes why.
+void countUndecodable(NodeCounters& counters, const std::string& node, const std::string& channel,
+                      const std::string& error);
+/// Counts an exception that left a handler (an error): nodes catch their own (guarded()), this
+/// is the last line before LCM 1.3.1's C code, through which an exception must never pass.
+void countEscaped(NodeCounters& counters, const std::string& node, const std::string& what);
+
+/// What a typed Bus subscription keeps alive while it is subscribed.
+class SubscriptionAdapter {
+ public:
+  virtual ~SubscriptionAdapter() = default;
+};
+
+/// Receives the raw packet, decodes it with decodeMessage() and calls the node's typed handler;
+/// a packet that does not decode is a counted skip, never an exception.
+template <class MessageT, class Handler>
+class TypedAdapter : public SubscriptionAdapter {
+ public:
+  using Method = void (Handler::*)(const lcm::ReceiveBuffer*, const std::string&, const MessageT*);
+  TypedAdapter(Method method, Handler* handler, NodeCounters& counters, std::string node)
+      : method_(method), handler_(handler), counters_(counters), node_(std::move(node)) {}
+
+  void onRaw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) noexcept {
+    try {
+      MessageT msg;
+      const std::string error = decodeMessage(rbuf->data, rbuf->data_size, &msg);
+      if (!error.empty()) {
+        countUndecodable(counters_, node_, channel, error);
+        return;
+      }
+      (handler_->*method_)(rbuf, channel, &msg);
+    } catch (const std::exception& e) {
+      countEscaped(counters_, node_, e.what());
+    } catch (...) {
+      countEscaped(counters_, node_, "unknown exception");
+    }
+  }
+
+ private:
+  Method method_;
+  Handler* handler_;
+  NodeCounters& counters_;
+  std::string node_;
+};
+
+}  // namespace detail
 
 /// "CHANNEL=URL" -> {CHANNEL, URL}; empty error on success.
 struct ChannelRoute {
@@ -36,6 +88,7 @@ bool isChannelPattern(const std::string& channel);
 /// The subscriptions one Bus::subscribe made (one per instance for a pattern).
 struct BusSubscription {
   std::vector<std::pair<lcm::LCM*, lcm::Subscription*>> parts;
+  std::shared_ptr<detail::SubscriptionAdapter> adapter;  ///< typed subscriptions: the decoder
 };
 
 /// Routes channels to LCM instances. Like lcm::LCM: subscribe and handle from one thread;
@@ -51,15 +104,24 @@ class Bus {
   /// The instance that carries `channel`.
   lcm::LCM& instanceFor(const std::string& channel) const;
 
-  /// Subscribes on the channel's instance; a pattern subscribes on every instance.
+  /// Subscribes on the channel's instance; a pattern subscribes on every instance. Packets are
+  /// decoded here, not by LCM (which prints and drops what does not decode, uncounted): one
+  /// that is not a MessageT (corrupt, truncated, another type) counts as a skipped frame in
+  /// `counters` with the reason as its last warning, and an exception that leaves `method`
+  /// counts as an error; neither reaches LCM. `counters` must outlive the subscription.
   template <class MessageT, class Handler>
   BusSubscription subscribe(const std::string& channel,
                             void (Handler::*method)(const lcm::ReceiveBuffer*, const std::string&,
                                                     const MessageT*),
-                            Handler* handler) const {
+                            Handler* handler, NodeCounters& counters,
+                            const std::string& node) const {
+    using Adapter = detail::TypedAdapter<MessageT, Handler>;
+    auto adapter = std::make_shared<Adapter>(method, handler, counters, node);
     BusSubscription s;
+    s.adapter = adapter;
+    routing_->adapters.push_back(adapter);
     for (lcm::LCM* l : receiveOn(channel)) {
-      s.parts.emplace_back(l, l->subscribe(channel, method, handler));
+      s.parts.emplace_back(l, l->subscribe(channel, &Adapter::onRaw, adapter.get()));
     }
     return s;
   }
@@ -101,6 +163,8 @@ class Bus {
     std::map<std::string, lcm::LCM*> routes;
     std::vector<lcm::LCM*> receiving;  // in order of first subscription
     std::vector<pollfd> wait_fds;      // one per receiving instance, for handleTimeout
+    // Decoders of the typed subscriptions, alive until unsubscribed (LCM holds raw pointers).
+    std::vector<std::shared_ptr<detail::SubscriptionAdapter>> adapters;
   };
   std::vector<lcm::LCM*> receiveOn(const std::string& channel) const;
   std::shared_ptr<Routing> routing_;

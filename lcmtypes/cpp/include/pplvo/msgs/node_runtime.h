@@ -46,18 +46,17 @@ inline int64_t noteFrameSequence(NodeCounters& counters, int64_t seq) {
   return lost;
 }
 
+/// Remembers `warning` as the node's last one and prints it to stderr, rate-limited by the
+/// node's skips and errors so far (the first few, then every 100th). Count before calling.
+void reportProblem(NodeCounters& counters, const std::string& node, const std::string& warning);
+
 /// Runs `body`; any exception is counted in `counters` (as a skipped frame when it is a
 /// MessageError, as an error otherwise), remembered as the last warning and printed
 /// (rate-limited to the first few and then every 100th). Never throws.
 template <typename Body>
 bool guarded(NodeCounters& counters, const char* node, Body&& body) noexcept {
   auto report = [&](const char* kind, const char* what) {
-    counters.last_warning = std::string(kind) + ": " + what;
-    const int64_t n = counters.errors + counters.frames_skipped;
-    if (n <= 5 || n % 100 == 0) {
-      std::fprintf(stderr, "[%s] %s (%lld so far)\n", node, counters.last_warning.c_str(),
-                   static_cast<long long>(n));
-    }
+    reportProblem(counters, node, std::string(kind) + ": " + what);
   };
   try {
     body();

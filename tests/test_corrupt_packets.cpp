@@ -1,0 +1,184 @@
+// Corrupt packets on the bus next to the real ones: every node of the pipeline (player, depth
+// filter, frontend, estimator) on one memq:// LCM, as pplvo-run wires them, with a corrupted
+// copy of every message on their input channels published right after the real one. Each copy
+// must be a counted skip of the node that receives it (never an exception, an exit or a hang),
+// and the poses must be byte-identical to those of a clean run.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "pplvo/msgs/channels.h"
+#include "pplvo/nodes/depth_filter_node.h"
+#include "pplvo/nodes/estimator_node.h"
+#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/player/player_node.h"
+#include "pplvo/synth/synthetic_sequence.h"
+
+namespace fs = std::filesystem;
+
+namespace pplvo {
+namespace {
+
+constexpr int kFrames = 12;
+
+const std::string& sequenceDir() {
+  static const std::string dir = [] {
+    const fs::path d =
+        fs::temp_directory_path() / ("pplvo_corrupt_test_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    synth::SynthOptions o;
+    o.frames = kFrames;
+    o.seed = 5;
+    synth::writeTumFolder(synth::SyntheticSequence(o), d.string());
+    return d.string();
+  }();
+  return dir;
+}
+
+void putInt32(std::vector<uint8_t>& bytes, size_t at, uint32_t value) {
+  for (int i = 0; i < 4; ++i) bytes.at(at + i) = static_cast<uint8_t>(value >> (24 - 8 * i));
+}
+
+/// Publishes, after each message on a pipeline channel, a corrupted copy of it: the frame's
+/// `stamp` length (offset 24 in every per-frame type: hash, utime, seq) made negative, zero or
+/// huge, a features_t's n_points made negative or huge, or the packet cut in half. Records the
+/// real poses' bytes.
+class Corrupter {
+ public:
+  Corrupter(lcm::LCM& lcm, bool corrupt) : lcm_(lcm), corrupt_(corrupt) {
+    sub_ = lcm_.subscribe(".*", &Corrupter::onMessage, this);
+  }
+  ~Corrupter() { lcm_.unsubscribe(sub_); }
+
+  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const auto* p = static_cast<const uint8_t*>(rbuf->data);
+    std::vector<uint8_t> bytes(p, p + rbuf->data_size);
+    auto own = sent_.find(bytes);
+    if (own != sent_.end()) {  // a copy this corrupter published
+      sent_.erase(own);
+      return;
+    }
+    if (channel == channels::kPose) poses.push_back(bytes);
+    if (!corrupt_ || !kCorrupted.count(channel)) return;
+    std::vector<uint8_t> bad = bytes;
+    const int kind = static_cast<int>(published_[channel]++ % 5);
+    switch (kind) {
+      case 0:
+        putInt32(bad, 24, 0xffffffffu);
+        break;
+      case 1:
+        putInt32(bad, 24, 0u);
+        break;
+      case 2:
+        putInt32(bad, 24, 0x7fffffffu);
+        break;
+      case 3:
+        bad.resize(bad.size() / 2);
+        break;
+      default: {
+        if (channel == channels::kFeatures || channel == channels::kFeatures3d) {
+          // n_points follows stamp, stage (1 byte) and camera_info (80 bytes).
+          const uint32_t stamp_length = (uint32_t{bad[24]} << 24) | (uint32_t{bad[25]} << 16) |
+                                        (uint32_t{bad[26]} << 8) | bad[27];
+          putInt32(bad, 28 + stamp_length + 1 + 80,
+                   published_[channel] % 2 ? 0x80000000u : 0x7ffffff0u);
+        } else {
+          putInt32(bad, 24, static_cast<uint32_t>(bad.size() - 28 + 1));  // one byte too long
+        }
+        break;
+      }
+    }
+    sent_.insert(bad);
+    ++corrupted[channel];
+    lcm_.publish(channel, bad.data(), static_cast<unsigned>(bad.size()));
+  }
+
+  std::vector<std::vector<uint8_t>> poses;
+  std::map<std::string, int64_t> corrupted;
+
+ private:
+  inline static const std::set<std::string> kCorrupted = {
+      channels::kRgbd,       channels::kPose,     channels::kDepthCgm,
+      channels::kDepthFused, channels::kFeatures, channels::kFeatures3d};
+  lcm::LCM& lcm_;
+  bool corrupt_;
+  lcm::Subscription* sub_ = nullptr;
+  std::multiset<std::vector<uint8_t>> sent_;
+  std::map<std::string, int64_t> published_;
+};
+
+struct PipelineRun {
+  std::vector<std::vector<uint8_t>> poses;
+  std::map<std::string, int64_t> corrupted;
+  std::map<std::string, msgs::NodeCounters> counters;
+  player::PlayerResult player;
+};
+
+PipelineRun runPipeline(bool corrupt) {
+  lcm::LCM lcm("memq://");
+  EXPECT_TRUE(lcm.good());
+  nodes::DepthFilterNodeOptions df;
+  df.overload_backlog = 0;
+  nodes::DepthFilterNode depth_filter(df, lcm);
+  nodes::FrontendNode frontend(nodes::FrontendNodeOptions{}, lcm);
+  nodes::EstimatorNode estimator(nodes::EstimatorNodeOptions{}, lcm);
+  Corrupter corrupter(lcm, corrupt);
+  player::PlayerOptions po;
+  po.dataset_dir = sequenceDir();
+  po.rate = 0.0;
+  po.lockstep = true;
+  po.in_process = true;
+  po.status_period_s = 1e9;
+  player::PlayerNode player(po, lcm);
+  PipelineRun run;
+  run.player = player.run();
+  run.poses = corrupter.poses;
+  run.corrupted = corrupter.corrupted;
+  run.counters[player::PlayerOptions{}.node_name] = player.counters();
+  run.counters[nodes::DepthFilterNode::kName] = depth_filter.counters();
+  run.counters[nodes::FrontendNode::kName] = frontend.counters();
+  run.counters[nodes::EstimatorNode::kName] = estimator.counters();
+  return run;
+}
+
+TEST(CorruptPackets, AreCountedSkipsAndThePosesStayByteIdentical) {
+  const PipelineRun clean = runPipeline(false);
+  ASSERT_FALSE(clean.player.failed) << clean.player.error;
+  ASSERT_EQ(clean.poses.size(), static_cast<size_t>(kFrames));
+  for (const auto& [name, c] : clean.counters) {
+    EXPECT_EQ(c.frames_skipped, 0) << name;
+    EXPECT_EQ(c.errors, 0) << name;
+  }
+
+  const PipelineRun bad = runPipeline(true);
+  ASSERT_FALSE(bad.player.failed) << bad.player.error;
+  EXPECT_EQ(bad.poses, clean.poses);  // every frame posed, byte for byte
+
+  const auto corrupted = [&](std::initializer_list<const char*> inputs) {
+    int64_t n = 0;
+    for (const char* c : inputs) n += bad.corrupted.count(c) ? bad.corrupted.at(c) : 0;
+    return n;
+  };
+  EXPECT_EQ(bad.corrupted.at(channels::kFeatures), kFrames);
+  const std::map<std::string, int64_t> expected = {
+      {"pplvo-player", corrupted({channels::kPose})},
+      {nodes::DepthFilterNode::kName, corrupted({channels::kRgbd, channels::kPose})},
+      {nodes::FrontendNode::kName,
+       corrupted({channels::kRgbd, channels::kDepthCgm, channels::kDepthFused})},
+      {nodes::EstimatorNode::kName, corrupted({channels::kFeatures, channels::kFeatures3d})}};
+  for (const auto& [name, n] : expected) {
+    const msgs::NodeCounters& c = bad.counters.at(name);
+    EXPECT_EQ(c.frames_skipped, n) << name << ": " << c.last_warning;
+    EXPECT_EQ(c.errors, 0) << name << ": " << c.last_warning;
+    EXPECT_EQ(c.frames_out, clean.counters.at(name).frames_out) << name;
+  }
+  fs::remove_all(sequenceDir());
+}
+
+}  // namespace
+}  // namespace pplvo
