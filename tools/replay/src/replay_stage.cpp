@@ -56,6 +56,7 @@ std::string ReplayResult::text() const {
     out << c.channel << ": recorded " << c.recorded << ", replayed " << c.replayed << ", identical "
         << c.identical;
     if (c.first_mismatch >= 0) out << ", first difference at message " << c.first_mismatch;
+    if (c.afterEnd() > 0) out << ", " << c.afterEnd() << " more after the end of the log";
     out << (c.allIdentical() ? "  [same]" : "  [DIFFERENT]") << "\n";
   }
   return out.str();
@@ -163,8 +164,8 @@ ReplayResult replayStage(const ReplayOptions& options) {
         else if (cmp.first_mismatch < 0)
           cmp.first_mismatch = static_cast<int64_t>(i);
       }
-      if (cmp.first_mismatch < 0 && want.size() != got.size()) {
-        cmp.first_mismatch = static_cast<int64_t>(std::min(want.size(), got.size()));
+      if (cmp.first_mismatch < 0 && got.size() < want.size()) {
+        cmp.first_mismatch = static_cast<int64_t>(got.size());  // a recorded one never came
       }
       result.outputs.push_back(cmp);
     }

@@ -22,13 +22,20 @@ struct ReplayOptions {
   pipeline::PipelineOptions pipeline;
 };
 
+/// One output channel of the stage. The log ends somewhere (a cut, or the logger stopped while
+/// the pipeline still worked): what the stage publishes after the last message recorded on a
+/// channel has no recording to compare with. Those are counted in `after_end`, not as a
+/// difference: every recorded message reproduced, in order, is identical.
 struct ChannelComparison {
   std::string channel;
   int64_t recorded = 0;         ///< messages on this channel in the log
   int64_t replayed = 0;         ///< messages the replayed stage published on it
   int64_t identical = 0;        ///< byte-identical pairs (in order)
-  int64_t first_mismatch = -1;  ///< index of the first differing pair (-1: none)
-  bool allIdentical() const { return recorded == replayed && identical == recorded; }
+  int64_t first_mismatch = -1;  ///< index of the first differing or missing message (-1: none)
+  /// Replayed beyond the last recorded message: the recording of their inputs' outputs was cut
+  /// off.
+  int64_t afterEnd() const { return replayed > recorded ? replayed - recorded : 0; }
+  bool allIdentical() const { return replayed >= recorded && identical == recorded; }
 };
 
 struct ReplayResult {
