@@ -58,6 +58,30 @@ bool looksLikeFrameIndices(std::vector<double> stamps) {
   return min_step == 1.0;
 }
 
+/// Entries listed after one with a later stamp.
+int countOutOfOrder(const std::vector<double>& listed) {
+  int n = 0;
+  for (size_t i = 1; i < listed.size(); ++i) n += listed[i] < listed[i - 1] ? 1 : 0;
+  return n;
+}
+
+/// Sorts the frames by colour stamp (stable: equal stamps keep their listed order) and drops
+/// every frame whose stamp an earlier one has, counting them.
+void sortAndDeduplicate(std::vector<DatasetEntry>* entries, IndexSummary* sum) {
+  std::stable_sort(entries->begin(), entries->end(),
+                   [](const DatasetEntry& a, const DatasetEntry& b) { return a.stamp < b.stamp; });
+  std::vector<DatasetEntry> kept;
+  kept.reserve(entries->size());
+  for (DatasetEntry& e : *entries) {
+    if (!kept.empty() && kept.back().stamp == e.stamp) {
+      if (sum->duplicate_stamps++ == 0) sum->first_duplicate = e.stamp_text;
+      continue;
+    }
+    kept.push_back(std::move(e));
+  }
+  *entries = std::move(kept);
+}
+
 }  // namespace
 
 IndexFile parseIndexFile(std::istream& in) {
@@ -164,6 +188,10 @@ std::string IndexSummary::text() const {
   if (unassociated_rgb > 0) s << "; " << unassociated_rgb << " colour images without depth";
   if (malformed_lines > 0) s << "; " << malformed_lines << " malformed lines ignored";
   if (unlisted_rgb_files > 0) s << "; " << unlisted_rgb_files << " files in rgb/ not listed";
+  if (out_of_order > 0) s << "; " << out_of_order << " lines out of stamp order (sorted)";
+  if (duplicate_stamps > 0) {
+    s << "; " << duplicate_stamps << " duplicate stamps dropped (first: " << first_duplicate << ")";
+  }
   if (index_stamps) s << "; stamps are frame indices at " << index_frame_rate_hz << " Hz";
   return s.str();
 }
@@ -304,6 +332,9 @@ DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options) {
   } else {
     throw DatasetError("no associations.txt and no rgb.txt + depth.txt in dataset folder " + dir);
   }
+
+  sum.out_of_order = countOutOfOrder(listed_stamps);
+  sortAndDeduplicate(&index.entries, &sum);
 
   // Colour files that no index line mentions (e.g. the last image of the TUM excerpt).
   const fs::path rgb_dir = fs::path(dir) / "rgb";

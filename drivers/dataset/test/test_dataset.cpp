@@ -178,6 +178,53 @@ TEST(Associate, AssociationsFileBothColumnOrders) {
   }
 }
 
+TEST(Associate, UnsortedAndDuplicateStampsAreSortedAndReported) {
+  TempDir t("assoc_unsorted");
+  // Listed order 3 1 2 2' 0 1': two lines out of order (1 after 3, 0 after 2), stamps 1 and 2
+  // twice (the first listed of each is kept).
+  const std::vector<std::pair<int, int>> lines = {{3, 0}, {1, 1}, {2, 2}, {2, 3}, {0, 4}, {1, 5}};
+  std::ostringstream a;
+  for (const auto& [stamp, file] : lines) {
+    const std::string rp = "rgb/" + std::to_string(file) + ".png";
+    const std::string dp = "depth/" + std::to_string(file) + ".png";
+    writeImages(t.path, rp, dp, file);
+    a << "300." << stamp << " " << rp << " 300." << stamp << " " << dp << "\n";
+  }
+  writeText(t.path / "associations.txt", a.str());
+  const DatasetIndex idx = buildIndex(t.str());
+  EXPECT_EQ(idx.summary.listed, 6);
+  EXPECT_EQ(idx.summary.out_of_order, 2);
+  EXPECT_EQ(idx.summary.duplicate_stamps, 2);
+  EXPECT_EQ(idx.summary.first_duplicate, "300.1");  // in stamp order
+  ASSERT_EQ(idx.entries.size(), 4u);
+  const std::vector<std::string> files = {"rgb/4.png", "rgb/1.png", "rgb/2.png", "rgb/0.png"};
+  for (size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(idx.entries[k].stamp_text, "300." + std::to_string(k));
+    EXPECT_NE(idx.entries[k].rgb_path.find(files[k]), std::string::npos) << k;
+  }
+  const std::string text = idx.summary.text();
+  EXPECT_NE(text.find("2 lines out of stamp order (sorted)"), std::string::npos) << text;
+  EXPECT_NE(text.find("2 duplicate stamps dropped (first: 300.1)"), std::string::npos) << text;
+
+  // rgb.txt + depth.txt: the same rule.
+  TempDir u("rgb_txt_duplicates");
+  std::ostringstream rgb, depth;
+  for (const auto& [stamp, file] : lines) {
+    const std::string rp = "rgb/" + std::to_string(file) + ".png";
+    const std::string dp = "depth/" + std::to_string(file) + ".png";
+    writeImages(u.path, rp, dp, file);
+    rgb << "400." << stamp << " " << rp << "\n";
+    depth << "400." << stamp << "1 " << dp << "\n";
+  }
+  writeText(u.path / "rgb.txt", rgb.str());
+  writeText(u.path / "depth.txt", depth.str());
+  const DatasetIndex idx2 = buildIndex(u.str());
+  EXPECT_EQ(idx2.summary.out_of_order, 2);
+  EXPECT_EQ(idx2.summary.duplicate_stamps, 2);
+  ASSERT_EQ(idx2.entries.size(), 4u);
+  for (size_t k = 0; k < 4; ++k) EXPECT_EQ(idx2.entries[k].stamp_text, "400." + std::to_string(k));
+}
+
 TEST(Associate, IntegerStampsAreFrameIndices) {
   TempDir t("icl");
   std::ostringstream a;

@@ -94,6 +94,13 @@ struct IndexSummary {
   int missing_depth_files = 0;     ///< listed depth images that do not exist (dropped)
   int unassociated_rgb = 0;        ///< existing colour images with no depth within the window
   int unlisted_rgb_files = 0;      ///< files in rgb/ that no index line mentions (not played)
+  /// Index lines listed after a line with a later colour stamp: the frames are played sorted
+  /// by stamp, not in file order.
+  int out_of_order = 0;
+  /// Frames whose colour stamp an earlier-listed frame already has (dropped: one pose per
+  /// stamp in the trajectory); `first_duplicate` is the first such stamp.
+  int duplicate_stamps = 0;
+  std::string first_duplicate;
   bool index_stamps = false;       ///< stamps are integer frame indices (ICL-NUIM)
   double index_frame_rate_hz = 0;  ///< rate used to turn indices into time
   std::string first_missing;       ///< first missing file, for the message
@@ -109,7 +116,9 @@ struct DatasetIndex {
 
 /// Builds the frame index of a folder: `associations.txt` if present (either column order,
 /// detected from which path is under depth/), else rgb.txt + depth.txt associated by
-/// associateStamps(). Entries whose files do not exist are dropped and counted.
+/// associateStamps(). Entries whose files do not exist are dropped and counted. The frames are
+/// sorted by colour stamp; of frames with the same stamp only the first listed is kept (both
+/// counted in the summary).
 /// Throws DatasetError when the folder or both index sources are missing.
 DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options = {});
 
