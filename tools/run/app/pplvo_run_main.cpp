@@ -67,6 +67,14 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
+  // Outputs are checked before the first frame, not found unwritable after the whole run.
+  for (const std::string* path : {&o.output, &o.summary, &o.log}) {
+    const std::string why = path->empty() ? "" : run::outputFileError(*path);
+    if (!why.empty()) {
+      std::fprintf(stderr, "pplvo-run: cannot write %s: %s\n", path->c_str(), why.c_str());
+      return 1;
+    }
+  }
   o.progress = !quiet && isatty(STDERR_FILENO);
   std::fprintf(stderr, "[pplvo-run] %s: features %s, depth model %s\n", o.dataset_dir.c_str(),
                pipeline::toString(o.pipeline.families()).c_str(),

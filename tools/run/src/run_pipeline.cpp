@@ -1,6 +1,9 @@
 #include "pplvo/run/run_pipeline.h"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <pplvo_msgs/pose_t.hpp>
@@ -107,6 +110,7 @@ std::string RunResult::text() const {
                 static_cast<long long>(tracking), static_cast<long long>(velocity_model),
                 static_cast<long long>(lost), static_cast<long long>(reinitialised));
   out << buf;
+  if (!index.source.empty()) out << "dataset: " << index.text() << "\n";
   for (const NodeReport& n : nodes) {
     std::snprintf(buf, sizeof buf, "%s: in %lld out %lld dropped %lld skipped %lld errors %lld\n",
                   n.name.c_str(), static_cast<long long>(n.counters.frames_in),
@@ -142,7 +146,13 @@ std::string RunResult::yaml() const {
       << "preload_s: " << preload_s << "\n"
       << "frames_per_s: " << framesPerSecond() << "\n"
       << "pipeline_ms_per_frame: " << pipelineMsPerFrame() << "\n"
-      << "failed: " << (failed ? "true" : "false") << "\n";
+      << "failed: " << (failed ? "true" : "false") << "\n"
+      << "index: {listed: " << index.listed << ", malformed_lines: " << index.malformed_lines
+      << ", missing_rgb_files: " << index.missing_rgb_files
+      << ", missing_depth_files: " << index.missing_depth_files
+      << ", unassociated_rgb: " << index.unassociated_rgb
+      << ", out_of_order: " << index.out_of_order
+      << ", duplicate_stamps: " << index.duplicate_stamps << "}\n";
   if (failed) out << "error: \"" << error << "\"\n";
   out << "nodes:\n";
   for (const NodeReport& n : nodes) {
@@ -203,6 +213,7 @@ RunResult runPipeline(const RunOptions& options) {
     po.status_period_s = 1e9;  // no status messages inside one process
     player::PlayerNode player(po, lcm);
 
+    result.index = player.dataset().index().summary;
     const player::PlayerResult pr = player.run();
     result.frames_published = pr.published;
     result.frames_skipped = pr.skipped;
@@ -234,6 +245,17 @@ RunResult runPipeline(const RunOptions& options) {
     result.error = e.what();
   }
   return result;
+}
+
+std::string outputFileError(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return "is a directory";
+  const bool existed = std::filesystem::exists(path, ec);
+  std::FILE* f = std::fopen(path.c_str(), "a");
+  if (f == nullptr) return std::strerror(errno);
+  std::fclose(f);
+  if (!existed) std::filesystem::remove(path, ec);
+  return "";
 }
 
 }  // namespace pplvo::run

@@ -178,5 +178,60 @@ TEST_F(RunPipelineTest, CommandLineWritesTrajectoryAndSummary) {
   fs::remove_all(out);
 }
 
+TEST_F(RunPipelineTest, IndexProblemsAreCountedInTheSummary) {
+  // What pplvo-player prints at start-up: a listed file missing, garbage lines in the index.
+  const fs::path copy = fs::path(sequenceDir() + "_index");
+  fs::remove_all(copy);
+  fs::copy(sequenceDir(), copy, fs::copy_options::recursive);
+  fs::remove(copy / "associations.txt");  // rgb.txt + depth.txt
+  std::vector<fs::path> rgb;
+  for (const auto& e : fs::directory_iterator(copy / "rgb")) rgb.push_back(e.path());
+  std::sort(rgb.begin(), rgb.end());
+  ASSERT_GT(rgb.size(), 5u);
+  fs::remove(rgb[5]);
+  std::ofstream(copy / "rgb.txt", std::ios::app) << "garbage\n";
+  std::ofstream(copy / "depth.txt", std::ios::app) << "1.0\n";
+
+  RunOptions o;
+  o.dataset_dir = copy.string();
+  const RunResult r = runPipeline(o);
+  ASSERT_FALSE(r.failed) << r.error;
+  EXPECT_EQ(r.poses, kFrames - 1);
+  EXPECT_EQ(r.index.missing_rgb_files, 1);
+  EXPECT_EQ(r.index.malformed_lines, 2);
+  EXPECT_NE(r.text().find("dataset: rgb.txt+depth.txt"), std::string::npos) << r.text();
+  EXPECT_NE(r.text().find("dropped 1 missing colour"), std::string::npos) << r.text();
+  EXPECT_NE(r.text().find("2 malformed lines"), std::string::npos) << r.text();
+  EXPECT_NE(r.yaml().find("missing_rgb_files: 1, missing_depth_files: 0"), std::string::npos);
+  EXPECT_NE(r.yaml().find("malformed_lines: 2"), std::string::npos) << r.yaml();
+  fs::remove_all(copy);
+}
+
+TEST_F(RunPipelineTest, UnwritableOutputIsRefusedBeforeTheFirstFrame) {
+  EXPECT_EQ(outputFileError("/nonexistent_pplvo_dir/traj.txt"), "No such file or directory");
+  EXPECT_EQ(outputFileError(fs::temp_directory_path().string()), "is a directory");
+  const fs::path fresh = fs::path(sequenceDir() + "_fresh.txt");
+  EXPECT_EQ(outputFileError(fresh.string()), "");
+  EXPECT_FALSE(fs::exists(fresh));  // nothing left behind
+
+  const std::string bin = std::string(std::getenv("PPLVO_BINARY_DIR")) + "/bin/pplvo-run";
+  const fs::path err = fs::path(sequenceDir() + "_err.txt");
+  const fs::path out = fs::path(sequenceDir() + "_stdout.txt");
+  for (const std::string option : {"--output", "--summary", "--log"}) {
+    const std::string cmd = bin + " --dataset " + sequenceDir() + " " + option +
+                            " /nonexistent_pplvo_dir/x >" + out.string() + " 2>" + err.string();
+    EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 1) << cmd;
+    std::ifstream e(err), o(out);
+    const std::string err_text((std::istreambuf_iterator<char>(e)), {});
+    const std::string out_text((std::istreambuf_iterator<char>(o)), {});
+    EXPECT_NE(err_text.find("cannot write /nonexistent_pplvo_dir/x: No such file or directory"),
+              std::string::npos)
+        << err_text;
+    EXPECT_EQ(out_text.find("frames:"), std::string::npos) << out_text;  // no frame was run
+  }
+  fs::remove(err);
+  fs::remove(out);
+}
+
 }  // namespace
 }  // namespace pplvo::run

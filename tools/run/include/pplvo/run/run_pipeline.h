@@ -51,6 +51,9 @@ struct RunResult {
   double elapsed_s = 0.0;  ///< wall time of the run (reading the dataset included)
   double preload_s = 0.0;  ///< of which decoding the frames beforehand (--preload)
   std::vector<NodeReport> nodes;
+  /// How the dataset's index was built: missing files, malformed lines, unsorted and
+  /// duplicate stamps (what pplvo-player prints at start-up).
+  dataset::IndexSummary index;
   bool failed = false;
   std::string error;
 
@@ -69,5 +72,9 @@ struct RunResult {
 
 /// Runs the whole sequence. Never throws: errors are returned in the result.
 RunResult runPipeline(const RunOptions& options);
+
+/// Empty when `path` can be written (created, or appended to; nothing is left behind), else
+/// why not, e.g. "No such file or directory". For checking outputs before the first frame.
+std::string outputFileError(const std::string& path);
 
 }  // namespace pplvo::run
