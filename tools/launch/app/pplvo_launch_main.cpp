@@ -22,6 +22,7 @@
 #include "pplvo/launch/launch.h"
 #include "pplvo/launch/supervisor.h"
 #include "pplvo/msgs/channels.h"
+#include "pplvo/pipeline/pipeline_args.h"
 
 namespace {
 
@@ -90,6 +91,17 @@ class BusMonitor {
   int64_t end_published_ = -1;
 };
 
+/// The pipeline options as the frontend and estimator will read them (--config, --set,
+/// --features, --depth-model): every error, so that a bad key is refused here with its own
+/// message (exit 2) instead of ending a node at start-up.
+std::vector<std::string> pipelineArgErrors(const LaunchOptions& o) {
+  const pplvo::pipeline::PipelineArgs args{o.config, o.set, o.features, o.depth_model};
+  pplvo::pipeline::PipelineOptions options;
+  pplvo::ArgParser parser;
+  pplvo::pipeline::applyPipelineArgs(args, &options, &parser);
+  return parser.errors();
+}
+
 std::string readFile(const std::string& path) {
   std::ifstream in(path);
   std::stringstream s;
@@ -106,9 +118,10 @@ int main(int argc, char** argv) {
     std::printf("%s", launchUsage().c_str());
     return 0;
   }
-  if (!parsed.errors.empty()) {
-    for (const std::string& e : parsed.errors)
-      std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
+  std::vector<std::string> errors = parsed.errors;
+  if (errors.empty()) errors = pipelineArgErrors(parsed.options);
+  if (!errors.empty()) {
+    for (const std::string& e : errors) std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
     std::fprintf(stderr, "pplvo-launch: see --help\n");
     return 2;
   }
@@ -190,6 +203,12 @@ int main(int argc, char** argv) {
   report.url = url.url;
   report.trajectory_path = o.output;
   const std::vector<ProcessSpec> specs = buildProcessSpecs(o, url, bin_dir, log_dir);
+  // A reused --node-logs folder holds an earlier run's logs: the report must read this run's
+  // counters only (a stage killed before its "done:" line would show the earlier one's).
+  for (const ProcessSpec& spec : specs) {
+    std::error_code ec;
+    std::filesystem::remove(spec.log_path, ec);
+  }
   const auto deadline = t0 + std::chrono::duration<double>(o.timeout_s);
   auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
 

@@ -758,3 +758,32 @@ TEST_F(LaunchProgram, KilledNodeIsReportedAndStopsTheLaunch) {
   EXPECT_EQ(l.out.find("launch.failure: timeout"), std::string::npos) << l.out;
   EXPECT_NE(l.err.find("FAILED: pplvo-estimator"), std::string::npos) << l.err;
 }
+
+TEST_F(LaunchProgram, BadPipelineKeyIsRefusedWithItsOwnError) {
+  const CommandRun l = runCommand(launch("badkey") + "--set no.key=1 --dataset " + seq().string() +
+                                      " --output " + (*dir_ / "badkey.txt").string(),
+                                  *dir_, "badkey");
+  EXPECT_EQ(l.code, 2) << l.err;
+  EXPECT_NE(l.err.find("no: unknown key"), std::string::npos) << l.err;
+  EXPECT_EQ(l.err.find("usage"), std::string::npos) << l.err;  // the error, not a node's help
+  EXPECT_FALSE(fs::exists(*dir_ / "logs_badkey"));             // nothing was started
+}
+
+TEST_F(LaunchProgram, ReusedNodeLogFolderReportsOnlyThisRun) {
+  // An earlier run's log of the frontend ends with its "done:" line; this run's frontend is
+  // killed before it writes one: the report must not show the earlier counts.
+  const fs::path logs = *dir_ / "logs_reused";
+  fs::create_directories(logs);
+  std::ofstream(logs / (std::string(kFrontend) + ".log"))
+      << "[pplvo-frontend] done: in 195 out 81 dropped 0 skipped 0\n";
+  const CommandRun l = runCommand(
+      launch("reused") + "--lockstep --max-frames 10 --test-kill pplvo-frontend:3 --dataset " +
+          seq().string() + " --output " + (*dir_ / "reused.txt").string(),
+      *dir_, "reused");
+  EXPECT_EQ(l.code, 1) << l.out << l.err;
+  const size_t at = l.out.find(std::string("  ") + kFrontend + " ");
+  ASSERT_NE(at, std::string::npos) << l.out;
+  const std::string row = l.out.substr(at, l.out.find('\n', at) - at);
+  EXPECT_EQ(row.find("195"), std::string::npos) << row;
+  EXPECT_NE(row.find("killed by signal 9"), std::string::npos) << row;
+}
