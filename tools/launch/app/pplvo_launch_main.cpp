@@ -12,6 +12,7 @@
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <optional>
 #include <pplvo_msgs/node_status_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
@@ -221,6 +222,18 @@ int main(int argc, char** argv) {
     kill_after = std::stoll(o.test_kill.substr(colon + 1));
   }
   bool test_killed = false;
+  std::string pause_name;
+  int64_t pause_after = -1;
+  double pause_s = 0.0;
+  if (!o.test_pause.empty()) {
+    const size_t second = o.test_pause.rfind(':');
+    const size_t first = o.test_pause.rfind(':', second - 1);
+    pause_name = o.test_pause.substr(0, first);
+    pause_after = std::stoll(o.test_pause.substr(first + 1, second - first - 1));
+    pause_s = std::stod(o.test_pause.substr(second + 1));
+  }
+  std::optional<Clock::time_point> paused_at;  // --test-pause: when the SIGSTOP was sent
+  bool pause_done = false;
   std::vector<std::string>& failures = report.failures;
   std::string failed_process;  // whose log to show
 
@@ -259,6 +272,22 @@ int main(int argc, char** argv) {
       }
     };
 
+    auto maybeTestPause = [&] {
+      if (pause_done || pause_after < 0) return;
+      const std::optional<size_t> i = sup.find(pause_name);
+      if (!i || !sup.child(*i).running()) return;
+      if (!paused_at && bus.poses() >= pause_after) {
+        say("--test-pause: SIGSTOP " + pause_name + " after " + std::to_string(bus.poses()) +
+            " poses for " + std::to_string(pause_s) + " s");
+        sup.signal(*i, SIGSTOP);
+        paused_at = Clock::now();
+      } else if (paused_at && Clock::now() - *paused_at >= std::chrono::duration<double>(pause_s)) {
+        say("--test-pause: SIGCONT " + pause_name);
+        sup.signal(*i, SIGCONT);
+        pause_done = true;
+      }
+    };
+
     try {
       // 3. Nodes and logger, then wait until each node published its first status (proof that
       // it is up and its LCM is subscribed; statuses come about once a second).
@@ -293,6 +322,7 @@ int main(int argc, char** argv) {
         while (sup.child(player).running() && checkChildren(true) && checkLimits("the run")) {
           bus.handle(20);
           maybeTestKill();
+          maybeTestPause();
         }
         if (failures.empty()) {
           const ExitInfo& pe = *sup.child(player).exit;
@@ -309,6 +339,7 @@ int main(int argc, char** argv) {
           while (checkChildren(true) && checkLimits("the drain")) {
             bus.handle(20);
             maybeTestKill();
+            maybeTestPause();
             int64_t published = bus.endSeen() ? bus.endPublished() : -1;
             if (published < 0) {
               if (auto s = bus.status(kPlayer)) published = s->frames_out;
@@ -327,6 +358,9 @@ int main(int argc, char** argv) {
 
     // 6. Stop: nodes first (they publish a final status), the logger last so that it records
     // them; SIGKILL after the grace period. Everything is stopped on every path.
+    if (paused_at && !pause_done) {  // never leave a stage stopped: it could not stop cleanly
+      if (auto i = sup.find(pause_name)) sup.signal(*i, SIGCONT);
+    }
     std::vector<size_t> nodes;
     for (const std::string& n : {std::string(kPlayer), std::string(kDepthFilter),
                                  std::string(kFrontend), std::string(kEstimator)}) {
@@ -356,6 +390,8 @@ int main(int argc, char** argv) {
       p.stop_requested = c.stop_requested;
       p.killed = c.killed;
       p.has_counts = c.spec.name != kLogger;
+      p.pauses = c.pauses;
+      p.paused_s = c.paused_s;
       if (p.has_counts) {
         const std::string log = readFile(c.spec.log_path);
         if (auto d = parseDoneLine(log, c.spec.name)) p.counts = *d;
@@ -400,6 +436,7 @@ int main(int argc, char** argv) {
   }
   report.poses_seen = bus.poses();
   report.trajectory_poses = countTrajectoryLines(o.output);
+  report.checkFramesLostToFaults();
   report.wall_s = seconds();
   std::printf("%s", report.text().c_str());
   std::fflush(stdout);

@@ -63,6 +63,8 @@ std::string launchUsage() {
          "  --drain-idle S          after the player ends, stop once no pose came for S s (2)\n"
          "  --stop-grace S          SIGINT -> SIGKILL delay when stopping (5)\n"
          "  --test-kill NODE:N      (tests) SIGKILL NODE once N poses were seen\n"
+         "  --test-pause NODE:N:S   (tests) SIGSTOP NODE once N poses were seen, SIGCONT after\n"
+         "                          S seconds\n"
          "  --compress              lossless compressed frames (player png/zlib) and depth\n"
          "                          maps (depth filter zlib); automatic when the kernel's\n"
          "                          net.core.rmem_max is below 2 MiB\n"
@@ -227,6 +229,18 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
           for (const std::string& n : allPrograms()) known = known || n == m[1].str();
         }
         if (!known) p.errors.push_back("--test-kill: NODE:POSES with NODE one of the programs");
+      }
+    } else if (key == "--test-pause") {
+      if (next(&o.test_pause)) {
+        static const std::regex re("(pplvo-[a-z-]+):([0-9]+):([0-9]+(\\.[0-9]*)?)");
+        std::smatch m;
+        bool known = false;
+        if (std::regex_match(o.test_pause, m, re)) {
+          for (const std::string& n : allPrograms()) known = known || n == m[1].str();
+        }
+        if (!known) {
+          p.errors.push_back("--test-pause: NODE:POSES:SECONDS with NODE one of the programs");
+        }
       }
     } else if (key == "--quiet")
       flag(&o.quiet);
@@ -569,10 +583,44 @@ std::string LaunchReport::text() const {
     out << "launch.lockstep_timeouts: " << player->counts.errors
         << "  # poses the player gave up waiting for (player errors)\n";
   }
+  for (const std::string& f : faults()) out << "launch.fault: " << f << "\n";
   out << "launch.wall_s: " << wall_s << "\n";
   out << "launch.result: " << (ok() ? "ok" : "FAILED") << "\n";
   for (const std::string& f : failures) out << "launch.failure: " << f << "\n";
   return out.str();
+}
+
+std::vector<std::string> LaunchReport::faults() const {
+  std::vector<std::string> f;
+  char buf[256];
+  for (const Process& p : processes) {
+    if (p.pauses > 0) {
+      std::snprintf(buf, sizeof buf, "%s paused %d time(s), %.1f s in all", p.name.c_str(),
+                    p.pauses, p.paused_s);
+      f.push_back(buf);
+    }
+    if (p.exit && !p.stop_requested && !p.exit->clean()) {
+      f.push_back(p.name + " ended early (" + p.exit->text() + ")");
+    }
+  }
+  return f;
+}
+
+int64_t LaunchReport::framesWithoutPose() const {
+  if (frames_published < 0 || trajectory_poses < 0) return -1;
+  return std::max<int64_t>(0, frames_published - trajectory_poses);
+}
+
+void LaunchReport::checkFramesLostToFaults() {
+  const std::vector<std::string> f = faults();
+  const int64_t lost = framesWithoutPose();
+  if (f.empty() || lost == 0) return;
+  std::string why = f.front();
+  for (size_t i = 1; i < f.size(); ++i) why += "; " + f[i];
+  failures.push_back("frames lost to a fault: " +
+                     (lost < 0 ? std::string("unknown number") : std::to_string(lost)) + " of " +
+                     std::to_string(frames_published) + " published frames without pose (" + why +
+                     ")");
 }
 
 int64_t countTrajectoryLines(const std::string& path) {

@@ -187,14 +187,40 @@ std::vector<size_t> Supervisor::poll() {
   for (size_t i = 0; i < children_.size(); ++i) {
     ChildState& c = children_[i];
     if (!c.running()) continue;
-    int status = 0;
-    const pid_t r = ::waitpid(c.pid, &status, WNOHANG);
-    if (r == c.pid) {
-      c.exit = ExitInfo::fromWaitStatus(status);
-      reaped.push_back(i);
-    } else if (r < 0 && errno == ECHILD) {
-      c.exit = ExitInfo{};  // reaped elsewhere: unknown end
-      reaped.push_back(i);
+    // A stop and a continue may both be pending: read state changes until there is none.
+    for (int changes = 0; changes < 4; ++changes) {
+      int status = 0;
+      const pid_t r = ::waitpid(c.pid, &status, WNOHANG | WUNTRACED | WCONTINUED);
+      const auto now = std::chrono::steady_clock::now();
+      if (r == c.pid && WIFSTOPPED(status)) {
+        if (!c.paused_since) {
+          c.paused_since = now;
+          ++c.pauses;
+        }
+        continue;
+      }
+      if (r == c.pid && WIFCONTINUED(status)) {
+        if (c.paused_since) {
+          c.paused_s += std::chrono::duration<double>(now - *c.paused_since).count();
+          c.paused_since.reset();
+        } else {
+          ++c.pauses;  // stopped and continued between two polls
+        }
+        continue;
+      }
+      if (r == c.pid) {
+        c.exit = ExitInfo::fromWaitStatus(status);
+        reaped.push_back(i);
+      } else if (r < 0 && errno == ECHILD) {
+        c.exit = ExitInfo{};  // reaped elsewhere: unknown end
+        reaped.push_back(i);
+      }
+      break;
+    }
+    if (c.exit && c.paused_since) {
+      c.paused_s +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - *c.paused_since).count();
+      c.paused_since.reset();
     }
   }
   return reaped;

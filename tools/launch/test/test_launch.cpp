@@ -499,6 +499,34 @@ TEST(Supervisor, NoticesACrash) {
   EXPECT_EQ(sup.child(i).exit->signal, SIGSEGV);
 }
 
+TEST(Supervisor, NoticesAPauseAndItsLength) {
+  Supervisor sup;
+  ProcessSpec s;
+  s.name = "sleeper";
+  s.path = "/bin/sleep";
+  s.args = {"5"};
+  const size_t i = sup.spawn(s);
+  sup.signal(i, SIGSTOP);
+  for (int k = 0; k < 200 && !sup.child(i).paused_since; ++k) {
+    sup.poll();
+    usleep(5000);
+  }
+  ASSERT_TRUE(sup.child(i).paused_since.has_value());
+  EXPECT_TRUE(sup.child(i).running());  // stopped is not ended
+  usleep(300000);
+  sup.signal(i, SIGCONT);
+  for (int k = 0; k < 200 && sup.child(i).paused_since; ++k) {
+    sup.poll();
+    usleep(5000);
+  }
+  EXPECT_FALSE(sup.child(i).paused_since.has_value());
+  EXPECT_EQ(sup.child(i).pauses, 1);
+  EXPECT_GE(sup.child(i).paused_s, 0.25);
+  EXPECT_LT(sup.child(i).paused_s, 3.0);
+  sup.stop({i}, 2.0);
+  EXPECT_FALSE(sup.child(i).running());
+}
+
 TEST(Supervisor, DestructorLeavesNoChild) {
   pid_t pid = -1;
   {

@@ -50,6 +50,8 @@ struct LaunchOptions {
   double drain_idle_s = 2.0;         ///< --drain-idle: no new pose for this long ends the drain
   double stop_grace_s = 5.0;         ///< --stop-grace: SIGINT -> SIGKILL delay
   std::string test_kill;             ///< --test-kill NODE:POSES: SIGKILL NODE after POSES poses
+  /// --test-pause NODE:POSES:SECONDS: SIGSTOP NODE after POSES poses, SIGCONT SECONDS later
+  std::string test_pause;
   bool compress = false;             ///< --compress: lossless compressed images and depth maps
   bool single_url = false;           ///< --single-url: frame channels on the main URL too
   /// --preload / --no-preload: the player decodes the frames before publishing the first
@@ -157,6 +159,8 @@ struct LaunchReport {
     bool stop_requested = false, killed = false;
     NodeCounts counts;
     bool has_counts = false;  ///< false for the logger
+    int pauses = 0;           ///< times it was stopped (SIGSTOP: by anyone) and continued
+    double paused_s = 0.0;    ///< time it spent stopped
   };
   std::vector<Process> processes;
   int64_t frames_published = -1;  ///< from the player's END event or final status (-1 unknown)
@@ -170,6 +174,14 @@ struct LaunchReport {
   std::vector<std::string> failures;  ///< why the launch failed (empty: success)
 
   int64_t droppedTotal() const;
+  /// The faults of the processes (pauses, deaths that were not a requested stop), one line
+  /// each, e.g. "pplvo-frontend paused 1 time(s), 2.0 s in all"; empty when none.
+  std::vector<std::string> faults() const;
+  /// Published frames without a pose in the trajectory (-1: unknown).
+  int64_t framesWithoutPose() const;
+  /// Adds the failure "frames lost to a fault" when there were faults() and frames without
+  /// pose: a pipeline that recovered still lost them, the launch is not ok.
+  void checkFramesLostToFaults();
   bool ok() const { return failures.empty(); }
   /// Table plus "launch.key: value" lines for scripts.
   std::string text() const;

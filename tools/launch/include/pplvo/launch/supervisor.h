@@ -47,6 +47,11 @@ struct ChildState {
   std::optional<ExitInfo> exit;  ///< set once reaped
   bool stop_requested = false;   ///< SIGINT sent by stop()/stopAll()
   bool killed = false;           ///< SIGKILL sent after the grace period
+  /// Times the child was stopped (SIGSTOP, SIGTSTP: by anyone) and seen so by poll(), and the
+  /// time it spent stopped (up to now while it still is).
+  int pauses = 0;
+  double paused_s = 0.0;
+  std::optional<std::chrono::steady_clock::time_point> paused_since;
 
   bool running() const { return pid > 0 && !exit.has_value(); }
 };
@@ -78,7 +83,8 @@ class Supervisor {
   /// SpawnError (never a silent child that exits 127). Returns the index of the child.
   size_t spawn(const ProcessSpec& spec);
 
-  /// Reaps every child that has ended (waitpid WNOHANG). Returns the indices reaped now.
+  /// Reaps every child that has ended (waitpid WNOHANG) and notes those stopped or continued
+  /// since (ChildState::pauses). Returns the indices reaped now.
   std::vector<size_t> poll();
 
   /// Sends `sig` to the child's process group (no-op when it already ended).
