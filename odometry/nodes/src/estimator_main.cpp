@@ -25,6 +25,8 @@ void usage() {
       "  --pose-channel NAME        out, pose_t (PPLVO_POSE)\n"
       "  --status-channel NAME      out, node_status_t (PPLVO_STATUS)\n"
       "  --max-waiting N            frames waiting for their reference (5)\n"
+      "  --max-reference-wait-ms MS restart tracking when no pose could be made for MS of\n"
+      "                             stream time, two frames waiting (1000; 0 = never)\n"
       "pipeline options (the odometry section is used):\n%s",
       pplvo::msgs::kRouteUsage, pplvo::pipeline::pipelineOptionsUsage());
 }
@@ -46,7 +48,8 @@ int main(int argc, char** argv) {
       .option("--features-3d-channel", &o.features_3d_channel)
       .option("--pose-channel", &o.pose_channel)
       .option("--status-channel", &o.status_channel)
-      .option("--max-waiting", &o.max_waiting, 1);
+      .option("--max-waiting", &o.max_waiting, 1)
+      .option("--max-reference-wait-ms", &o.max_reference_wait_ms, 0, 3600000);
   p.parse(argsFromArgv(argc, argv));
   if (p.help()) {
     usage();

@@ -1,5 +1,6 @@
 #include "pplvo/nodes/estimator_node.h"
 
+#include <algorithm>
 #include <pplvo_msgs/pose_t.hpp>
 
 #include "pplvo/msgs/convert_features.h"
@@ -34,6 +35,7 @@ void EstimatorNode::onFeatures3d(const lcm::ReceiveBuffer*, const std::string&,
 void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
   ++counters_.frames_in;
   counters_.last_seq = msg.seq;
+  newest_utime_ = msg.utime;
   if (msg.stage != pplvo_msgs::features_t::STAGE_2D) {
     throw msgs::MessageError("features_t on the 2D channel is not STAGE_2D");
   }
@@ -61,7 +63,13 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
     counters_.last_warning = "frame dropped: the reference of the last pose is late";
   }
   processWaiting();
-  if (!waiting_.empty() && drops_without_reference_ > options_.max_drops_without_reference) {
+  // The reference is missing for too long in stream time (the loop lost it): the newest frame
+  // is that far beyond the newest frame at the last pose.
+  const bool waited_too_long =
+      options_.max_reference_wait_ms > 0 && waiting_.size() >= 2 && last_pose_utime_ >= 0 &&
+      waiting_.back().utime - last_pose_utime_ > int64_t{options_.max_reference_wait_ms} * 1000;
+  if (!waiting_.empty() &&
+      (drops_without_reference_ > options_.max_drops_without_reference || waited_too_long)) {
     // The reference is not coming: restart at the newest frame, holding the last pose.
     FrameFeatures newest = std::move(waiting_.back());
     counters_.frames_dropped += static_cast<int64_t>(waiting_.size()) - 1;
@@ -108,6 +116,7 @@ void EstimatorNode::processWaiting() {
 
 void EstimatorNode::publish(const TrackerOutput& out, const FrameFeatures& frame,
                             const pipeline::FrameOdometryStats& stats) {
+  last_pose_utime_ = std::max(newest_utime_, frame.utime);
   FramePose pose = toFramePose(out);
   pose.utime = frame.utime;
   pose.seq = frame.seq;

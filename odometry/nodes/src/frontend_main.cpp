@@ -31,6 +31,8 @@ void usage() {
       "                             worker thread while the previous frame is lifted\n"
       "  --max-unlifted N           frames extracted but not yet lifted beyond which a new\n"
       "                             frame is dropped before extraction (5; 0 = never)\n"
+      "  --max-unlifted-wait-ms MS  with that many waiting and no fused depth for MS of\n"
+      "                             stream time, they are dropped instead (1000; 0 = never)\n"
       "pipeline options (the frontend section is used):\n%s",
       pplvo::msgs::kRouteUsage, pplvo::pipeline::pipelineOptionsUsage());
 }
@@ -56,7 +58,8 @@ int main(int argc, char** argv) {
       .option("--status-channel", &o.status_channel)
       .option("--max-pending", &o.max_pending, 1)
       .flag("--no-extract-ahead", &o.extract_ahead, false)
-      .option("--max-unlifted", &o.max_unlifted, 0, 1000);
+      .option("--max-unlifted", &o.max_unlifted, 0, 1000)
+      .option("--max-unlifted-wait-ms", &o.max_unlifted_wait_ms, 0, 3600000);
   p.parse(argsFromArgv(argc, argv));
   if (p.help()) {
     usage();
@@ -92,10 +95,12 @@ int main(int argc, char** argv) {
     const msgs::NodeCounters& c = node.counters();
     std::fprintf(stderr,
                  "[pplvo-frontend] done: in %lld out %lld dropped %lld skipped %lld; %lld of the "
-                 "drops before extraction, the pose -> fused depth loop behind\n%s",
+                 "drops before extraction, the pose -> fused depth loop behind; %lld extracted "
+                 "without fused depth within the wait\n%s",
                  static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_out),
                  static_cast<long long>(c.frames_dropped), static_cast<long long>(c.frames_skipped),
                  static_cast<long long>(node.droppedLoopBehind()),
+                 static_cast<long long>(node.droppedUnliftedTimeout()),
                  node.allTimings().table().c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pplvo-frontend: %s\n", e.what());

@@ -57,6 +57,7 @@ void FrontendNode::warn(const std::string& what) { counters_.last_warning = what
 void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   ++counters_.frames_in;
   msgs::noteFrameSequence(counters_, msg.seq);
+  newest_frame_utime_ = msg.utime;
   if (msg.seq <= last_extracted_seq_) {
     ++counters_.frames_skipped;
     warn("frame " + std::to_string(msg.seq) + " is older than one already handled");
@@ -120,7 +121,15 @@ void FrontendNode::extractReady() {
     frames_.pop_front();
     cgm_.pop_front();
     last_extracted_seq_ = frame.seq;
-    const size_t unlifted = awaiting_3d_.size() + (in_flight_.result.valid() ? 1 : 0);
+    auto unliftedCount = [this] {
+      return awaiting_3d_.size() + (in_flight_.result.valid() ? 1 : 0);
+    };
+    size_t unlifted = unliftedCount();
+    if (options_.max_unlifted > 0 && unlifted >= static_cast<size_t>(options_.max_unlifted) &&
+        dropUnliftedIfLoopStalled(frame.utime) > 0) {
+      publishWhenDue();
+      unlifted = unliftedCount();
+    }
     if (options_.max_unlifted > 0 && unlifted >= static_cast<size_t>(options_.max_unlifted)) {
       // The pose -> fused depth -> lifting loop is behind: extracting this frame would only
       // delay it further, and the estimator would drop the frame anyway.
@@ -165,6 +174,27 @@ void FrontendNode::finishInFlight() {
   publishExtracted(in_flight_.result.get());  // a job's exception surfaces here (counted skip)
 }
 
+int64_t FrontendNode::dropUnliftedIfLoopStalled(int64_t utime) {
+  if (options_.max_unlifted_wait_ms <= 0 || awaiting_3d_.empty()) return 0;
+  if (last_lift_utime_ < 0 || utime < last_lift_utime_) {
+    last_lift_utime_ = utime;  // the first wait (or a restarted source) starts now
+    return 0;
+  }
+  if (utime - last_lift_utime_ <= int64_t{options_.max_unlifted_wait_ms} * 1000) return 0;
+  // No fused depth for that long while the queue is full: the loop lost these frames (a
+  // paused or restarted estimator or depth filter). Drop them, so that features flow again and
+  // the estimator can restart on new frames; the next drop needs another full wait.
+  const auto dropped = static_cast<int64_t>(awaiting_3d_.size());
+  warn(std::to_string(dropped) + " extracted frames dropped: no fused depth for " +
+       std::to_string((utime - last_lift_utime_) / 1000) + " ms (from frame " +
+       std::to_string(awaiting_3d_.front().seq) + ")");
+  awaiting_3d_.clear();
+  counters_.frames_dropped += dropped;
+  dropped_unlifted_timeout_ += dropped;
+  last_lift_utime_ = utime;
+  return dropped;
+}
+
 void FrontendNode::publishWhenDue() {
   // With no frame waiting for its fused depth there is no lifting to overlap: publish now.
   if (awaiting_3d_.empty()) finishInFlight();
@@ -207,6 +237,7 @@ void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
   }
   pipeline::FrontendStats stats;
   frontend_.lift3d(features, fused, &stats);
+  last_lift_utime_ = newest_frame_utime_;  // the loop delivers
   if (!stats.warning.empty()) warn(stats.warning);
   {
     ScopedStageTimer t(timings_, "encode");

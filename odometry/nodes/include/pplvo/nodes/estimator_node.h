@@ -41,6 +41,12 @@ struct EstimatorNodeOptions {
   int max_waiting = 5;
   /// Consecutive drops while the reference is missing before tracking restarts.
   int max_drops_without_reference = 3;
+  /// The same wait bounded by time: when two or more frames wait and no pose could be made for
+  /// this much stream time (frame stamps: the newest frame against the newest one at the last
+  /// pose), tracking restarts at the newest. A frontend that lost its loop sends frames
+  /// sparsely, so drops alone could take long. A slow loop that still delivers its references
+  /// is never cut. 0 = no time bound. Lockstep never reaches it.
+  int max_reference_wait_ms = 1000;
   pipeline::FrameOdometryOptions odometry;
 };
 
@@ -85,6 +91,8 @@ class EstimatorNode {
   FrameFeatures reference_;            ///< stage 3D of the newest posed frame received
   bool have_reference_ = false;
   int drops_without_reference_ = 0;
+  int64_t newest_utime_ = -1;     ///< stamp of the newest stage-2D features received
+  int64_t last_pose_utime_ = -1;  ///< newest_utime_ when the last pose was published
   msgs::NodeCounters counters_;
   EstimatorCounts counts_;
   StageTimings timings_;

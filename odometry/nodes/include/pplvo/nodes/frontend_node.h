@@ -53,6 +53,14 @@ struct FrontendNodeOptions {
   /// lockstep with up to max_unlifted frames in flight; 5 absorbs a loop late by a few frame
   /// periods at 30 Hz (fewer drops than 3, docs/launch.md) and bounds the latency to ~170 ms.
   int max_unlifted = 5;
+  /// The same wait bounded by time: when max_unlifted frames wait and no fused depth has come
+  /// for this much stream time (frame stamps), the loop lost them: they are dropped, counted,
+  /// instead of the new frame. Without it a loop that lost its fused depth (a paused or
+  /// restarted estimator or depth filter) kept the queue full for good: every new frame dropped
+  /// before extraction, so no features, no pose, no fused depth. A slow loop that still
+  /// delivers is never cut. 0 = no time bound. Never reached in lockstep (fewer than
+  /// max_unlifted in flight).
+  int max_unlifted_wait_ms = 1000;
   pipeline::FrontendOptions frontend;
 };
 
@@ -73,6 +81,9 @@ class FrontendNode {
   /// Of counters().frames_dropped, the frames dropped before extraction because max_unlifted
   /// frames waited for their fused depth (the loop through estimator and depth filter behind).
   int64_t droppedLoopBehind() const { return dropped_loop_behind_; }
+  /// Of counters().frames_dropped, extracted frames dropped because no fused depth came for
+  /// max_unlifted_wait_ms while the queue was full (the loop lost them).
+  int64_t droppedUnliftedTimeout() const { return dropped_unlifted_timeout_; }
   const StageTimings& timings() const { return timings_; }
   /// Decode/encode times of this node and the frontend's own stages, in one table.
   StageTimings allTimings() const;
@@ -106,6 +117,9 @@ class FrontendNode {
   void finishInFlight();
   /// Publishes stage 2D in flight while no earlier frame waits for its fused depth.
   void publishWhenDue();
+  /// Drops every frame waiting for fused depth when none came for max_unlifted_wait_ms of
+  /// stream time up to the frame stamped `utime`; returns how many.
+  int64_t dropUnliftedIfLoopStalled(int64_t utime);
   void warn(const std::string& what);
 
   FrontendNodeOptions options_;
@@ -117,6 +131,11 @@ class FrontendNode {
   std::deque<FrameFeatures> awaiting_3d_;  ///< stage 2D published, fused depth not yet
   int64_t last_extracted_seq_ = -1;
   int64_t dropped_loop_behind_ = 0;
+  int64_t dropped_unlifted_timeout_ = 0;
+  int64_t newest_frame_utime_ = -1;  ///< stamp of the newest colour frame received
+  /// Stamp of the newest frame when fused depth last came (or the last drop): the loop's
+  /// progress in stream time; -1 before the first wait.
+  int64_t last_lift_utime_ = -1;
   /// Stage 2D under way on the worker (result invalid: none; destroyed, i.e. joined, before
   /// frontend_).
   struct InFlight {
