@@ -16,6 +16,7 @@
 #include <pplvo_msgs/node_status_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <pplvo_msgs/stream_event_t.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -240,13 +241,45 @@ int main(int argc, char** argv) {
   {
     Supervisor sup;
     // Checks every child; returns false (and records why) if one ended when it should not.
+    // --restart: stages that died and when to start them again; restarts done per stage.
+    std::map<std::string, Clock::time_point> restart_at;
+    std::map<std::string, int> restarts_of;
+    std::set<size_t> restarted;  // children that died and were (or will be) replaced
+    auto mayRestart = [&](const std::string& name) {
+      return name == kDepthFilter || name == kFrontend || name == kEstimator;
+    };
     auto checkChildren = [&](bool player_may_end) {
       for (size_t i : sup.poll()) {
         const ChildState& c = sup.child(i);
         if (c.stop_requested) continue;
         if (c.spec.name == kPlayer && player_may_end) continue;
-        failures.push_back(c.spec.name + " ended early (" + c.exit->text() + ")");
-        if (failed_process.empty()) failed_process = c.spec.name;
+        const std::string& name = c.spec.name;
+        if (mayRestart(name) && restarts_of[name] < o.restart_limit) {
+          const double backoff = o.restart_backoff_s * (1 << std::min(restarts_of[name], 16));
+          say(name + " ended (" + c.exit->text() + "); restarting it in " +
+              std::to_string(backoff) + " s");
+          restart_at[name] = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                std::chrono::duration<double>(backoff));
+          restarted.insert(i);
+          continue;
+        }
+        failures.push_back(name + " ended early (" + c.exit->text() + ")" +
+                           (restarts_of[name] > 0
+                                ? " after " + std::to_string(restarts_of[name]) + " restart(s)"
+                                : ""));
+        if (failed_process.empty()) failed_process = name;
+      }
+      for (auto it = restart_at.begin(); it != restart_at.end();) {
+        if (Clock::now() < it->second) {
+          ++it;
+          continue;
+        }
+        const ProcessSpec spec = sup.child(*sup.find(it->first)).spec;
+        const size_t i = sup.spawn(spec);  // the same command line; its log is appended to
+        ++restarts_of[it->first];
+        ++report.restarts;
+        say("restarted " + it->first + " (pid " + std::to_string(sup.child(i).pid) + ")");
+        it = restart_at.erase(it);
       }
       return failures.empty();
     };
@@ -376,7 +409,7 @@ int main(int argc, char** argv) {
     }
     if (auto i = sup.find(kLogger)) sup.stop({*i}, o.stop_grace_s, [&] { bus.handle(10); });
     bus.handle(50);
-    if (test_killed) {
+    if (test_killed && report.restarts == 0) {
       // A kill on request is still a failure of the launch; make sure it is named.
       bool named = false;
       for (const std::string& f : failures) named = named || f.rfind(kill_name, 0) == 0;
@@ -392,6 +425,9 @@ int main(int argc, char** argv) {
       p.has_counts = c.spec.name != kLogger;
       p.pauses = c.pauses;
       p.paused_s = c.paused_s;
+      p.restarted = restarted.count(&c - sup.children().data()) > 0;
+      // A replaced process shares its log with its successor, whose counts those are.
+      if (p.restarted) p.has_counts = false;
       if (p.has_counts) {
         const std::string log = readFile(c.spec.log_path);
         if (auto d = parseDoneLine(log, c.spec.name)) p.counts = *d;
@@ -406,7 +442,7 @@ int main(int argc, char** argv) {
         failures.push_back(c.spec.name + " did not stop within " + std::to_string(o.stop_grace_s) +
                            " s of SIGINT (killed)");
       }
-      if (c.exit && !c.exit->clean() && !c.killed) {
+      if (c.exit && !c.exit->clean() && !c.killed && !p.restarted) {
         const std::string f = c.spec.name + " ended with " + c.exit->text();
         bool dup = false;
         for (const std::string& x : failures) dup = dup || x.rfind(c.spec.name, 0) == 0;

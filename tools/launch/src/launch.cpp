@@ -63,6 +63,9 @@ std::string launchUsage() {
          "  --drain-idle S          after the player ends, stop once no pose came for S s (2)\n"
          "  --stop-grace S          SIGINT -> SIGKILL delay when stopping (5)\n"
          "  --test-kill NODE:N      (tests) SIGKILL NODE once N poses were seen\n"
+         "  --restart N             start a depth filter, frontend or estimator that died again,\n"
+         "                          at most N times per stage (0: a dead stage fails the launch)\n"
+         "  --restart-backoff S     wait before a restart, doubled each time (0.5)\n"
          "  --test-pause NODE:N:S   (tests) SIGSTOP NODE once N poses were seen, SIGCONT after\n"
          "                          S seconds\n"
          "  --compress              lossless compressed frames (player png/zlib) and depth\n"
@@ -220,6 +223,15 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
       number(&o.drain_idle_s, 0.1);
     else if (key == "--stop-grace")
       number(&o.stop_grace_s, 0.1);
+    else if (key == "--restart") {
+      std::string t;
+      int64_t v = 0;
+      if (next(&t) && (!toInt(t, &v) || v < 0 || v > 1000))
+        p.errors.push_back("--restart: expected an integer in [0, 1000], not '" + t + "'");
+      else
+        o.restart_limit = static_cast<int>(v);
+    } else if (key == "--restart-backoff")
+      number(&o.restart_backoff_s, 0.0);
     else if (key == "--test-kill") {
       if (next(&o.test_kill)) {
         static const std::regex re("(pplvo-[a-z-]+):([0-9]+)");
@@ -583,6 +595,7 @@ std::string LaunchReport::text() const {
     out << "launch.lockstep_timeouts: " << player->counts.errors
         << "  # poses the player gave up waiting for (player errors)\n";
   }
+  out << "launch.restarts: " << restarts << "\n";
   for (const std::string& f : faults()) out << "launch.fault: " << f << "\n";
   out << "launch.wall_s: " << wall_s << "\n";
   out << "launch.result: " << (ok() ? "ok" : "FAILED") << "\n";
@@ -600,7 +613,8 @@ std::vector<std::string> LaunchReport::faults() const {
       f.push_back(buf);
     }
     if (p.exit && !p.stop_requested && !p.exit->clean()) {
-      f.push_back(p.name + " ended early (" + p.exit->text() + ")");
+      f.push_back(p.name + " ended early (" + p.exit->text() + ")" +
+                  (p.restarted ? ", restarted" : ""));
     }
   }
   return f;

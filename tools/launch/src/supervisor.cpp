@@ -241,7 +241,7 @@ std::vector<size_t> Supervisor::runningIndices() const {
 }
 
 std::optional<size_t> Supervisor::find(const std::string& name) const {
-  for (size_t i = 0; i < children_.size(); ++i) {
+  for (size_t i = children_.size(); i-- > 0;) {
     if (children_[i].spec.name == name) return i;
   }
   return std::nullopt;

@@ -815,3 +815,89 @@ TEST_F(LaunchProgram, ReusedNodeLogFolderReportsOnlyThisRun) {
   EXPECT_EQ(row.find("195"), std::string::npos) << row;
   EXPECT_NE(row.find("killed by signal 9"), std::string::npos) << row;
 }
+
+// A stage stopped for 2 s (SIGSTOP, then SIGCONT) in a free-running launch at the sensor's rate:
+// the pipeline resumes within a few frames (the frontend's and the estimator's waits are bounded
+// by time as well as count; the estimator restarts at the newest frame when its reference does
+// not come), and the report names the fault and the frames it cost. Before, no pose came after
+// the pause for the frontend and the estimator (the frontend's full queue of frames waiting for
+// fused depth dropped every new frame before extraction, for good).
+namespace {
+
+/// 150 frames of 160x120 at 30 Hz (stamps 1.0 + k / 30): a free-running launch keeps up.
+fs::path sequence150(const fs::path& dir) {
+  const fs::path seq = dir / "small150";
+  if (!fs::exists(seq)) {
+    const CommandRun r = runCommand(binDir() + "/pplvo-synth --output " + seq.string() +
+                                        " --frames 150 --width 160 --height 120",
+                                    dir, "synth150");
+    EXPECT_EQ(r.code, 0) << r.err;
+  }
+  return seq;
+}
+
+/// Poses of a TUM file whose stamp is at least `from_s`.
+int posesFrom(const fs::path& traj, double from_s) {
+  int n = 0;
+  for (const auto& p : pplvo::readTumTrajectory(traj.string()).poses) {
+    n += std::stod(p.stamp_text) >= from_s - 1e-6 ? 1 : 0;
+  }
+  return n;
+}
+
+}  // namespace
+
+TEST_F(LaunchProgram, PausedStageCostsOnlyTheFramesItHeld) {
+  const fs::path seq150 = sequence150(*dir_);
+  constexpr int kFrames = 150, kPauseAfterPoses = 30, kLastFrames = 60;
+  for (const char* node : {kDepthFilter, kFrontend, kEstimator}) {
+    const fs::path traj = *dir_ / (std::string("paused_") + node + ".txt");
+    const CommandRun l =
+        runCommand(launch(std::string("pause_") + node) + "--rate 1 --test-pause " + node + ":" +
+                       std::to_string(kPauseAfterPoses) + ":2 --dataset " + seq150.string() +
+                       " --output " + traj.string(),
+                   *dir_, std::string("pause_") + node);
+    std::printf("%s stopped for 2 s: exit %d after %.1f s\n%s", node, l.code, l.seconds,
+                l.out.c_str());
+    EXPECT_EQ(reportValue(l.out, "launch.frames_published"), kFrames) << node;
+    // The 2 s pause (60 frames at 30 Hz) starts after ~30 frames: the last 60 frames come after
+    // it. A majority of them must be posed (all were, 3 of 3 stages, here).
+    EXPECT_GT(posesFrom(traj, 1.0 + (kFrames - kLastFrames) / 30.0), kLastFrames / 2)
+        << node << "\n"
+        << l.out;
+    EXPECT_GE(posesFrom(traj, 0.0), kPauseAfterPoses) << node;
+    // Frames were lost to the fault: said so, and the launch is not ok.
+    EXPECT_NE(l.out.find(std::string("launch.fault: ") + node + " paused 1 time(s)"),
+              std::string::npos)
+        << l.out;
+    EXPECT_NE(l.out.find("launch.failure: frames lost to a fault"), std::string::npos) << l.out;
+    EXPECT_EQ(l.code, 1) << node;
+  }
+}
+
+// --restart: a stage killed (SIGKILL) after 30 poses is started again, the pipeline resumes (the
+// estimator restarts tracking when its reference is lost with the dead stage; a restarted
+// estimator starts a new world frame), and the report counts the restart and the frames lost.
+TEST_F(LaunchProgram, KilledStageIsRestartedAndThePipelineResumes) {
+  const fs::path seq150 = sequence150(*dir_);
+  constexpr int kFrames = 150, kLastFrames = 60;
+  for (const char* node : {kDepthFilter, kFrontend, kEstimator}) {
+    const fs::path traj = *dir_ / (std::string("restarted_") + node + ".txt");
+    const CommandRun l =
+        runCommand(launch(std::string("restart_") + node) + "--rate 1 --restart 2 --test-kill " +
+                       node + ":30 --dataset " + seq150.string() + " --output " + traj.string(),
+                   *dir_, std::string("restart_") + node);
+    std::printf("%s killed, --restart 2: exit %d after %.1f s\n%s", node, l.code, l.seconds,
+                l.out.c_str());
+    EXPECT_EQ(reportValue(l.out, "launch.frames_published"), kFrames) << node;
+    EXPECT_EQ(reportValue(l.out, "launch.restarts"), 1) << node;
+    EXPECT_GT(posesFrom(traj, 1.0 + (kFrames - kLastFrames) / 30.0), kLastFrames / 2)
+        << node << "\n"
+        << l.out;
+    EXPECT_NE(l.out.find(std::string("launch.fault: ") + node + " ended early (killed by signal 9"),
+              std::string::npos)
+        << l.out;
+    EXPECT_NE(l.out.find("launch.failure: frames lost to a fault"), std::string::npos) << l.out;
+    EXPECT_EQ(l.code, 1) << node;
+  }
+}

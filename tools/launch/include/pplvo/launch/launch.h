@@ -58,6 +58,11 @@ struct LaunchOptions {
   /// (default: on when free-running, where decoding would compete with the pipeline).
   std::optional<bool> preload;
   bool quiet = false;                ///< --quiet: report only
+  /// --restart N: a depth filter, frontend or estimator that dies is started again, at most N
+  /// times per stage (0: a dead stage fails the launch), after --restart-backoff seconds,
+  /// doubled on each restart of the same stage.
+  int restart_limit = 0;
+  double restart_backoff_s = 0.5;  ///< --restart-backoff
 };
 
 struct ParsedArgs {
@@ -161,6 +166,7 @@ struct LaunchReport {
     bool has_counts = false;  ///< false for the logger
     int pauses = 0;           ///< times it was stopped (SIGSTOP: by anyone) and continued
     double paused_s = 0.0;    ///< time it spent stopped
+    bool restarted = false;   ///< it died and --restart started the stage again
   };
   std::vector<Process> processes;
   int64_t frames_published = -1;  ///< from the player's END event or final status (-1 unknown)
@@ -168,6 +174,7 @@ struct LaunchReport {
   int64_t trajectory_poses = -1;  ///< lines in the trajectory file (-1: not readable)
   std::string trajectory_path;
   int64_t overload_fusions = -1;  ///< depth filter's shortened fusions (-1: not reported)
+  int restarts = 0;               ///< stages started again by --restart
   double wall_s = 0.0;
   bool lockstep = false;
   std::string url;

@@ -104,7 +104,7 @@ class Supervisor {
 
   const std::vector<ChildState>& children() const { return children_; }
   const ChildState& child(size_t index) const { return children_.at(index); }
-  /// Index of the child called `name`, if any.
+  /// Index of the child called `name` (the newest, when a stage was started again), if any.
   std::optional<size_t> find(const std::string& name) const;
 
  private:
