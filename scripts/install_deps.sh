@@ -19,6 +19,8 @@ packages=(
   iproute2 util-linux procps
   # headless viewer checks
   xvfb xauth
+  # fuzzing (scripts/fuzz.sh): clang with libFuzzer and the sanitizer runtimes
+  clang libclang-rt-14-dev
 )
 
 SUDO=""

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses (tests/fuzz) with clang, AddressSanitizer and
+# UndefinedBehaviorSanitizer in their own build folder and runs each for a given time.
+#
+#   scripts/fuzz.sh [SECONDS_PER_HARNESS] [BUILD_DIR]     # defaults: 60, build-fuzz
+#
+# Seeds: the shared sequences' PNG images and index files when ../shared/data is there
+# (copied into BUILD_DIR/corpus, never into the repository); the LCM harness starts from
+# nothing (libFuzzer's comparison tracing finds the type hashes). Each harness's corpus is
+# kept in BUILD_DIR/corpus/NAME between runs. A crash leaves BUILD_DIR/crash-* and makes the
+# script exit 1; turn each into a regression test with its input. Prints per harness the
+# inputs run. Needs: clang, libclang-rt-14-dev (scripts/install_deps.sh).
+set -euo pipefail
+
+seconds=${1:-60}
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${2:-$root/build-fuzz}
+harnesses=(fuzz_lcm_decode fuzz_png_decode fuzz_index_file)
+
+export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
+mkdir -p "$build"
+san="-fsanitize=address,undefined,fuzzer-no-link -fno-sanitize-recover=undefined"
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ "${launcher[@]}" \
+  -DCMAKE_C_FLAGS="$san" -DCMAKE_CXX_FLAGS="$san" \
+  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+  -DPPLVO_BUILD_FUZZERS=ON -DPPLVO_BUILD_BENCHMARKS=OFF >"$build/fuzz-cmake.log" 2>&1 ||
+  { cat "$build/fuzz-cmake.log"; exit 1; }
+cmake --build "$build" -j"$(nproc)" --target "${harnesses[@]}" >"$build/fuzz-build.log" 2>&1 ||
+  { tail -40 "$build/fuzz-build.log"; exit 1; }
+
+data=$root/../shared/data
+mkdir -p "$build/corpus"
+for h in "${harnesses[@]}"; do mkdir -p "$build/corpus/$h"; done
+if [ -d "$data" ]; then
+  # A few images of each kind (colour and 16-bit depth) and every index file.
+  find "$data" -name '*.png' -size -400k | sort | awk 'NR % 40 == 1' | head -8 |
+    while read -r f; do cp -n "$f" "$build/corpus/fuzz_png_decode/$(echo "$f" | md5sum | cut -c1-16)"; done
+  find "$data" -name '*.txt' | while read -r f; do
+    head -c 4000 "$f" >"$build/corpus/fuzz_index_file/$(echo "$f" | md5sum | cut -c1-16)"
+  done
+fi
+
+status=0
+cd "$build"
+for h in "${harnesses[@]}"; do
+  log="$build/$h.log"
+  if "$build/bin/$h" -max_total_time="$seconds" -rss_limit_mb=2048 -max_len=65536 \
+    -print_final_stats=1 "$build/corpus/$h" >"$log" 2>&1; then
+    result="no crash"
+  else
+    result="CRASH (see $log and $build/crash-*)"
+    status=1
+  fi
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo '?')
+  printf '%-18s %12s inputs in %s s: %s\n' "$h" "$runs" "$seconds" "$result"
+done
+exit $status
