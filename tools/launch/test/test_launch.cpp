@@ -824,13 +824,14 @@ TEST_F(LaunchProgram, ReusedNodeLogFolderReportsOnlyThisRun) {
 // fused depth dropped every new frame before extraction, for good).
 namespace {
 
-/// 150 frames of 160x120 at 30 Hz (stamps 1.0 + k / 30): a free-running launch keeps up.
-fs::path sequence150(const fs::path& dir) {
-  const fs::path seq = dir / "small150";
+/// 300 frames of 160x120 at 30 Hz (stamps 1.0 + k / 30, 10 s): a free-running launch keeps
+/// up, and a stage restarted on a loaded machine is up well before the end.
+fs::path sequence300(const fs::path& dir) {
+  const fs::path seq = dir / "small300";
   if (!fs::exists(seq)) {
     const CommandRun r = runCommand(binDir() + "/pplvo-synth --output " + seq.string() +
-                                        " --frames 150 --width 160 --height 120",
-                                    dir, "synth150");
+                                        " --frames 300 --width 160 --height 120",
+                                    dir, "synth300");
     EXPECT_EQ(r.code, 0) << r.err;
   }
   return seq;
@@ -848,20 +849,20 @@ int posesFrom(const fs::path& traj, double from_s) {
 }  // namespace
 
 TEST_F(LaunchProgram, PausedStageCostsOnlyTheFramesItHeld) {
-  const fs::path seq150 = sequence150(*dir_);
-  constexpr int kFrames = 150, kPauseAfterPoses = 30, kLastFrames = 60;
+  const fs::path seq300 = sequence300(*dir_);
+  constexpr int kFrames = 300, kPauseAfterPoses = 30, kLastFrames = 150;
   for (const char* node : {kDepthFilter, kFrontend, kEstimator}) {
     const fs::path traj = *dir_ / (std::string("paused_") + node + ".txt");
     const CommandRun l =
         runCommand(launch(std::string("pause_") + node) + "--rate 1 --test-pause " + node + ":" +
-                       std::to_string(kPauseAfterPoses) + ":2 --dataset " + seq150.string() +
+                       std::to_string(kPauseAfterPoses) + ":2 --dataset " + seq300.string() +
                        " --output " + traj.string(),
                    *dir_, std::string("pause_") + node);
     std::printf("%s stopped for 2 s: exit %d after %.1f s\n%s", node, l.code, l.seconds,
                 l.out.c_str());
     EXPECT_EQ(reportValue(l.out, "launch.frames_published"), kFrames) << node;
-    // The 2 s pause (60 frames at 30 Hz) starts after ~30 frames: the last 60 frames come after
-    // it. A majority of them must be posed (all were, 3 of 3 stages, here).
+    // The 2 s pause (60 frames at 30 Hz) starts after ~30 frames: the last 150 frames come well
+    // after it. A majority of them must be posed (all were, 3 of 3 stages, on 150 frames here).
     EXPECT_GT(posesFrom(traj, 1.0 + (kFrames - kLastFrames) / 30.0), kLastFrames / 2)
         << node << "\n"
         << l.out;
@@ -879,13 +880,13 @@ TEST_F(LaunchProgram, PausedStageCostsOnlyTheFramesItHeld) {
 // estimator restarts tracking when its reference is lost with the dead stage; a restarted
 // estimator starts a new world frame), and the report counts the restart and the frames lost.
 TEST_F(LaunchProgram, KilledStageIsRestartedAndThePipelineResumes) {
-  const fs::path seq150 = sequence150(*dir_);
-  constexpr int kFrames = 150, kLastFrames = 60;
+  const fs::path seq300 = sequence300(*dir_);
+  constexpr int kFrames = 300, kLastFrames = 150;
   for (const char* node : {kDepthFilter, kFrontend, kEstimator}) {
     const fs::path traj = *dir_ / (std::string("restarted_") + node + ".txt");
     const CommandRun l =
         runCommand(launch(std::string("restart_") + node) + "--rate 1 --restart 2 --test-kill " +
-                       node + ":30 --dataset " + seq150.string() + " --output " + traj.string(),
+                       node + ":30 --dataset " + seq300.string() + " --output " + traj.string(),
                    *dir_, std::string("restart_") + node);
     std::printf("%s killed, --restart 2: exit %d after %.1f s\n%s", node, l.code, l.seconds,
                 l.out.c_str());
