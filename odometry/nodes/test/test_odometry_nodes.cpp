@@ -205,6 +205,51 @@ TEST(FrontendNode, DropsNewFramesBeforeExtractionWhileTheLoopIsBehind) {
   }
 }
 
+TEST(FrontendNode, ALoopThatDeliversNoFusedDepthForTheTimeBoundIsDropped) {
+  // No fused depth ever (the loop lost it: a paused estimator). With max_unlifted 3 frames 3
+  // and 4 are dropped before extraction; a frame 2 s later (stream time) finds no fused depth
+  // came for more than max_unlifted_wait_ms: the queue is dropped and the frame extracted.
+  // Without the time bound it stays full for good.
+  for (const int wait_ms : {1000, 0}) {
+    SCOPED_TRACE("max_unlifted_wait_ms " + std::to_string(wait_ms));
+    lcm::LCM lcm("memq://");
+    FrontendNodeOptions options;
+    options.max_unlifted = 3;
+    options.max_unlifted_wait_ms = wait_ms;
+    FrontendNode node(options, lcm);
+    Recorder<pplvo_msgs::features_t> f2d(lcm, channels::kFeatures);
+    for (int i = 0; i < 6; ++i) {
+      auto m = frameMsg(i);
+      auto d = cgmMsg(i);
+      if (i == 5) {
+        m.utime += 2000000;
+        d.utime = m.utime;
+      }
+      lcm.publish(channels::kRgbd, &m);
+      lcm.publish(channels::kDepthCgm, &d);
+      drain(lcm);
+    }
+    if (wait_ms > 0) {
+      EXPECT_EQ(node.droppedLoopBehind(), 2);
+      EXPECT_EQ(node.droppedUnliftedTimeout(), 2);  // frames 0 and 1 (2 was on the worker)
+      EXPECT_EQ(node.counters().frames_dropped, 4);
+      EXPECT_NE(node.counters().last_warning.find("no fused depth for"), std::string::npos)
+          << node.counters().last_warning;
+      node.poll();
+      for (int k = 0; k < 500 && f2d.msgs.size() < 4; ++k) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        node.poll();
+        drain(lcm);
+      }
+      ASSERT_EQ(f2d.msgs.size(), 4u);  // frames 0, 1, 2 and then 5
+      EXPECT_EQ(f2d.msgs.back().seq, frames()[5].frame.seq);
+    } else {
+      EXPECT_EQ(node.droppedLoopBehind(), 3);  // frames 3, 4 and 5
+      EXPECT_EQ(node.droppedUnliftedTimeout(), 0);
+    }
+  }
+}
+
 TEST(FrontendNode, BadMessagesAreCountedAndQueuesStayBounded) {
   lcm::LCM lcm("memq://");
   FrontendNodeOptions o;
@@ -348,6 +393,40 @@ TEST(EstimatorNode, RestartsHoldingThePoseWhenTheReferenceNeverComes) {
   drain(lcm);
   ASSERT_EQ(poses.msgs.size(), 4u);
   EXPECT_EQ(poses.msgs[3].status, pplvo_msgs::pose_t::STATUS_TRACKING);
+}
+
+TEST(EstimatorNode, RestartsWhenNoPoseCouldBeMadeForTheTimeBound) {
+  // Frame 1's 3D features are lost and only two more frames come (a frontend that lost its
+  // loop sends few): no drop, but they are 2 s of stream time past the last pose: tracking
+  // restarts at the newest. Without the time bound they wait for good.
+  const FeatureSet& fs = featureSet();
+  for (const int wait_ms : {1000, 0}) {
+    SCOPED_TRACE("max_reference_wait_ms " + std::to_string(wait_ms));
+    lcm::LCM lcm("memq://");
+    EstimatorNodeOptions o;
+    o.max_reference_wait_ms = wait_ms;
+    EstimatorNode node(o, lcm);
+    Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
+    lcm.publish(channels::kFeatures, &fs.f2d[0]);
+    lcm.publish(channels::kFeatures3d, &fs.f3d[0]);
+    lcm.publish(channels::kFeatures, &fs.f2d[1]);
+    drain(lcm);
+    ASSERT_EQ(poses.msgs.size(), 2u);
+    for (int i = 2; i <= 3; ++i) {
+      auto late = fs.f2d[i];
+      late.utime += 2000000;
+      lcm.publish(channels::kFeatures, &late);
+      drain(lcm);
+    }
+    if (wait_ms > 0) {
+      ASSERT_EQ(poses.msgs.size(), 3u);
+      EXPECT_EQ(poses.msgs[2].status, pplvo_msgs::pose_t::STATUS_REINITIALISED);
+      EXPECT_EQ(poses.msgs[2].seq, frames()[3].frame.seq);
+      EXPECT_EQ(node.counts().restarts_missing_reference, 1);
+    } else {
+      EXPECT_EQ(poses.msgs.size(), 2u);
+    }
+  }
 }
 
 TEST(EstimatorNode, InconsistentMessagesAreCountedNotFatal) {
