@@ -1,9 +1,8 @@
 // pplvo-run: the whole pipeline in one process over memq:// (see pplvo/run/run_pipeline.h).
-#include <unistd.h>
-
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
@@ -30,7 +29,9 @@ void usage() {
       "                          camera); the throughput then leaves the decoding out\n"
       "  --summary FILE          write the run summary as YAML\n"
       "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
-      "  --quiet                 no summary on stdout\n%s",
+      "  --quiet                 no summary on stdout\n"
+      "  --progress/--no-progress  progress line (frames, frames/s, ETA) on stderr (default:\n"
+      "                          when stderr is a terminal and not --quiet)\n%s",
       pplvo::pipeline::pipelineOptionsUsage());
 }
 
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
   run::RunOptions o;
   pipeline::PipelineArgs pa;
   bool quiet = false;
+  bool progress = false;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   p.option("--dataset", &o.dataset_dir)
@@ -54,8 +56,11 @@ int main(int argc, char** argv) {
       .option("--fps", &o.fps, 0.0)
       .flag("--skip-bad", &o.skip_bad)
       .flag("--preload", &o.preload)
-      .flag("--quiet", &quiet);
-  p.parse(argsFromArgv(argc, argv));
+      .flag("--quiet", &quiet)
+      .flag("--progress", &progress)
+      .flag("--no-progress", &progress, false);
+  const std::vector<std::string> args = argsFromArgv(argc, argv);
+  p.parse(args);
   if (p.help()) {
     usage();
     return 0;
@@ -67,7 +72,7 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
-  o.progress = !quiet && isatty(STDERR_FILENO);
+  o.progress = progressEnabled(args, progress) && (progress || !quiet);
   std::fprintf(stderr, "[pplvo-run] %s: features %s, depth model %s\n", o.dataset_dir.c_str(),
                pipeline::toString(o.pipeline.families()).c_str(),
                depth_filter::toString(o.pipeline.depth_filter.model));
