@@ -68,6 +68,21 @@ ViewerOptions headless(const std::string& dir) {
   return o;
 }
 
+TEST(ViewerNode, CreatesItsSnapshotFolder) {
+  const std::string dir = tempDir() + "/not/yet/there";
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  ViewerNode node(headless(dir), lcm);
+  publishAll(lcm, 0);
+  node.spinOnce(0.0);
+  EXPECT_EQ(node.snapshotsWritten(), 1);
+  EXPECT_FALSE(cv::imread(dir + "/canvas_000000.png").empty());
+  EXPECT_EQ(node.counters().errors, 0);
+  // A folder that cannot be created (a path through a regular file) fails at construction.
+  const std::string file = dir + "/canvas_000000.png";
+  EXPECT_THROW(ViewerNode(headless(file + "/sub"), lcm), std::runtime_error);
+}
+
 TEST(ViewerNode, HeadlessSnapshotsShowEveryPanelAndTheOverlay) {
   const std::string dir = tempDir();
   lcm::LCM lcm("memq://");
