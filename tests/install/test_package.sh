@@ -29,7 +29,7 @@ field() { sed -n "s/^$1: //p" "$tmp/control"; }
 [[ $(field Version) == "$version" ]] || fail "Version"
 [[ $(field Architecture) == "$(dpkg --print-architecture)" ]] || fail "Architecture"
 depends=$(field Depends)
-for dep in 'liblcm1' 'libopencv-core' 'libyaml-cpp' 'libceres' 'libc6' 'liblcm-dev (>= 1.3)' \
+for dep in 'liblcm1' 'libopencv-core4' 'libyaml-cpp0' 'libc6 (' 'liblcm-dev (>= 1.3)' \
   libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev libyaml-cpp-dev zlib1g-dev \
   libdeflate-dev; do
   [[ $depends == *"$dep"* ]] || fail "Depends lacks $dep"
