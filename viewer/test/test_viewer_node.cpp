@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -69,7 +70,8 @@ ViewerOptions headless(const std::string& dir) {
 }
 
 TEST(ViewerNode, CreatesItsSnapshotFolder) {
-  const std::string dir = tempDir() + "/not/yet/there";
+  const std::string root = tempDir();
+  const std::string dir = root + "/not/yet/there";
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   ViewerNode node(headless(dir), lcm);
@@ -81,6 +83,7 @@ TEST(ViewerNode, CreatesItsSnapshotFolder) {
   // A folder that cannot be created (a path through a regular file) fails at construction.
   const std::string file = dir + "/canvas_000000.png";
   EXPECT_THROW(ViewerNode(headless(file + "/sub"), lcm), std::runtime_error);
+  std::filesystem::remove_all(root);
 }
 
 TEST(ViewerNode, HeadlessSnapshotsShowEveryPanelAndTheOverlay) {
