@@ -1,8 +1,9 @@
 // pplvo-run: the whole pipeline in one process over memq:// (see pplvo/run/run_pipeline.h).
+#include <unistd.h>
+
 #include <cstdio>
 #include <fstream>
 #include <string>
-#include <vector>
 
 #include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
@@ -22,6 +23,8 @@ void usage() {
       "  --start N               first associated frame (0)\n"
       "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
       "  --skip-bad              skip (and count) corrupt frames instead of stopping\n"
+      "  --progress/--no-progress  progress line (frames, frames/s, ETA) on stderr (default:\n"
+      "                          when stderr is a terminal and not --quiet)\n"
       "  --in-flight N           frames published before the previous one's pose (2: the next\n"
       "                          frame's features are extracted while this one is fused;\n"
       "                          1: one frame at a time; same trajectory either way)\n"
@@ -29,9 +32,7 @@ void usage() {
       "                          camera); the throughput then leaves the decoding out\n"
       "  --summary FILE          write the run summary as YAML\n"
       "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
-      "  --quiet                 no summary on stdout\n"
-      "  --progress/--no-progress  progress line (frames, frames/s, ETA) on stderr (default:\n"
-      "                          when stderr is a terminal and not --quiet)\n%s",
+      "  --quiet                 no summary on stdout\n%s",
       pplvo::pipeline::pipelineOptionsUsage());
 }
 
@@ -55,12 +56,11 @@ int main(int argc, char** argv) {
       .option("--start", &o.start, int64_t{0})
       .option("--fps", &o.fps, 0.0)
       .flag("--skip-bad", &o.skip_bad)
-      .flag("--preload", &o.preload)
-      .flag("--quiet", &quiet)
       .flag("--progress", &progress)
-      .flag("--no-progress", &progress, false);
-  const std::vector<std::string> args = argsFromArgv(argc, argv);
-  p.parse(args);
+      .flag("--no-progress", &progress, false)
+      .flag("--preload", &o.preload)
+      .flag("--quiet", &quiet);
+  p.parse(argsFromArgv(argc, argv));
   if (p.help()) {
     usage();
     return 0;
@@ -72,7 +72,10 @@ int main(int argc, char** argv) {
     usage();
     return 2;
   }
-  o.progress = progressEnabled(args, progress) && (progress || !quiet);
+  o.progress = !quiet && isatty(STDERR_FILENO);
+  for (const std::string& a : argsFromArgv(argc, argv)) {
+    if (a == "--progress" || a == "--no-progress") o.progress = progress;  // explicit choice
+  }
   std::fprintf(stderr, "[pplvo-run] %s: features %s, depth model %s\n", o.dataset_dir.c_str(),
                pipeline::toString(o.pipeline.families()).c_str(),
                depth_filter::toString(o.pipeline.depth_filter.model));
