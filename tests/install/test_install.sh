@@ -9,7 +9,8 @@
 #  3. examples/cpp (as installed in PREFIX/share/pplvo/examples) is configured with
 #     find_package(pplvo) and built; pose_listener reads PPLVO_POSE from the log through the
 #     file:// provider and through memq:// and must write pplvo-run's trajectory exactly;
-#  4. the same source built with `pkg-config --cflags --libs pplvo` gives the same output;
+#  4. the same source built with `pkg-config --cflags --libs pplvo` gives the same output, and
+#     every installed header compiles with pkg-config's flags (nothing of the source tree);
 #  5. the installed Python package and examples/python/pplvo_log_to_tum.py give the same
 #     trajectory (within 1e-8) and the same covariances, text for text, as pose_listener.
 # Usage: test_install.sh SOURCE_DIR BUILD_DIR
@@ -85,6 +86,14 @@ g++ -std=c++17 -O1 "$prefix/share/pplvo/examples/cpp/pose_listener.cpp" -o "$tmp
 cmp "$tmp/run.txt" "$tmp/pc.txt" || fail "pkg-config build: trajectory differs"
 [[ $(pkg-config --cflags pplvo-msgs) == *"$prefix/lib/pkgconfig/../../include"* ]] ||
   fail "pplvo-msgs.pc: unexpected Cflags $(pkg-config --cflags pplvo-msgs)"
+
+step "every installed header against the prefix alone (no header of the source tree missing)"
+(cd "$prefix/include" && find pplvo pplvo_msgs -name '*.h' -o -name '*.hpp' | sort |
+  sed 's/.*/#include "&"/') > "$tmp/all_headers.cpp"
+[[ $(wc -l < "$tmp/all_headers.cpp") -ge 50 ]] || fail "only $(wc -l < "$tmp/all_headers.cpp") headers"
+# shellcheck disable=SC2046
+g++ -std=c++17 -fsyntax-only $(pkg-config --cflags pplvo) "$tmp/all_headers.cpp" ||
+  fail "the installed headers do not compile with the prefix's include folder"
 
 step "installed Python package"
 PYTHONPATH=$prefix/lib/python3/dist-packages python3 \
