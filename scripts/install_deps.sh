@@ -21,6 +21,8 @@ packages=(
   iproute2 util-linux procps
   # headless viewer checks
   xvfb xauth
+  # cpack's Debian package: dpkg-shlibdeps for its Depends
+  dpkg-dev
 )
 
 SUDO=""
