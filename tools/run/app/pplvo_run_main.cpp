@@ -23,6 +23,8 @@ void usage() {
       "  --start N               first associated frame (0)\n"
       "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
       "  --skip-bad              skip (and count) corrupt frames instead of stopping\n"
+      "  --progress/--no-progress  progress line (frames, frames/s, ETA) on stderr (default:\n"
+      "                          when stderr is a terminal and not --quiet)\n"
       "  --in-flight N           frames published before the previous one's pose (2: the next\n"
       "                          frame's features are extracted while this one is fused;\n"
       "                          1: one frame at a time; same trajectory either way)\n"
@@ -42,6 +44,7 @@ int main(int argc, char** argv) {
   run::RunOptions o;
   pipeline::PipelineArgs pa;
   bool quiet = false;
+  bool progress = false;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   p.option("--dataset", &o.dataset_dir)
@@ -53,6 +56,8 @@ int main(int argc, char** argv) {
       .option("--start", &o.start, int64_t{0})
       .option("--fps", &o.fps, 0.0)
       .flag("--skip-bad", &o.skip_bad)
+      .flag("--progress", &progress)
+      .flag("--no-progress", &progress, false)
       .flag("--preload", &o.preload)
       .flag("--quiet", &quiet);
   p.parse(argsFromArgv(argc, argv));
@@ -68,6 +73,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   o.progress = !quiet && isatty(STDERR_FILENO);
+  for (const std::string& a : argsFromArgv(argc, argv)) {
+    if (a == "--progress" || a == "--no-progress") o.progress = progress;  // explicit choice
+  }
   std::fprintf(stderr, "[pplvo-run] %s: features %s, depth model %s\n", o.dataset_dir.c_str(),
                pipeline::toString(o.pipeline.families()).c_str(),
                depth_filter::toString(o.pipeline.depth_filter.model));
