@@ -36,8 +36,9 @@ const char* kUsage =
     "                  [--json]\n"
     "  EST                a covariance file (pplvo-run --covariance) or an LCM event log\n"
     "                     (pplvo-run --log, pplvo-logger) whose PPLVO_POSE messages are read\n"
-    "  --gt-sigma-t-m S   white noise of each ground-truth position, per axis (default 2e-4)\n"
-    "  --gt-sigma-rot-deg S  of each ground-truth orientation, per axis (default 0.07)\n"
+    "  --gt-sigma-t-m S   white noise of each ground-truth position, per axis (m; default:\n"
+    "                     estimated from the ground truth's third differences)\n"
+    "  --gt-sigma-rot-deg S  of each ground-truth orientation, per axis (deg; same default)\n"
     "  --stamp-sigma-s S  error of each frame stamp (default 0.002 s)\n"
     "  --exact-gt         all three 0 (ICL-NUIM, synthetic sequences)\n"
     "  --no-velocity-model  leave frames posed by the velocity model out\n"
@@ -51,15 +52,33 @@ bool parseNonNegative(const std::string& text, double* value) {
   return true;
 }
 
+/// Which ground-truth noise figures are estimated from the ground truth itself.
+struct GtNoiseSource {
+  bool sigma_t_from_data = true, sigma_rot_from_data = true;
+};
+
 int runNees(const std::string& gt_path, const std::string& est_path,
-            const pplvo::eval::NeesOptions& options, double fps, const std::string& data_path,
-            bool json) {
+            pplvo::eval::NeesOptions options, const GtNoiseSource& source, double fps,
+            const std::string& data_path, bool json) {
   pplvo::eval::TumReadOptions read_options;
   read_options.fps = fps;
   const auto gt = pplvo::eval::readTumFile(gt_path, read_options);
   if (!gt.ok) {
     std::cerr << "pplvo-eval: ground truth: " << gt.error << '\n';
     return kExitError;
+  }
+  if (source.sigma_t_from_data || source.sigma_rot_from_data) {
+    const pplvo::eval::GtJitter j = pplvo::eval::estimateGtJitter(gt.file);
+    if (!j.ok) {
+      std::cerr << "pplvo-eval: too few ground-truth samples to estimate their noise: give "
+                   "--gt-sigma-t-m and --gt-sigma-rot-deg\n";
+      return kExitError;
+    }
+    if (source.sigma_t_from_data) options.gt.sigma_t_m = j.sigma_t_m;
+    if (source.sigma_rot_from_data) options.gt.sigma_rot_rad = j.sigma_rot_rad;
+    std::cout << "# ground-truth white noise estimated from its samples (third differences): "
+              << j.sigma_t_m * 1e3 << " mm, " << j.sigma_rot_rad * 180 / M_PI
+              << " deg per axis (RMS over axes)\n";
   }
   std::vector<pplvo::eval::RelativePoseRecord> records;
   if (pplvo::eval::isLcmEventLog(est_path)) {
@@ -100,9 +119,7 @@ int runNees(const std::string& gt_path, const std::string& est_path,
     records = file.records;
   }
   const pplvo::eval::NeesResult r = pplvo::eval::evaluateNees(gt.file, records, options);
-  std::cout << "# nees: gt '" << gt_path << "' est '" << est_path << "', gt sigma_t "
-            << options.gt.sigma_t_m << " m, sigma_rot " << options.gt.sigma_rot_rad * 180 / M_PI
-            << " deg, stamp sigma " << options.gt.sigma_stamp_s << " s\n";
+  std::cout << "# nees: gt '" << gt_path << "' est '" << est_path << "'\n";
   std::cout << (json ? pplvo::eval::formatNeesJson(r) : pplvo::eval::formatNeesText(r));
   std::cout.flush();
   if (!r.ok) {
@@ -135,6 +152,7 @@ int run(int argc, char** argv) {
   std::string plot_path, nees_data_path;
   bool json = false, nees = false;
   pplvo::eval::NeesOptions nees_options;
+  bool t_given = false, rot_given = false, exact_gt = false;
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
     auto needValue = [&](double* target) {
@@ -170,6 +188,7 @@ int run(int argc, char** argv) {
       nees = true;
     } else if (arg == "--exact-gt") {
       nees_options.gt = {0.0, 0.0, 0.0};
+      exact_gt = true;
     } else if (arg == "--no-velocity-model") {
       nees_options.include_velocity_model = false;
     } else if (arg == "--gt-sigma-t-m" || arg == "--gt-sigma-rot-deg" || arg == "--stamp-sigma-s") {
@@ -179,6 +198,8 @@ int run(int argc, char** argv) {
         return kExitError;
       }
       ++k;
+      t_given = t_given || arg == "--gt-sigma-t-m";
+      rot_given = rot_given || arg == "--gt-sigma-rot-deg";
       if (arg == "--gt-sigma-t-m") nees_options.gt.sigma_t_m = v;
       if (arg == "--gt-sigma-rot-deg") nees_options.gt.sigma_rot_rad = v * M_PI / 180.0;
       if (arg == "--stamp-sigma-s") nees_options.gt.sigma_stamp_s = v;
@@ -201,7 +222,13 @@ int run(int argc, char** argv) {
     return kExitError;
   }
   if (nees) {
-    return runNees(positional[0], positional[1], nees_options, options.fps, nees_data_path, json);
+    if (exact_gt && (t_given || rot_given)) {
+      std::cerr << "pplvo-eval: --exact-gt and --gt-sigma-* exclude each other\n";
+      return kExitError;
+    }
+    const GtNoiseSource source{!exact_gt && !t_given, !exact_gt && !rot_given};
+    return runNees(positional[0], positional[1], nees_options, source, options.fps, nees_data_path,
+                   json);
   }
   pplvo::eval::TumReadOptions read_options;
   read_options.fps = options.fps;

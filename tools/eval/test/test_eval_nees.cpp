@@ -233,6 +233,17 @@ TEST(Nees, GroundTruthNoiseAndStampErrorAreAccountedFor) {
   EXPECT_GT(a.all.mean, 5.3);
   EXPECT_LT(a.all.mean, 6.7);
   EXPECT_GT(a.all.share_inside, 0.92);
+  // The jitter is recovered from the ground truth itself (third differences, robust std).
+  const GtJitter j = estimateGtJitter(gt);
+  ASSERT_TRUE(j.ok);
+  EXPECT_NEAR(j.sigma_t_m, sigma_gt_t, 0.1 * sigma_gt_t);
+  EXPECT_NEAR(j.sigma_rot_rad, sigma_gt_rot, 0.1 * sigma_gt_rot);
+  NeesOptions from_data;
+  from_data.gt.sigma_stamp_s = sigma_stamp;
+  from_data.gt_jitter_from_data = true;
+  const NeesResult c = evaluateNees(gt, records, from_data);
+  ASSERT_TRUE(c.ok);
+  EXPECT_NEAR(c.all.mean, a.all.mean, 0.1 * a.all.mean);
   NeesOptions exact;
   exact.gt = {0.0, 0.0, 0.0};
   const NeesResult b = evaluateNees(gt, records, exact);

@@ -34,8 +34,23 @@ struct GtNoiseOptions {
   double sigma_stamp_s = 2e-3;
 };
 
+/// White noise of the ground truth's samples estimated from the data: third differences of
+/// consecutive samples cancel a motion that is quadratic over four samples and multiply white
+/// noise of std s by sqrt(20); robust std (1.4826 MAD) per axis, RMS over the three axes.
+/// Rotation from the body-frame increments log(R_i^T R_i+1) (second differences of them).
+/// Positions per world axis, rotations per body axis. Needs >= 20 samples.
+struct GtJitter {
+  bool ok = false;
+  double sigma_t_m = 0.0, sigma_rot_rad = 0.0;
+  double per_axis_t_m[3] = {0, 0, 0}, per_axis_rot_rad[3] = {0, 0, 0};
+};
+GtJitter estimateGtJitter(const TumFile& gt);
+
 struct NeesOptions {
   GtNoiseOptions gt;
+  /// Replace gt.sigma_t_m and gt.sigma_rot_rad by estimateGtJitter(gt) (pplvo-eval's default;
+  /// --gt-sigma-* or --exact-gt turn it off).
+  bool gt_jitter_from_data = false;
   /// The two ground-truth samples around a stamp must be at most this far apart (s);
   /// <= 0: 2.5 times the median ground-truth interval.
   double max_gt_interval_s = 0.0;
@@ -79,6 +94,7 @@ struct NeesResult {
   int skipped_no_gt = 0;     ///< a stamp outside the ground truth or in a gap
   int skipped_singular = 0;  ///< C not positive definite
   double max_gt_interval_s = 0.0;
+  GtNoiseOptions gt_used;  ///< the ground-truth noise actually assumed
 };
 
 /// Evaluates every record against `gt` (TUM file, T_w_c; stamps in seconds already).
