@@ -7,6 +7,7 @@
 
 #include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
+#include "pplvo/eval/pose_records.h"
 #include "pplvo/pipeline/pipeline_args.h"
 #include "pplvo/run/run_pipeline.h"
 
@@ -32,6 +33,8 @@ void usage() {
       "                          camera); the throughput then leaves the decoding out\n"
       "  --summary FILE          write the run summary as YAML\n"
       "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
+      "  --covariance FILE       relative pose T_prev_curr and its 6x6 covariance per frame\n"
+      "                          (docs/evaluation.md; pplvo-eval --nees)\n"
       "  --quiet                 no summary on stdout\n%s",
       pplvo::pipeline::pipelineOptionsUsage());
 }
@@ -51,6 +54,7 @@ int main(int argc, char** argv) {
       .option("--output", &o.output)
       .option("--summary", &o.summary)
       .option("--log", &o.log)
+      .option("--covariance", &o.covariance)
       .option("--max-frames", &o.max_frames, int64_t{0})
       .option("--in-flight", &o.in_flight, 1, 1000)
       .option("--start", &o.start, int64_t{0})
@@ -90,6 +94,18 @@ int main(int argc, char** argv) {
                    r.trajectory.size());
     } catch (const std::exception& e) {
       std::fprintf(stderr, "pplvo-run: cannot write %s: %s\n", o.output.c_str(), e.what());
+      code = 1;
+    }
+  }
+  if (!o.covariance.empty()) {
+    std::ofstream out(o.covariance);
+    out << pplvo::eval::relativePoseFileHeader();
+    for (const auto& rec : pplvo::eval::relativePoseRecords(r.frame_poses, o.fps)) {
+      out << pplvo::eval::formatRelativePoseLine(rec);
+    }
+    out.flush();
+    if (!out) {
+      std::fprintf(stderr, "pplvo-run: cannot write %s\n", o.covariance.c_str());
       code = 1;
     }
   }

@@ -31,6 +31,7 @@ class PoseCollector {
       s.stamp_text = p.stamp;
       s.T_w_c = p.T_w_c;
       result_.trajectory.push_back(s);
+      result_.frame_poses.push_back(p);
       ++result_.poses;
       switch (p.status) {
         case TrackingStatus::kFirstFrame:
