@@ -3,7 +3,25 @@
 #include <cmath>
 #include <limits>
 
+#include "pplvo/estimator/pose_parameterisation.h"
+#include "pplvo/features/line_extractor.h"
+
 namespace pplvo::pipeline {
+
+bool parseTrackingReference(const std::string& text, TrackingReference* out) {
+  if (text == "frame") {
+    *out = TrackingReference::kFrame;
+  } else if (text == "keyframe") {
+    *out = TrackingReference::kKeyframe;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* toString(TrackingReference reference) {
+  return reference == TrackingReference::kKeyframe ? "keyframe" : "frame";
+}
 
 FrameOdometry::FrameOdometry(const FrameOdometryOptions& options)
     : options_(options), tracker_(options.tracker) {}
@@ -14,16 +32,27 @@ void FrameOdometry::setFamilies(const FeatureFamilies& families) {
   options_.tracker.estimator.use_planes = families.planes;
   tracker_ = OdometryTracker(options_.tracker);
   last_seq_ = -1;
+  keyframe_.reset();
+  pending_keyframe_seq_ = -1;
+  keyframe_count_ = 0;
+}
+
+void FrameOdometry::resetKeyframes(int64_t next_keyframe_seq) {
+  keyframe_.reset();
+  pending_keyframe_seq_ =
+      options_.reference == TrackingReference::kKeyframe ? next_keyframe_seq : -1;
 }
 
 TrackerOutput FrameOdometry::initialise(const FrameFeatures& first) {
   last_seq_ = first.seq;
+  resetKeyframes(first.seq);
   return tracker_.initialise(first.seq);
 }
 
 TrackerOutput FrameOdometry::restart(const FrameFeatures& current) {
   const Pose3 T_w_c = tracker_.T_w_c();
   last_seq_ = current.seq;
+  resetKeyframes(current.seq);
   TrackerOutput out = tracker_.initialise(current.seq, T_w_c);
   out.status = TrackingStatus::kReinitialised;
   return out;
@@ -52,7 +81,24 @@ FeatureMatches FrameOdometry::match(const FrameFeatures& reference, const FrameF
   }
   if (use.use_lines && !reference.lines.empty() && !current.lines.empty()) {
     ScopedStageTimer t(timings_, "match_lines");
-    m.lines = features::matchLines(reference, current, options_.line_matching).pairs;
+    if (options_.predict_line_positions) {
+      // The reference lines' 2D equations moved to where their 3D segments project under the
+      // predicted motion, so the gate is centred there (as for points).
+      std::vector<LineFeature> predicted = reference.lines;
+      for (LineFeature& l : predicted) {
+        if (!l.has_3d) continue;
+        const Eigen::Vector3d a = T_curr_ref * l.line.p1, b = T_curr_ref * l.line.p2;
+        if (a.z() <= 1e-3 || b.z() <= 1e-3) continue;
+        const Eigen::Vector3d eq =
+            features::lineEquation(current.camera.project(a), current.camera.project(b));
+        if (eq.allFinite()) l.eq = eq;
+      }
+      m.lines = features::matchLines(predicted, reference.line_descriptors, current.lines,
+                                     current.line_descriptors, options_.line_matching)
+                    .pairs;
+    } else {
+      m.lines = features::matchLines(reference, current, options_.line_matching).pairs;
+    }
   }
   if (use.use_planes && !reference.planes.empty() && !current.planes.empty()) {
     ScopedStageTimer t(timings_, "match_planes");
@@ -77,17 +123,105 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
     s.reinitialised = true;
     return last_seq_ < 0 ? initialise(current) : restart(current);
   }
+  const bool keyframes = options_.reference == TrackingReference::kKeyframe;
+  if (keyframes && pending_keyframe_seq_ == reference.seq) {
+    // The previous frame was chosen as keyframe: its 3D features (lifted on its fused depth)
+    // are the keyframe's landmarks, its pose is the tracker's current one.
+    keyframe_ = reference;
+    T_w_kf_ = tracker_.T_w_c();
+    pending_keyframe_seq_ = -1;
+    keyframe_first_rows_ = 0;
+    ++keyframe_count_;
+  }
+  if (keyframes && keyframe_ && keyframe_->seq != reference.seq) {
+    std::optional<PoseEstimate> through_keyframe = estimateFromKeyframe(current, &s);
+    if (through_keyframe) {
+      TrackerOutput out = tracker_.update(current.seq, *through_keyframe);
+      last_seq_ = current.seq;
+      if (out.status != TrackingStatus::kTracking) resetKeyframes(current.seq);
+      s.new_keyframe = pending_keyframe_seq_ == current.seq;
+      return out;
+    }
+    // The keyframe failed (matches lost, degenerate or too uncertain): the previous frame
+    // serves, and this frame starts a new keyframe.
+    s.keyframe_fallback = true;
+  }
   const FeatureMatches matches = match(reference, current, tracker_.predictedMotion());
   s.point_matches = static_cast<int>(matches.points.size());
   s.line_matches = static_cast<int>(matches.lines.size());
   s.plane_matches = static_cast<int>(matches.planes.size());
+  s.reference_seq = reference.seq;
   TrackerOutput out;
   {
     ScopedStageTimer t(timings_, "pose");
     out = tracker_.track(reference, current, matches);
   }
   last_seq_ = current.seq;
+  if (keyframes) {
+    const bool first_against_keyframe = keyframe_ && keyframe_->seq == reference.seq;
+    if (first_against_keyframe && out.estimate.accepted() &&
+        out.status == TrackingStatus::kTracking) {
+      // The keyframe's reference quality: what the next frames are compared with.
+      keyframe_first_rows_ = out.estimate.n_residuals;
+      keyframe_first_var_t_ = out.estimate.max_translation_variance_m2;
+      keyframe_first_var_q_ = out.estimate.max_rotation_variance;
+    } else {
+      resetKeyframes(current.seq);
+    }
+    s.new_keyframe = pending_keyframe_seq_ == current.seq;
+  }
   return out;
+}
+
+std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatures& current,
+                                                                FrameOdometryStats* stats) {
+  const FrameFeatures& keyframe = *keyframe_;
+  if (current.camera != keyframe.camera) return std::nullopt;
+  // The tracker's pose is the previous frame's: T_prev_kf chains the prediction.
+  const Pose3 T_prev_kf = tracker_.T_w_c().inverse() * T_w_kf_;
+  const Pose3 T_curr_kf_predicted = tracker_.predictedMotion() * T_prev_kf;
+  const FeatureMatches matches = match(keyframe, current, T_curr_kf_predicted);
+  stats->point_matches = static_cast<int>(matches.points.size());
+  stats->line_matches = static_cast<int>(matches.lines.size());
+  stats->plane_matches = static_cast<int>(matches.planes.size());
+  stats->reference_seq = keyframe.seq;
+  PoseEstimate est;
+  {
+    ScopedStageTimer t(timings_, "pose");
+    const PoseEstimator estimator(options_.tracker.estimator);
+    est = estimator.estimate(
+        buildCorrespondences(keyframe, current, matches, options_.tracker.estimator),
+        current.camera, T_curr_kf_predicted);
+  }
+  if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
+    return std::nullopt;
+  }
+  const Pose3 T_curr_kf = est.T_curr_prev;
+  if (keyframeExhausted(est, T_curr_kf)) pending_keyframe_seq_ = current.seq;
+  // The motion from the previous frame, T_curr_prev = T_curr_kf * T_kf_prev, with the
+  // previous frame's pose relative to the keyframe held fixed: its covariance is that of the
+  // estimate against the keyframe (conservative: the two frames' errors relative to the same
+  // keyframe are positively correlated, so their difference varies less).
+  const Pose3 T_kf_prev = T_prev_kf.inverse();
+  est.T_curr_prev = T_curr_kf * T_kf_prev;
+  est.covariance =
+      propagateCompositionCovariance(T_kf_prev, Matrix6d::Zero(), T_curr_kf, est.covariance);
+  est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
+  est.max_rotation_variance = maxRotationVariance(est.covariance);
+  return est;
+}
+
+bool FrameOdometry::keyframeExhausted(const PoseEstimate& against_keyframe,
+                                      const Pose3& T_curr_kf) {
+  const KeyframeOptions& k = options_.keyframe;
+  if (against_keyframe.n_residuals < k.min_inlier_fraction * keyframe_first_rows_) return true;
+  if (against_keyframe.max_translation_variance_m2 >
+          k.max_variance_growth * keyframe_first_var_t_ ||
+      against_keyframe.max_rotation_variance > k.max_variance_growth * keyframe_first_var_q_) {
+    return true;
+  }
+  const double angle_deg = Eigen::AngleAxisd(T_curr_kf.linear()).angle() * 180.0 / M_PI;
+  return T_curr_kf.translation().norm() > k.max_translation_m || angle_deg > k.max_rotation_deg;
 }
 
 }  // namespace pplvo::pipeline

@@ -128,6 +128,15 @@ struct EnumText<LineFitOptions::Weighting> {
   static const char* choices() { return "residual_covariance, paper_scalar"; }
 };
 
+template <>
+struct EnumText<TrackingReference> {
+  static bool parse(const std::string& s, TrackingReference* out) {
+    return parseTrackingReference(s, out);
+  }
+  static std::string name(TrackingReference r) { return toString(r); }
+  static const char* choices() { return "frame, keyframe"; }
+};
+
 std::string toText(bool b) { return b ? "true" : "false"; }
 std::string toText(int i) { return std::to_string(i); }
 std::string toText(uint64_t i) { return std::to_string(i); }
@@ -578,7 +587,28 @@ void listFields(V& v, geometry::PlaneMatchOptions& o) {
 }
 
 template <class V>
+void listFields(V& v, KeyframeOptions& o) {
+  v.field("min_inlier_fraction", o.min_inlier_fraction,
+          "new keyframe when the inlier rows against it fall below this fraction of the first "
+          "frame's (feature overlap)",
+          between(0, 1));
+  v.field("max_variance_growth", o.max_variance_growth,
+          "new keyframe when the pose variance relative to it grows beyond this factor of the "
+          "first frame's (largest eigenvalue, translation or rotation block)",
+          atLeast(1));
+  v.field("max_translation_m", o.max_translation_m, "new keyframe beyond this translation (m)",
+          positive());
+  v.field("max_rotation_deg", o.max_rotation_deg, "new keyframe beyond this rotation (deg)",
+          openClosed(0, 180));
+}
+
+template <class V>
 void listFields(V& v, FrameOdometryOptions& o) {
+  v.field("reference", o.reference,
+          "what a frame is tracked against: frame (the previous one, as in the paper) or "
+          "keyframe (the active keyframe, the previous frame as fallback; docs/estimator.md)");
+  v.section("keyframe", "When a new keyframe is taken (reference: keyframe)",
+            [&] { listFields(v, o.keyframe); });
   v.section("tracker", "Frame-to-frame tracking, pose estimation and window uncertainty",
             [&] { listFields(v, o.tracker); });
   v.section("point_matching", "Point matching (Sec. 4.5)",
@@ -590,6 +620,8 @@ void listFields(V& v, FrameOdometryOptions& o) {
           "gate points around their position predicted by the constant-velocity model");
   v.field("predict_plane_positions", o.predict_plane_positions,
           "move the previous planes by the predicted motion before the plane gate");
+  v.field("predict_line_positions", o.predict_line_positions,
+          "gate lines around the projection of their 3D segment under the predicted motion");
 }
 
 /// The whole file. `families` stands for frontend.families and estimator.use_* together.
