@@ -19,6 +19,18 @@ bool parseTrackingReference(const std::string& text, TrackingReference* out) {
   return true;
 }
 
+const char* toString(KeyframeReason reason) {
+  switch (reason) {
+    case KeyframeReason::kNone: return "none";
+    case KeyframeReason::kStart: return "start";
+    case KeyframeReason::kFallback: return "fallback";
+    case KeyframeReason::kOverlap: return "overlap";
+    case KeyframeReason::kUncertainty: return "uncertainty";
+    case KeyframeReason::kMotion: return "motion";
+  }
+  return "?";
+}
+
 const char* toString(TrackingReference reference) {
   return reference == TrackingReference::kKeyframe ? "keyframe" : "frame";
 }
@@ -37,22 +49,23 @@ void FrameOdometry::setFamilies(const FeatureFamilies& families) {
   keyframe_count_ = 0;
 }
 
-void FrameOdometry::resetKeyframes(int64_t next_keyframe_seq) {
+void FrameOdometry::resetKeyframes(int64_t next_keyframe_seq, KeyframeReason reason) {
   keyframe_.reset();
-  pending_keyframe_seq_ =
-      options_.reference == TrackingReference::kKeyframe ? next_keyframe_seq : -1;
+  const bool keyframes = options_.reference == TrackingReference::kKeyframe;
+  pending_keyframe_seq_ = keyframes ? next_keyframe_seq : -1;
+  pending_reason_ = keyframes ? reason : KeyframeReason::kNone;
 }
 
 TrackerOutput FrameOdometry::initialise(const FrameFeatures& first) {
   last_seq_ = first.seq;
-  resetKeyframes(first.seq);
+  resetKeyframes(first.seq, KeyframeReason::kStart);
   return tracker_.initialise(first.seq);
 }
 
 TrackerOutput FrameOdometry::restart(const FrameFeatures& current) {
   const Pose3 T_w_c = tracker_.T_w_c();
   last_seq_ = current.seq;
-  resetKeyframes(current.seq);
+  resetKeyframes(current.seq, KeyframeReason::kStart);
   TrackerOutput out = tracker_.initialise(current.seq, T_w_c);
   out.status = TrackingStatus::kReinitialised;
   return out;
@@ -138,8 +151,11 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
     if (through_keyframe) {
       TrackerOutput out = tracker_.update(current.seq, *through_keyframe);
       last_seq_ = current.seq;
-      if (out.status != TrackingStatus::kTracking) resetKeyframes(current.seq);
+      if (out.status != TrackingStatus::kTracking) {
+        resetKeyframes(current.seq, KeyframeReason::kStart);
+      }
       s.new_keyframe = pending_keyframe_seq_ == current.seq;
+      if (s.new_keyframe) s.keyframe_reason = pending_reason_;
       return out;
     }
     // The keyframe failed (matches lost, degenerate or too uncertain): the previous frame
@@ -166,9 +182,11 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
       keyframe_first_var_t_ = out.estimate.max_translation_variance_m2;
       keyframe_first_var_q_ = out.estimate.max_rotation_variance;
     } else {
-      resetKeyframes(current.seq);
+      resetKeyframes(current.seq,
+                     s.keyframe_fallback ? KeyframeReason::kFallback : KeyframeReason::kStart);
     }
     s.new_keyframe = pending_keyframe_seq_ == current.seq;
+    if (s.new_keyframe) s.keyframe_reason = pending_reason_;
   }
   return out;
 }
@@ -197,7 +215,11 @@ std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatu
     return std::nullopt;
   }
   const Pose3 T_curr_kf = est.T_curr_prev;
-  if (keyframeExhausted(est, T_curr_kf)) pending_keyframe_seq_ = current.seq;
+  const KeyframeReason exhausted = keyframeExhausted(est, T_curr_kf);
+  if (exhausted != KeyframeReason::kNone) {
+    pending_keyframe_seq_ = current.seq;
+    pending_reason_ = exhausted;
+  }
   // The motion from the previous frame, T_curr_prev = T_curr_kf * T_kf_prev, with the
   // previous frame's pose relative to the keyframe held fixed: its covariance is that of the
   // estimate against the keyframe (conservative: the two frames' errors relative to the same
@@ -211,17 +233,22 @@ std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatu
   return est;
 }
 
-bool FrameOdometry::keyframeExhausted(const PoseEstimate& against_keyframe,
-                                      const Pose3& T_curr_kf) {
+KeyframeReason FrameOdometry::keyframeExhausted(const PoseEstimate& against_keyframe,
+                                                const Pose3& T_curr_kf) {
   const KeyframeOptions& k = options_.keyframe;
-  if (against_keyframe.n_residuals < k.min_inlier_fraction * keyframe_first_rows_) return true;
+  if (against_keyframe.n_residuals < k.min_inlier_fraction * keyframe_first_rows_) {
+    return KeyframeReason::kOverlap;
+  }
   if (against_keyframe.max_translation_variance_m2 >
           k.max_variance_growth * keyframe_first_var_t_ ||
       against_keyframe.max_rotation_variance > k.max_variance_growth * keyframe_first_var_q_) {
-    return true;
+    return KeyframeReason::kUncertainty;
   }
   const double angle_deg = Eigen::AngleAxisd(T_curr_kf.linear()).angle() * 180.0 / M_PI;
-  return T_curr_kf.translation().norm() > k.max_translation_m || angle_deg > k.max_rotation_deg;
+  if (T_curr_kf.translation().norm() > k.max_translation_m || angle_deg > k.max_rotation_deg) {
+    return KeyframeReason::kMotion;
+  }
+  return KeyframeReason::kNone;
 }
 
 }  // namespace pplvo::pipeline

@@ -58,12 +58,25 @@ struct FrameOdometryOptions {
   bool predict_line_positions = false;
 };
 
+/// Why a frame was chosen as the next keyframe.
+enum class KeyframeReason : int8_t {
+  kNone = 0,
+  kStart,        ///< first frame, or tracking restarted / not tracking
+  kFallback,     ///< the keyframe's estimate failed
+  kOverlap,      ///< inlier rows below min_inlier_fraction of the first frame's
+  kUncertainty,  ///< pose variance grew beyond max_variance_growth
+  kMotion,       ///< translation or rotation bound
+};
+constexpr int kKeyframeReasons = 6;
+const char* toString(KeyframeReason reason);
+
 struct FrameOdometryStats {
   int point_matches = 0, line_matches = 0, plane_matches = 0;
   bool reinitialised = false;      ///< no usable reference: tracking restarted at this frame
   int64_t reference_seq = -1;      ///< the frame whose 3D features the pose was estimated from
   bool keyframe_fallback = false;  ///< the keyframe estimate failed; the previous frame served
   bool new_keyframe = false;       ///< this frame becomes the next frame's keyframe
+  KeyframeReason keyframe_reason = KeyframeReason::kNone;  ///< why, if new_keyframe
 };
 
 class FrameOdometry {
@@ -109,8 +122,8 @@ class FrameOdometry {
   std::optional<PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
                                                    FrameOdometryStats* stats);
   /// Applies the keyframe rule to an accepted estimate against the keyframe.
-  bool keyframeExhausted(const PoseEstimate& against_keyframe, const Pose3& T_curr_kf);
-  void resetKeyframes(int64_t next_keyframe_seq);
+  KeyframeReason keyframeExhausted(const PoseEstimate& against_keyframe, const Pose3& T_curr_kf);
+  void resetKeyframes(int64_t next_keyframe_seq, KeyframeReason reason);
 
   FrameOdometryOptions options_;
   OdometryTracker tracker_;
@@ -121,6 +134,7 @@ class FrameOdometry {
   std::optional<FrameFeatures> keyframe_;
   Pose3 T_w_kf_ = Pose3::Identity();
   int64_t pending_keyframe_seq_ = -1;  ///< the frame whose 3D features become the keyframe
+  KeyframeReason pending_reason_ = KeyframeReason::kNone;
   int keyframe_first_rows_ = 0;        ///< inlier rows of the first frame tracked against it
   double keyframe_first_var_t_ = 0, keyframe_first_var_q_ = 0;
   int64_t keyframe_count_ = 0;
