@@ -21,12 +21,18 @@ bool parseTrackingReference(const std::string& text, TrackingReference* out) {
 
 const char* toString(KeyframeReason reason) {
   switch (reason) {
-    case KeyframeReason::kNone: return "none";
-    case KeyframeReason::kStart: return "start";
-    case KeyframeReason::kFallback: return "fallback";
-    case KeyframeReason::kOverlap: return "overlap";
-    case KeyframeReason::kUncertainty: return "uncertainty";
-    case KeyframeReason::kMotion: return "motion";
+    case KeyframeReason::kNone:
+      return "none";
+    case KeyframeReason::kStart:
+      return "start";
+    case KeyframeReason::kFallback:
+      return "fallback";
+    case KeyframeReason::kOverlap:
+      return "overlap";
+    case KeyframeReason::kUncertainty:
+      return "uncertainty";
+    case KeyframeReason::kMotion:
+      return "motion";
   }
   return "?";
 }
@@ -145,7 +151,13 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
     pending_keyframe_seq_ = -1;
     keyframe_first_rows_ = 0;
     ++keyframe_count_;
+    pending_fusion_ = PendingFusion{};
   }
+  if (keyframes && keyframe_ && pending_fusion_.seq == reference.seq) {
+    ScopedStageTimer t(timings_, "landmark_fusion");
+    fuseIntoKeyframe(reference);
+  }
+  pending_fusion_.seq = -1;
   if (keyframes && keyframe_ && keyframe_->seq != reference.seq) {
     std::optional<PoseEstimate> through_keyframe = estimateFromKeyframe(current, &s);
     if (through_keyframe) {
@@ -215,6 +227,12 @@ std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatu
     return std::nullopt;
   }
   const Pose3 T_curr_kf = est.T_curr_prev;
+  if (options_.keyframe.fuse_landmarks) {
+    pending_fusion_.seq = current.seq;
+    pending_fusion_.T_kf_frame = T_curr_kf.inverse();
+    pending_fusion_.covariance = invertedPoseCovariance(T_curr_kf, est.covariance);
+    pending_fusion_.points = matches.points;
+  }
   const KeyframeReason exhausted = keyframeExhausted(est, T_curr_kf);
   if (exhausted != KeyframeReason::kNone) {
     pending_keyframe_seq_ = current.seq;
@@ -231,6 +249,44 @@ std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatu
   est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
   est.max_rotation_variance = maxRotationVariance(est.covariance);
   return est;
+}
+
+void FrameOdometry::fuseIntoKeyframe(const FrameFeatures& observed) {
+  std::vector<PointFeature>& landmarks = keyframe_->points;
+  const Pose3& T = pending_fusion_.T_kf_frame;
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d q_xyz = poseToXi(T).tail<3>();
+  for (const auto& [i, j] : pending_fusion_.points) {
+    if (i < 0 || j < 0 || i >= static_cast<int>(landmarks.size()) ||
+        j >= static_cast<int>(observed.points.size())) {
+      continue;
+    }
+    PointFeature& landmark = landmarks[i];
+    const PointFeature& seen = observed.points[j];
+    if (!landmark.has_3d || !seen.has_3d) continue;
+    // The observation in the keyframe, with the pose's uncertainty (first order in xi).
+    const Eigen::Vector3d p = T * seen.point.p;
+    Eigen::Matrix<double, 3, 6> J;
+    J.leftCols<3>().setIdentity();
+    J.rightCols<3>() = rotatedPointJacobian(q_xyz, seen.point.p);
+    const Eigen::Matrix3d C =
+        R * seen.point.cov * R.transpose() + J * pending_fusion_.covariance * J.transpose();
+    const Eigen::Vector3d d = p - landmark.point.p;
+    const Eigen::Matrix3d S = landmark.point.cov + C;
+    const Eigen::LDLT<Eigen::Matrix3d> S_ldlt(S);
+    if (S_ldlt.info() != Eigen::Success || !(S_ldlt.vectorD().minCoeff() > 0)) continue;
+    const double chi2 = d.dot(S_ldlt.solve(d));
+    if (!(chi2 < options_.keyframe.fusion_gate_chi2)) continue;
+    // Information-weighted mean, in the update form that needs only S^-1:
+    // p' = p_L + C_L S^-1 d, C' = C_L - C_L S^-1 C_L.
+    const Eigen::Matrix3d K = S_ldlt.solve(landmark.point.cov).transpose();
+    const Eigen::Vector3d fused_p = landmark.point.p + K * d;
+    Eigen::Matrix3d fused_cov = landmark.point.cov - K * landmark.point.cov;
+    fused_cov = 0.5 * (fused_cov + fused_cov.transpose());
+    if (!fused_p.allFinite() || !fused_cov.allFinite()) continue;
+    landmark.point.p = fused_p;
+    landmark.point.cov = fused_cov;
+  }
 }
 
 KeyframeReason FrameOdometry::keyframeExhausted(const PoseEstimate& against_keyframe,

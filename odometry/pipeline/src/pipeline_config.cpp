@@ -331,8 +331,8 @@ void listFields(V& v, features::LineExtractorOptions& o) {
           "compute LBD on the full-resolution image");
   v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)", atLeast(0));
   v.field("max_lines", o.max_lines, "segments kept per frame, longest first", atLeast(1));
-  v.field("lsd_refine", o.lsd_refine, "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)",
-          between(0, 2));
+  v.field("lsd_refine", o.lsd_refine,
+          "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)", between(0, 2));
   v.field("lbd_band_width", o.lbd_band_width, "LBD band width (rows per band, LBD's 7)",
           between(1, 64));
   v.field("lbd_octaves", o.lbd_octaves,
@@ -442,8 +442,8 @@ void listFields(V& v, geometry::LiftOptions& o) {
           "a line sample on a depth step (depths this far to either side of the segment differ "
           "by more than line_max_depth_step) takes the nearer side's depth (px; 0 disables)",
           atLeast(0));
-  v.field("line_max_depth_step", o.line_max_depth_step,
-          "that depth step, as max/min - 1", atLeast(0));
+  v.field("line_max_depth_step", o.line_max_depth_step, "that depth step, as max/min - 1",
+          atLeast(0));
   v.field("max_line_samples", o.max_line_samples,
           "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)", atLeast(2));
   v.field("line_ransac_threshold_m", o.line_ransac_threshold_m,
@@ -600,6 +600,12 @@ void listFields(V& v, KeyframeOptions& o) {
           positive());
   v.field("max_rotation_deg", o.max_rotation_deg, "new keyframe beyond this rotation (deg)",
           openClosed(0, 180));
+  v.field("fuse_landmarks", o.fuse_landmarks,
+          "refine the keyframe's 3D points with every frame tracked against it (information "
+          "weighting, chi-square gate)");
+  v.field("fusion_gate_chi2", o.fusion_gate_chi2,
+          "gate on the squared Mahalanobis distance of an observation (3 dof; 7.81 = 95 %)",
+          positive());
 }
 
 template <class V>

@@ -30,7 +30,7 @@
 namespace pplvo::nodes {
 
 struct EstimatorNodeOptions {
-  std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::string lcm_url;                     ///< empty: $LCM_DEFAULT_URL
   std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string features_channel = channels::kFeatures;
   std::string features_3d_channel = channels::kFeatures3d;

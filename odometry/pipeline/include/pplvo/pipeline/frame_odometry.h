@@ -40,6 +40,14 @@ struct KeyframeOptions {
   /// depth errors of the keyframe's primitives weigh more than a keyframe change costs.
   double max_translation_m = 0.3;
   double max_rotation_deg = 20.0;
+  /// The keyframe's 3D points are refined by every later frame tracked against it: the
+  /// frame's own 3D point (lifted on its fused depth), moved into the keyframe by the
+  /// estimated pose (its covariance included), is fused by information weighting when it
+  /// passes the chi-square gate below (docs/estimator.md, "Keyframe landmarks").
+  bool fuse_landmarks = false;
+  /// Gate on the squared Mahalanobis distance between the keyframe point and the moved
+  /// observation (3 dof; 7.81 = 95 %).
+  double fusion_gate_chi2 = 7.81;
 };
 
 struct FrameOdometryOptions {
@@ -124,6 +132,9 @@ class FrameOdometry {
   /// Applies the keyframe rule to an accepted estimate against the keyframe.
   KeyframeReason keyframeExhausted(const PoseEstimate& against_keyframe, const Pose3& T_curr_kf);
   void resetKeyframes(int64_t next_keyframe_seq, KeyframeReason reason);
+  /// Fuses the 3D points of `observed` (the frame last tracked against the keyframe) into
+  /// the keyframe's points they were matched to.
+  void fuseIntoKeyframe(const FrameFeatures& observed);
 
   FrameOdometryOptions options_;
   OdometryTracker tracker_;
@@ -135,9 +146,18 @@ class FrameOdometry {
   Pose3 T_w_kf_ = Pose3::Identity();
   int64_t pending_keyframe_seq_ = -1;  ///< the frame whose 3D features become the keyframe
   KeyframeReason pending_reason_ = KeyframeReason::kNone;
-  int keyframe_first_rows_ = 0;        ///< inlier rows of the first frame tracked against it
+  int keyframe_first_rows_ = 0;  ///< inlier rows of the first frame tracked against it
   double keyframe_first_var_t_ = 0, keyframe_first_var_q_ = 0;
   int64_t keyframe_count_ = 0;
+  /// The last frame tracked against the keyframe, waiting for its 3D features to refine the
+  /// keyframe's points: its pose in the keyframe and the point matches (keyframe, frame).
+  struct PendingFusion {
+    int64_t seq = -1;
+    Pose3 T_kf_frame = Pose3::Identity();
+    Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_kf_frame)
+    std::vector<std::pair<int, int>> points;
+  };
+  PendingFusion pending_fusion_;
 };
 
 }  // namespace pplvo::pipeline
