@@ -35,7 +35,7 @@ struct KeyframeOptions {
   /// Uncertainty: the largest eigenvalue of the translation (or q_xyz) block of the pose
   /// covariance relative to the keyframe grew beyond this factor of the first frame's; a
   /// new keyframe then restarts from the smaller frame-to-frame uncertainty.
-  double max_variance_growth = 4.0;
+  double max_variance_growth = 2.0;
   /// Parallax bound: translation (m) and rotation (deg) from the keyframe; beyond either,
   /// depth errors of the keyframe's primitives weigh more than a keyframe change costs.
   double max_translation_m = 0.3;
@@ -44,14 +44,14 @@ struct KeyframeOptions {
   /// frame's own 3D point (lifted on its fused depth), moved into the keyframe by the
   /// estimated pose (its covariance included), is fused by information weighting when it
   /// passes the chi-square gate below (docs/estimator.md, "Keyframe landmarks").
-  bool fuse_landmarks = false;
+  bool fuse_landmarks = true;
   /// Gate on the squared Mahalanobis distance between the keyframe point and the moved
   /// observation (3 dof; 7.81 = 95 %).
   double fusion_gate_chi2 = 7.81;
 };
 
 struct FrameOdometryOptions {
-  TrackingReference reference = TrackingReference::kFrame;
+  TrackingReference reference = TrackingReference::kKeyframe;
   KeyframeOptions keyframe;
   OdometryTrackerOptions tracker;  ///< tracker.estimator.use_* select the families
   features::PointMatchOptions point_matching;
@@ -63,7 +63,7 @@ struct FrameOdometryOptions {
   bool predict_plane_positions = true;
   /// Gate lines around the projection of their 3D segment under the predicted motion
   /// (reference lines without 3D keep their own 2D equation).
-  bool predict_line_positions = false;
+  bool predict_line_positions = true;
 };
 
 /// Why a frame was chosen as the next keyframe.
