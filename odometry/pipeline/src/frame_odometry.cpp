@@ -57,6 +57,7 @@ void FrameOdometry::setFamilies(const FeatureFamilies& families) {
 
 void FrameOdometry::resetKeyframes(int64_t next_keyframe_seq, KeyframeReason reason) {
   keyframe_.reset();
+  pending_keyframe_covariance_.reset();
   const bool keyframes = options_.reference == TrackingReference::kKeyframe;
   pending_keyframe_seq_ = keyframes ? next_keyframe_seq : -1;
   pending_reason_ = keyframes ? reason : KeyframeReason::kNone;
@@ -144,14 +145,7 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
   }
   const bool keyframes = options_.reference == TrackingReference::kKeyframe;
   if (keyframes && pending_keyframe_seq_ == reference.seq) {
-    // The previous frame was chosen as keyframe: its 3D features (lifted on its fused depth)
-    // are the keyframe's landmarks, its pose is the tracker's current one.
-    keyframe_ = reference;
-    T_w_kf_ = tracker_.T_w_c();
-    pending_keyframe_seq_ = -1;
-    keyframe_first_rows_ = 0;
-    ++keyframe_count_;
-    pending_fusion_ = PendingFusion{};
+    takeKeyframe(reference);
   }
   if (keyframes && keyframe_ && pending_fusion_.seq == reference.seq) {
     ScopedStageTimer t(timings_, "landmark_fusion");
@@ -205,8 +199,10 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
 
 std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatures& current,
                                                                 FrameOdometryStats* stats) {
-  const FrameFeatures& keyframe = *keyframe_;
-  if (current.camera != keyframe.camera) return std::nullopt;
+  if (current.camera != keyframe_->camera) return std::nullopt;
+  // Indices of the active keyframe's features come first in the local map.
+  const FrameFeatures keyframe_or_map = map_.empty() ? FrameFeatures() : localMap();
+  const FrameFeatures& keyframe = map_.empty() ? *keyframe_ : keyframe_or_map;
   // The tracker's pose is the previous frame's: T_prev_kf chains the prediction.
   const Pose3 T_prev_kf = tracker_.T_w_c().inverse() * T_w_kf_;
   const Pose3 T_curr_kf_predicted = tracker_.predictedMotion() * T_prev_kf;
@@ -237,6 +233,7 @@ std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatu
   if (exhausted != KeyframeReason::kNone) {
     pending_keyframe_seq_ = current.seq;
     pending_reason_ = exhausted;
+    pending_keyframe_covariance_ = est.covariance;  // of xi(T_curr_kf)
   }
   // The motion from the previous frame, T_curr_prev = T_curr_kf * T_kf_prev, with the
   // previous frame's pose relative to the keyframe held fixed: its covariance is that of the
@@ -249,6 +246,81 @@ std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatu
   est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
   est.max_rotation_variance = maxRotationVariance(est.covariance);
   return est;
+}
+
+void FrameOdometry::takeKeyframe(const FrameFeatures& reference) {
+  // The previous frame was chosen as keyframe: its 3D features (lifted on its fused depth)
+  // are the keyframe's landmarks, its pose is the tracker's current one.
+  const int max_map = std::max(0, options_.keyframe.local_map_keyframes);
+  if (max_map > 0 && keyframe_ && pending_keyframe_covariance_) {
+    const Pose3 T_new_old = tracker_.T_w_c().inverse() * T_w_kf_;
+    const Matrix6d& cov = *pending_keyframe_covariance_;
+    for (MapKeyframe& e : map_) {
+      e.covariance = propagateCompositionCovariance(e.T_kf_this, e.covariance, T_new_old, cov);
+      e.T_kf_this = T_new_old * e.T_kf_this;
+    }
+    map_.push_back({std::move(*keyframe_), T_new_old, cov});
+    while (static_cast<int>(map_.size()) > max_map) map_.pop_front();
+  } else {
+    map_.clear();
+  }
+  keyframe_ = reference;
+  T_w_kf_ = tracker_.T_w_c();
+  pending_keyframe_seq_ = -1;
+  pending_keyframe_covariance_.reset();
+  keyframe_first_rows_ = 0;
+  ++keyframe_count_;
+  pending_fusion_ = PendingFusion{};
+  // The map's features in the new keyframe, the relative pose's uncertainty added to each.
+  map_points_.clear();
+  map_lines_.clear();
+  std::vector<int> point_rows, line_rows;
+  std::vector<const cv::Mat*> point_desc, line_desc;
+  map_point_descriptors_ = cv::Mat();
+  map_line_descriptors_ = cv::Mat();
+  for (const MapKeyframe& e : map_) {
+    const Eigen::Matrix3d R = e.T_kf_this.linear();
+    const Eigen::Vector3d q_xyz = poseToXi(e.T_kf_this).tail<3>();
+    auto moved = [&](const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, Eigen::Vector3d* p_out,
+                     Eigen::Matrix3d* cov_out) {
+      Eigen::Matrix<double, 3, 6> J;
+      J.leftCols<3>().setIdentity();
+      J.rightCols<3>() = rotatedPointJacobian(q_xyz, p);
+      *p_out = e.T_kf_this * p;
+      *cov_out = R * cov * R.transpose() + J * e.covariance * J.transpose();
+    };
+    for (size_t i = 0; i < e.features.points.size(); ++i) {
+      PointFeature f = e.features.points[i];
+      if (!f.has_3d || static_cast<int>(i) >= e.features.point_descriptors.rows) continue;
+      moved(f.point.p, f.point.cov, &f.point.p, &f.point.cov);
+      map_points_.push_back(f);
+      map_point_descriptors_.push_back(e.features.point_descriptors.row(static_cast<int>(i)));
+    }
+    if (!options_.predict_line_positions) continue;  // old 2D lines say nothing here
+    for (size_t i = 0; i < e.features.lines.size(); ++i) {
+      LineFeature l = e.features.lines[i];
+      if (!l.has_3d || static_cast<int>(i) >= e.features.line_descriptors.rows) continue;
+      moved(l.line.p1, l.line.cov1, &l.line.p1, &l.line.cov1);
+      moved(l.line.p2, l.line.cov2, &l.line.p2, &l.line.cov2);
+      map_lines_.push_back(l);
+      map_line_descriptors_.push_back(e.features.line_descriptors.row(static_cast<int>(i)));
+    }
+  }
+}
+
+FrameFeatures FrameOdometry::localMap() const {
+  FrameFeatures map = *keyframe_;
+  if (!map_points_.empty() && map.point_descriptors.type() == map_point_descriptors_.type() &&
+      map.point_descriptors.cols == map_point_descriptors_.cols) {
+    map.points.insert(map.points.end(), map_points_.begin(), map_points_.end());
+    cv::vconcat(keyframe_->point_descriptors, map_point_descriptors_, map.point_descriptors);
+  }
+  if (!map_lines_.empty() && map.line_descriptors.type() == map_line_descriptors_.type() &&
+      map.line_descriptors.cols == map_line_descriptors_.cols) {
+    map.lines.insert(map.lines.end(), map_lines_.begin(), map_lines_.end());
+    cv::vconcat(keyframe_->line_descriptors, map_line_descriptors_, map.line_descriptors);
+  }
+  return map;
 }
 
 void FrameOdometry::fuseIntoKeyframe(const FrameFeatures& observed) {

@@ -603,6 +603,10 @@ void listFields(V& v, KeyframeOptions& o) {
   v.field("fuse_landmarks", o.fuse_landmarks,
           "refine the keyframe's 3D points with every frame tracked against it (information "
           "weighting, chi-square gate)");
+  v.field("local_map_keyframes", o.local_map_keyframes,
+          "earlier keyframes whose 3D points and lines are matched with the active one's "
+          "(0: the active keyframe alone)",
+          between(0, 10));
   v.field("fusion_gate_chi2", o.fusion_gate_chi2,
           "gate on the squared Mahalanobis distance of an observation (3 dof; 7.81 = 95 %)",
           positive());

@@ -5,6 +5,7 @@
 /// (docs/estimator.md, "Keyframes"), and the tracker estimates the motion, its covariance and
 /// the window uncertainties the depth filter needs. No LCM.
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 
@@ -48,6 +49,11 @@ struct KeyframeOptions {
   /// Gate on the squared Mahalanobis distance between the keyframe point and the moved
   /// observation (3 dof; 7.81 = 95 %).
   double fusion_gate_chi2 = 7.81;
+  /// Local map: the 3D points and lines of up to this many earlier keyframes, moved into the
+  /// active keyframe by the chain of keyframe poses (their covariance added), are matched and
+  /// used together with the active keyframe's (0: the active keyframe alone). The chain
+  /// restarts when a keyframe is taken after a fallback or a restart.
+  int local_map_keyframes = 0;
 };
 
 struct FrameOdometryOptions {
@@ -135,6 +141,11 @@ class FrameOdometry {
   /// Fuses the 3D points of `observed` (the frame last tracked against the keyframe) into
   /// the keyframe's points they were matched to.
   void fuseIntoKeyframe(const FrameFeatures& observed);
+  /// Takes `reference` as the active keyframe; the one it replaces joins the local map when
+  /// the new one was chosen through it.
+  void takeKeyframe(const FrameFeatures& reference);
+  /// The active keyframe with the local map's points and lines appended (in its frame).
+  FrameFeatures localMap() const;
 
   FrameOdometryOptions options_;
   OdometryTracker tracker_;
@@ -158,6 +169,22 @@ class FrameOdometry {
     std::vector<std::pair<int, int>> points;
   };
   PendingFusion pending_fusion_;
+  /// Covariance of xi(T_pending_kf), the pending keyframe's pose in the active keyframe,
+  /// when it was chosen through an estimate against the active keyframe.
+  std::optional<Matrix6d> pending_keyframe_covariance_;
+  /// Earlier keyframes of the local map, oldest first, with their pose in the active
+  /// keyframe and its covariance; `map_points_`/`map_lines_` hold their 3D features moved
+  /// into the active keyframe (with descriptors), rebuilt at each keyframe.
+  struct MapKeyframe {
+    FrameFeatures features;
+    Pose3 T_kf_this = Pose3::Identity();
+    Matrix6d covariance = Matrix6d::Zero();
+  };
+  std::deque<MapKeyframe> map_;
+  std::vector<PointFeature> map_points_;
+  cv::Mat map_point_descriptors_;
+  std::vector<LineFeature> map_lines_;
+  cv::Mat map_line_descriptors_;
 };
 
 }  // namespace pplvo::pipeline
