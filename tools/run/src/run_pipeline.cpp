@@ -108,6 +108,11 @@ std::string RunResult::text() const {
                 static_cast<long long>(tracking), static_cast<long long>(velocity_model),
                 static_cast<long long>(lost), static_cast<long long>(reinitialised));
   out << buf;
+  if (keyframes > 0) {
+    std::snprintf(buf, sizeof buf, "keyframes: %lld (fallbacks to the previous frame %lld)\n",
+                  static_cast<long long>(keyframes), static_cast<long long>(keyframe_fallbacks));
+    out << buf << "  chosen for: " << keyframe_reasons << "\n";
+  }
   for (const NodeReport& n : nodes) {
     std::snprintf(buf, sizeof buf, "%s: in %lld out %lld dropped %lld skipped %lld errors %lld\n",
                   n.name.c_str(), static_cast<long long>(n.counters.frames_in),
@@ -139,6 +144,7 @@ std::string RunResult::yaml() const {
       << "status: {first: " << first << ", tracking: " << tracking
       << ", velocity_model: " << velocity_model << ", lost: " << lost
       << ", reinitialised: " << reinitialised << "}\n"
+      << "keyframes: {taken: " << keyframes << ", fallbacks: " << keyframe_fallbacks << "}\n"
       << "elapsed_s: " << elapsed_s << "\n"
       << "preload_s: " << preload_s << "\n"
       << "frames_per_s: " << framesPerSecond() << "\n"
@@ -222,6 +228,13 @@ RunResult runPipeline(const RunOptions& options) {
         {nodes::FrontendNode::kName, frontend.counters(), frontend.allTimings()});
     result.nodes.push_back(
         {nodes::EstimatorNode::kName, estimator.counters(), estimator.allTimings()});
+    result.keyframes = estimator.counts().keyframes;
+    result.keyframe_fallbacks = estimator.counts().keyframe_fallbacks;
+    for (int r = 1; r < pipeline::kKeyframeReasons; ++r) {
+      result.keyframe_reasons += (r > 1 ? ", " : "");
+      result.keyframe_reasons += pipeline::toString(static_cast<pipeline::KeyframeReason>(r));
+      result.keyframe_reasons += " " + std::to_string(estimator.counts().keyframe_reasons[r]);
+    }
     if (recorder && recorder->counters().errors > 0) {
       result.failed = true;
       result.error = "event log: " + recorder->counters().last_warning;

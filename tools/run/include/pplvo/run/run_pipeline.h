@@ -53,6 +53,8 @@ struct RunResult {
   int64_t frames_published = 0, frames_skipped = 0;
   int64_t poses = 0;
   int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
+  int64_t keyframes = 0, keyframe_fallbacks = 0;  ///< the estimator's (reference: keyframe)
+  std::string keyframe_reasons;  ///< "overlap N, uncertainty N, ..." (chosen keyframes)
   double elapsed_s = 0.0;  ///< wall time of the run (reading the dataset included)
   double preload_s = 0.0;  ///< of which decoding the frames beforehand (--preload)
   std::vector<NodeReport> nodes;
