@@ -2,14 +2,16 @@
 # Accuracy and speed benchmark of the pipeline (issue 6), in the shape of the paper's tables:
 # RPE (m/s, deg/s) and ATE (m) for points / points+lines / points+planes / all, for the sensor
 # model / C-GM / O-GM depth, per-stage ms/frame, end-to-end frames/s of pplvo-run, and OpenCV's
-# cv::rgbd::RgbdOdometry measured in the same run on the same frames (pplvo-peer-odometry).
+# cv::rgbd odometries (Rgbd, RgbdICP, ICP; each frame to frame and against keyframes, issue 17)
+# measured in the same run on the same frames (pplvo-peer-odometry, docs/peer_odometry.md).
 #
 #   scripts/benchmark.sh [--build DIR] [--out DIR] [--docs FILE] [--frames N] [--quick]
 #
 # Sequences: every folder of ../shared/data (or $PPLVO_SHARED_DATA) with a groundtruth.txt, plus
 # a synthetic one generated here (pplvo-synth, room scene, 150 frames, seed 1).
 # --docs FILE writes the tables as Markdown (with the machine and the commit) to FILE and the
-# trajectory plots next to it (images/benchmark_<sequence>.png).
+# trajectory plots next to it (images/benchmark_<sequence>.png). --quick: two pplvo configurations
+# and three peers (Rgbd frame to frame, Rgbd and RgbdICP with keyframes).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 build="$here/build"
@@ -24,7 +26,7 @@ while [ $# -gt 0 ]; do
     --docs) docs="$2"; shift 2 ;;
     --frames) synth_frames="$2"; shift 2 ;;
     --quick) quick=1; shift ;;
-    -h|--help) sed -n 2,12p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,14p "$0"; exit 0 ;;
     *) echo "benchmark.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -51,6 +53,19 @@ configs=(
   "all, alpha=1|--set odometry.tracker.estimator.plane_scale_alpha=1"
 )
 [ "$quick" = 1 ] && configs=("points|--features points" "all|--features points,lines,planes")
+
+# Peers: label | pplvo-peer-odometry arguments | label in the plot (empty: not plotted; the
+# plot's legend is one row, room for two short peer labels at 1600 px). Keyframe mode: a new keyframe beyond 10 cm or
+# 10 deg from it, or when only the previous frame tracks (DVO, Fovis).
+peers=(
+  "OpenCV RgbdOdometry|--method rgbd|Rgbd"
+  "OpenCV RgbdICPOdometry|--method rgbd_icp|"
+  "OpenCV ICPOdometry|--method icp|"
+  "OpenCV RgbdOdometry (keyframes)|--method rgbd --keyframes|"
+  "OpenCV RgbdICPOdometry (keyframes)|--method rgbd_icp --keyframes|RgbdICP kf"
+  "OpenCV ICPOdometry (keyframes)|--method icp --keyframes|"
+)
+[ "$quick" = 1 ] && peers=("${peers[0]}" "${peers[3]}" "${peers[4]}")
 
 eval_line() {  # eval_line GT EST FPS -> "rpe_t rpe_r ate pairs trans_scale"
   local fpsarg=()
@@ -142,18 +157,27 @@ for i in "${!names[@]}"; do
       ests+=("$est"); labels+=("pplvo (points)")
     fi
   done
-  # The peer, on the same frames.
-  peer="$out/$n.opencv_rgbd.txt"
-  "$bin/pplvo-peer-odometry" --dataset "$d" --output "$peer" --method rgbd >"$out/$n.opencv_rgbd.log" 2>&1
-  read -r t r a p sc < <(eval_line "$d/groundtruth.txt" "$peer" "$fps")
-  pf="$(grep -Eo '[0-9.]+ frames/s' "$out/$n.opencv_rgbd.log" | tail -1 | awk '{print $1}')"
-  printf "| %s | OpenCV RgbdOdometry | %s | %s | %s | %s | - | %s (odometry only) |\n" "$n" "$t" "$r" "$a" "$sc" "${pf:--}" >> "$table"
-  echo "$n / OpenCV RgbdOdometry: RPE $t m/s $r deg/s, ATE $a m" >&2
-  ests+=("$peer"); labels+=("OpenCV RgbdOdometry")
+  # The peers, on the same frames.
+  for pc in "${peers[@]}"; do
+    label="${pc%%|*}"; rest="${pc#*|}"; args="${rest%|*}"; plot_label="${rest##*|}"
+    # Files: opencv_<method>[_kf] (opencv_rgbd is the frame-to-frame RgbdOdometry, as before).
+    tag="opencv_$(echo "$args" | awk '{ m = $2; kf = ""; for (i = 1; i <= NF; i++) if ($i == "--keyframes") kf = "_kf"; print m kf }')"
+    peer="$out/$n.$tag.txt"
+    # shellcheck disable=SC2086
+    "$bin/pplvo-peer-odometry" --dataset "$d" --output "$peer" $args >"$out/$n.$tag.log" 2>&1
+    read -r t r a _ sc < <(eval_line "$d/groundtruth.txt" "$peer" "$fps")
+    pf="$(grep -Eo '[0-9.]+ frames/s' "$out/$n.$tag.log" | tail -1 | awk '{print $1}')"
+    tracked="$(awk '/^frames: /{ print $4 "/" $2 }' "$out/$n.$tag.log")"
+    kfs="$(awk '/^keyframes: /{ print $2 }' "$out/$n.$tag.log")"
+    if [ -n "$kfs" ]; then tracked="$tracked ($kfs keyframe$([ "$kfs" = 1 ] || echo s))"; fi
+    printf "| %s | %s | %s | %s | %s | %s | %s | %s (odometry only) |\n" "$n" "$label" "$t" "$r" "$a" "$sc" "${tracked:--}" "${pf:--}" >> "$table"
+    echo "$n / $label: RPE $t m/s $r deg/s, ATE $a m${kfs:+, $kfs keyframes}" >&2
+    if [ -n "$plot_label" ]; then ests+=("$peer"); labels+=("$plot_label"); fi
+  done
   if [ -n "$docs" ]; then
     mkdir -p "$(dirname "$docs")/images"
     "$bin/pplvo-plot" "$d/groundtruth.txt" "${ests[@]}" --labels "$(IFS=,; echo "${labels[*]}")" \
-      "${fpsarg[@]}" --title "$n" --output "$(dirname "$docs")/images/benchmark_$n.png" >/dev/null 2>&1 || \
+      "${fpsarg[@]}" --title "$n" --size 1600x900 --output "$(dirname "$docs")/images/benchmark_$n.png" >/dev/null 2>&1 || \
       echo "benchmark.sh: plot of $n failed" >&2
   fi
 done
@@ -175,8 +199,12 @@ if [ -n "$docs" ]; then
 
 Every pplvo row is one `pplvo-run` (all processes over memq://, every frame, deterministic);
 errors by `pplvo-eval` (TUM definitions: ATE RMSE after SE(3) alignment, RPE RMSE over 1 s
-pairs, in m/s and deg/s). The peer is OpenCV 4.6's `cv::rgbd::RgbdOdometry` run by
-`pplvo-peer-odometry` on the same frames (docs/peer_odometry.md). "tracked" counts frames
+pairs, in m/s and deg/s). The peers are OpenCV 4.6's `cv::rgbd` odometries run by
+`pplvo-peer-odometry` on the same frames (docs/peer_odometry.md): `RgbdOdometry`
+(photometric), `ICPOdometry` (point-to-plane ICP on depth) and `RgbdICPOdometry` (both), each
+frame to frame and against keyframes ("keyframes": a frame becomes the keyframe when its motion
+from the keyframe passes 10 cm or 10 deg, or when only the previous frame could track it, as
+in DVO and Fovis). "tracked" counts frames
 whose pose came from an accepted estimate (the first frame is the origin). "motion scale" is
 `rpe.trans_scale`: the least-squares scale of the estimated 1 s relative translations against
 the ground truth's (1 = unbiased; below 1 = motion under-estimated, see docs/pipeline.md on
@@ -202,6 +230,9 @@ TEXT
     cat "$stages"
     echo
     echo "## Trajectories"
+    echo
+    echo "'Rgbd' is OpenCV's RgbdOdometry frame to frame, 'RgbdICP kf' its RgbdICPOdometry against"
+    echo "keyframes; the other peers are in the accuracy table only."
     echo
     for n in "${names[@]}"; do echo "![$n](images/benchmark_$n.png)"; echo; done
   } > "$docs"

@@ -4,10 +4,12 @@
 set -euo pipefail
 
 packages=(
-  # toolchain
-  build-essential cmake pkg-config git
+  # toolchain (dpkg-dev: dpkg-shlibdeps for the Depends of cpack's Debian package)
+  build-essential cmake pkg-config git dpkg-dev
   # messaging: LCM 1.3.1 (library, lcm-gen, lcm-logplayer, lcm-spy's jar) and a JDK for the types jar
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
+  # pplvo-spy: lcm-spy's window needs a JRE with AWT (default-jre) and its charts jchart2d
+  libjchart2d-java default-jre
   # algorithms
   libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev libyaml-cpp-dev zlib1g-dev
   libdeflate-dev

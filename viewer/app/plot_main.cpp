@@ -1,5 +1,7 @@
 // pplvo-plot GT EST... --output FILE.png|svg [--labels a,b] [--fps F] [--title T]
 // [--size WxH]: trajectories against ground truth, aligned with pplvo_eval's ATE alignment.
+// pplvo-plot --nees NEES_DATA --output FILE.png|svg [--title T] [--size WxH]: NEES over time
+// with the chi-square bounds (NEES_DATA from pplvo-eval --nees --nees-data).
 #include <cstdio>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -7,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/eval/nees.h"
 #include "pplvo/eval/tum_file.h"
 #include "pplvo/viewer/plot.h"
 
@@ -15,16 +18,59 @@ void usage() {
   std::fprintf(stderr,
                "usage: pplvo-plot GT EST [EST...] --output FILE.png|FILE.svg\n"
                "       [--labels a,b,...] [--fps F] [--title TEXT] [--size WxH]\n"
-               "  --fps F: stamps are frame indices at F Hz (ICL-NUIM)\n");
+               "  --fps F: stamps are frame indices at F Hz (ICL-NUIM)\n"
+               "usage: pplvo-plot --nees NEES_DATA --output FILE.png|FILE.svg [--title TEXT]\n"
+               "       [--size WxH]   (NEES_DATA: pplvo-eval --nees ... --nees-data FILE)\n");
 }
 bool endsWith(const std::string& s, const std::string& e) {
   return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
 }
+int plotNees(const std::string& path, const std::string& output, const std::string& title,
+             cv::Size size) {
+  const bool svg = endsWith(output, ".svg");
+  if (output.empty() || (!svg && !endsWith(output, ".png"))) {
+    std::fprintf(stderr, "pplvo-plot: --output must end in .png or .svg\n");
+    return 2;
+  }
+  const pplvo::eval::NeesDataReadResult r = pplvo::eval::readNeesData(path);
+  if (!r.ok) {
+    std::fprintf(stderr, "pplvo-plot: %s\n", r.error.c_str());
+    return 1;
+  }
+  if (r.rows.empty()) {
+    std::fprintf(stderr, "pplvo-plot: %s has no NEES pairs\n", path.c_str());
+    return 1;
+  }
+  pplvo::viewer::NeesPlotData d;
+  const size_t slash = path.find_last_of('/');
+  d.label = slash == std::string::npos ? path : path.substr(slash + 1);
+  for (const auto& row : r.rows) {
+    d.t_s.push_back(row.stamp_s - r.rows.front().stamp_s);
+    d.nees.push_back(row.nees);
+    d.nees_t.push_back(row.nees_t);
+    d.nees_r.push_back(row.nees_r);
+  }
+  bool written = false;
+  if (svg) {
+    std::ofstream out(output);
+    out << pplvo::viewer::renderNeesPlotSvg(d, size, title);
+    written = static_cast<bool>(out);
+  } else {
+    written = cv::imwrite(output, pplvo::viewer::renderNeesPlotImage(d, size, title));
+  }
+  if (!written) {
+    std::fprintf(stderr, "pplvo-plot: cannot write %s\n", output.c_str());
+    return 1;
+  }
+  std::printf("%s: %zu pairs plotted\n", d.label.c_str(), d.t_s.size());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<std::string> files, labels;
-  std::string output, title;
+  std::string output, title, nees_path;
   double fps = 0.0;
   cv::Size size(1400, 900);
   for (int i = 1; i < argc; ++i) {
@@ -38,6 +84,8 @@ int main(int argc, char** argv) {
     };
     if (a == "--output" || a == "-o")
       output = next();
+    else if (a == "--nees")
+      nees_path = next();
     else if (a == "--labels") {
       std::stringstream ss(next());
       std::string l;
@@ -62,6 +110,7 @@ int main(int argc, char** argv) {
     } else
       files.push_back(a);
   }
+  if (!nees_path.empty()) return plotNees(nees_path, output, title, size);
   if (files.size() < 2 || output.empty()) {
     usage();
     return 2;

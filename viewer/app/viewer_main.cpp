@@ -19,6 +19,7 @@ void usage() {
                "  --replay-speed S       replay speed factor (default 1; 0 = as fast as possible)\n"
                "  --headless             no window\n"
                "  --snapshot-dir DIR     write canvas_NNNNNN.png every --every canvases\n"
+               "                         (DIR is created if missing)\n"
                "  --every N              (default 1)\n"
                "  --video FILE.avi       MJPG video of every canvas\n"
                "  --save-window FILE.png overwrite FILE with each canvas shown\n"

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
@@ -27,6 +28,15 @@ ViewerNode::ViewerNode(const ViewerOptions& options, msgs::Bus bus)
   if (!(options_.max_fps > 0)) throw std::invalid_argument("max_fps must be > 0");
   if (options_.every < 1) throw std::invalid_argument("every must be >= 1");
   if (options_.frame_ring < 1) options_.frame_ring = 1;
+  if (!options_.snapshot_dir.empty()) {
+    // --snapshot-dir DIR need not exist (as mkdir -p).
+    std::error_code ec;
+    std::filesystem::create_directories(options_.snapshot_dir, ec);
+    if (ec) {
+      throw std::runtime_error("cannot create snapshot folder " + options_.snapshot_dir + ": " +
+                               ec.message());
+    }
+  }
   if (!options_.groundtruth_path.empty()) {
     eval::TumReadOptions ro;
     ro.fps = options_.groundtruth_fps;

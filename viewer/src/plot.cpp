@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "pplvo/eval/nees.h"
 #include "pplvo/eval/rpe.h"
 #include "pplvo/viewer/ticks.h"
 
@@ -383,6 +384,72 @@ void drawFigure(Painter& p, const PlotData& d, cv::Size size, const std::string&
          Anchor::kStart);
 }
 
+const Rgb kBoundColour{214, 39, 40};
+const Rgb kBandColour{255, 127, 14};
+
+void drawNeesFigure(Painter& p, const NeesPlotData& d, cv::Size size, const std::string& title) {
+  const double W = size.width, H = size.height;
+  const double top = 80, bottom = 50, gap = 46;
+  const std::string heading =
+      title.empty() ? "NEES of the relative-pose covariance (" + d.label + ")" : title;
+  double heading_px = 18;
+  while (heading_px > 9 && p.textWidth(heading, heading_px) > W - 20) heading_px -= 1;
+  p.text({W / 2, 24}, heading, kAxisColour, heading_px, Anchor::kMiddle);
+  double lx = 90;
+  auto legend = [&](const std::string& label, Rgb c) {
+    p.line({lx, 50}, {lx + 28, 50}, c, 2);
+    p.text({lx + 34, 55}, label, kAxisColour, 13, Anchor::kStart);
+    lx += 34 + p.textWidth(label, 13) + 24;
+  };
+  char buf[96];
+  legend("NEES per frame pair", runColour(0));
+  legend("dof (consistent mean)", kGtColour);
+  std::snprintf(buf, sizeof buf, "%.0f %% upper bound", 100 * d.confidence);
+  legend(buf, kBoundColour);
+  std::snprintf(buf, sizeof buf, "two-sided %.0f %% band", 100 * d.confidence);
+  legend(buf, kBandColour);
+  Range tr;
+  for (double t : d.t_s) tr.add(t);
+  const double bx = 100, bw = W - bx - 30, bh = (H - top - bottom - 2 * gap) / 3;
+  const std::vector<double>* values[] = {&d.nees, &d.nees_t, &d.nees_r};
+  const double dofs[] = {6, 3, 3};
+  const char* names[] = {"6 dof", "translation (3 dof)", "rotation (3 dof)"};
+  for (int k = 0; k < 3; ++k) {
+    const std::vector<double>& v = *values[k];
+    const double dof = dofs[k];
+    const double upper = eval::chiSquareQuantile(d.confidence, dof);
+    const double lo = eval::chiSquareQuantile(0.5 * (1 - d.confidence), dof);
+    const double hi = eval::chiSquareQuantile(0.5 * (1 + d.confidence), dof);
+    Series s{{}, {}, runColour(0), 1.2};
+    Range yr;
+    double sum = 0;
+    int inside = 0;
+    for (size_t i = 0; i < v.size() && i < d.t_s.size(); ++i) {
+      const double y = std::log10(std::max(v[i], 1e-6));
+      s.x.push_back(d.t_s[i]);
+      s.y.push_back(y);
+      yr.add(y);
+      sum += v[i];
+      if (v[i] <= upper) ++inside;
+    }
+    std::vector<Series> series{s};
+    auto hline = [&](double value, Rgb c, double w) {
+      const double y = std::log10(value);
+      yr.add(y);
+      series.push_back(Series{{tr.lo, tr.hi}, {y, y}, c, w});
+    };
+    hline(dof, kGtColour, 1.5);
+    hline(upper, kBoundColour, 1.5);
+    hline(lo, kBandColour, 1);
+    hline(hi, kBandColour, 1);
+    const double n = static_cast<double>(std::max<size_t>(1, v.size()));
+    std::snprintf(buf, sizeof buf, "%s: mean %.3g (ideal %.0f), %.1f %% below %.2f", names[k],
+                  sum / n, dof, 100.0 * inside / n, upper);
+    const cv::Rect2d box(bx, top + k * (bh + gap), bw, bh);
+    drawAxes(p, box, series, tr, yr, k == 2 ? "time [s]" : "", "log10 NEES", buf, false, 1.0);
+  }
+}
+
 }  // namespace
 
 PlotPrepareResult preparePlot(const eval::TumFile& gt, const std::vector<eval::TumFile>& est,
@@ -459,6 +526,18 @@ cv::Mat renderPlotImage(const PlotData& data, cv::Size size, const std::string& 
 std::string renderPlotSvg(const PlotData& data, cv::Size size, const std::string& title) {
   SvgPainter p(size);
   drawFigure(p, data, size, title);
+  return p.document();
+}
+
+cv::Mat renderNeesPlotImage(const NeesPlotData& data, cv::Size size, const std::string& title) {
+  MatPainter p(size);
+  drawNeesFigure(p, data, size, title);
+  return p.image();
+}
+
+std::string renderNeesPlotSvg(const NeesPlotData& data, cv::Size size, const std::string& title) {
+  SvgPainter p(size);
+  drawNeesFigure(p, data, size, title);
   return p.document();
 }
 

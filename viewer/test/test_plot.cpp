@@ -186,6 +186,55 @@ TEST(ViewerPlot, ProgramWritesPngAndParsableSvg) {
   std::system(("rm -rf " + dir).c_str());
 }
 
+TEST(ViewerPlot, NeesFigureAndProgramMode) {
+  // Library: per axes one NEES polyline and four horizontal lines (dof, upper bound, band).
+  NeesPlotData d;
+  d.label = "run";
+  std::mt19937 rng(9);
+  std::chi_squared_distribution<double> c6(6.0), c3(3.0);
+  for (int i = 0; i < 200; ++i) {
+    d.t_s.push_back(i / 30.0);
+    d.nees.push_back(c6(rng));
+    d.nees_t.push_back(c3(rng));
+    d.nees_r.push_back(c3(rng));
+  }
+  const std::string svg = renderNeesPlotSvg(d, cv::Size(1000, 700), "");
+  size_t count = 0;
+  for (size_t p = svg.find("<polyline"); p != std::string::npos; p = svg.find("<polyline", p + 1)) {
+    ++count;
+  }
+  EXPECT_EQ(count, 3u * 5u);
+  EXPECT_NE(svg.find("6 dof: mean"), std::string::npos);
+  EXPECT_NE(svg.find("below 12.59"), std::string::npos);
+  EXPECT_NE(svg.find("below 7.81"), std::string::npos);
+  const cv::Mat img = renderNeesPlotImage(d, cv::Size(1000, 700), "nees");
+  EXPECT_EQ(img.size(), cv::Size(1000, 700));
+
+  // Program: NEES data as pplvo-eval --nees-data writes it.
+  const std::string dir = tempDir();
+  std::ostringstream data;
+  data << "# pplvo-eval --nees per-pair data\n";
+  for (size_t i = 0; i < d.t_s.size(); ++i) {
+    data << 10 + d.t_s[i] << ' ' << 10 + d.t_s[i] - 1 / 30.0 << " 1 " << d.nees[i] << ' '
+         << d.nees_t[i] << ' ' << d.nees_r[i] << " 0 0 0 0 0 0 0 1 1 1 1 1 1\n";
+  }
+  writeFile(dir + "/nees.txt", data.str());
+  int status = 0;
+  std::string out = run(
+      std::string(PPLVO_PLOT_BINARY) + " --nees " + dir + "/nees.txt --output " + dir + "/nees.png",
+      status);
+  ASSERT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("200 pairs plotted"), std::string::npos) << out;
+  EXPECT_EQ(cv::imread(dir + "/nees.png").size(), cv::Size(1400, 900));
+  writeFile(dir + "/bad.txt", "1 2 3\n");
+  out = run(
+      std::string(PPLVO_PLOT_BINARY) + " --nees " + dir + "/bad.txt --output " + dir + "/bad.png",
+      status);
+  EXPECT_NE(status, 0);
+  EXPECT_NE(out.find("bad.txt:1"), std::string::npos) << out;
+  std::system(("rm -rf " + dir).c_str());
+}
+
 TEST(ViewerPlot, LiveGroundTruthAlignmentModes) {
   const eval::TumFile gt = parse(tumText(groundTruth()), "gt");
   // The estimate's world is the first camera frame: T_w_c = T_gt_c0^-1 T_gt_c.

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -66,6 +67,23 @@ ViewerOptions headless(const std::string& dir) {
   o.snapshot_dir = dir;
   o.max_fps = 1000.0;  // draw on every spin in these tests
   return o;
+}
+
+TEST(ViewerNode, CreatesItsSnapshotFolder) {
+  const std::string root = tempDir();
+  const std::string dir = root + "/not/yet/there";
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  ViewerNode node(headless(dir), lcm);
+  publishAll(lcm, 0);
+  node.spinOnce(0.0);
+  EXPECT_EQ(node.snapshotsWritten(), 1);
+  EXPECT_FALSE(cv::imread(dir + "/canvas_000000.png").empty());
+  EXPECT_EQ(node.counters().errors, 0);
+  // A folder that cannot be created (a path through a regular file) fails at construction.
+  const std::string file = dir + "/canvas_000000.png";
+  EXPECT_THROW(ViewerNode(headless(file + "/sub"), lcm), std::runtime_error);
+  std::filesystem::remove_all(root);
 }
 
 TEST(ViewerNode, HeadlessSnapshotsShowEveryPanelAndTheOverlay) {

@@ -1,5 +1,6 @@
 #include "pplvo/player/player_node.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -180,6 +181,26 @@ void PlayerNode::publishStream(int8_t event, const PlayerResult& result) {
   bus_.publish(options_.stream_channel, &ev);
 }
 
+std::string progressLine(const std::string& name, int64_t done, int64_t total, double elapsed_s,
+                         int64_t skipped) {
+  const double rate = elapsed_s > 0 ? done / elapsed_s : 0.0;
+  char buf[256];
+  if (total <= 0) {
+    std::snprintf(buf, sizeof buf, "[%s] %lld frames, %.1f frames/s, skipped %lld", name.c_str(),
+                  static_cast<long long>(done), rate, static_cast<long long>(skipped));
+    return buf;
+  }
+  char eta[32] = "--:--";
+  if (rate > 0) {
+    const long long s = std::llround(std::max<int64_t>(0, total - done) / rate);
+    std::snprintf(eta, sizeof eta, "%lld:%02lld", s / 60, s % 60);
+  }
+  std::snprintf(buf, sizeof buf, "[%s] %lld/%lld frames, %.1f frames/s, ETA %s, skipped %lld",
+                name.c_str(), static_cast<long long>(done), static_cast<long long>(total), rate,
+                eta, static_cast<long long>(skipped));
+  return buf;
+}
+
 void PlayerNode::periodic(bool force) {
   const double now = nowS();
   if (force || now - last_status_s_ >= options_.status_period_s) {
@@ -189,10 +210,16 @@ void PlayerNode::periodic(bool force) {
   }
   if (options_.progress && (force || now - last_progress_s_ >= 0.25)) {
     last_progress_s_ = now;
-    const double el = now - start_s_;
-    std::fprintf(stderr, "\r[%s] %lld/%zu frames, %.1f frames/s, skipped %lld   ",
-                 options_.node_name.c_str(), static_cast<long long>(published_), dataset_.size(),
-                 el > 0 ? published_ / el : 0.0, static_cast<long long>(counters_.frames_skipped));
+    // Frames this run publishes: from --start to the end, or --max-frames (unknown: --loop).
+    const int64_t available =
+        std::max<int64_t>(0, static_cast<int64_t>(dataset_.size()) - options_.start);
+    int64_t total = options_.loop ? 0 : available;
+    if (options_.max_frames > 0) {
+      total = options_.loop ? options_.max_frames : std::min(available, options_.max_frames);
+    }
+    const std::string line = progressLine(options_.node_name, published_, total, now - start_s_,
+                                          counters_.frames_skipped);
+    std::fprintf(stderr, "\r%s   ", line.c_str());
     std::fflush(stderr);
   }
 }

@@ -106,6 +106,18 @@ TEST(PlayerArgs, ParsesAndCollectsErrors) {
   EXPECT_EQ(r.errors.size(), 5u);  // rate, bogus, encoding, start needs value, no --dataset
 }
 
+TEST(PlayerProgress, LineShowsFramesRateAndEta) {
+  // 30 of 90 frames in 2 s: 15 frames/s, 60 frames left = 4 s.
+  EXPECT_EQ(player::progressLine("pplvo-player", 30, 90, 2.0, 1),
+            "[pplvo-player] 30/90 frames, 15.0 frames/s, ETA 0:04, skipped 1");
+  // 100 of 10000 at 1 frame/s: 9900 s = 165 min.
+  EXPECT_EQ(player::progressLine("p", 100, 10000, 100.0, 0),
+            "[p] 100/10000 frames, 1.0 frames/s, ETA 165:00, skipped 0");
+  EXPECT_EQ(player::progressLine("p", 0, 90, 0.0, 0),
+            "[p] 0/90 frames, 0.0 frames/s, ETA --:--, skipped 0");
+  EXPECT_EQ(player::progressLine("p", 12, 0, 2.0, 0), "[p] 12 frames, 6.0 frames/s, skipped 0");
+}
+
 TEST(Player, MissingDatasetIsAClearError) {
   lcm::LCM lcm("memq://");
   PlayerOptions o = baseOptions();

@@ -341,8 +341,12 @@ class JointProblem {
 
   /// H = J^T W J at xi over the inlier terms with the inverse-variance weights and alpha on
   /// the planes (Tukey weights only select the inliers): the information of eq. 21. M is the
-  /// same sum with alpha^2, for the sandwich covariance H^-1 M H^-1.
-  void information(const double* xi, Matrix6d& H, Matrix6d& M) const {
+  /// same sum with alpha^2, for the sandwich covariance H^-1 M H^-1, and with the point and
+  /// line terms times `residual_variance_scale`: their residuals' actual covariance is that
+  /// factor times the modelled Sigma_r (the robust scale squared; docs/estimator.md,
+  /// "Covariance consistency on real data").
+  void information(const double* xi, double residual_variance_scale, Matrix6d& H,
+                   Matrix6d& M) const {
     const PoseEval pose(xi);
     H.setZero();
     M.setZero();
@@ -355,7 +359,7 @@ class JointProblem {
       const Matrix26 A = T.S * J2;
       const Matrix6d AtA = A.transpose() * A;
       H += AtA;
-      M += AtA;
+      M += residual_variance_scale * AtA;
     }
     for (const LineTerm& T : lines) {
       if (!T.active || T.sqrt_tukey <= 0) continue;
@@ -363,7 +367,7 @@ class JointProblem {
       const Matrix26 A = Eigen::Vector2d(T.s[0], T.s[1]).asDiagonal() * J2;
       const Matrix6d AtA = A.transpose() * A;
       H += AtA;
-      M += AtA;
+      M += residual_variance_scale * AtA;
     }
     Eigen::Vector3d r3;
     Matrix36 J3;
@@ -610,7 +614,10 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
 
   // --- covariance (eq. 21) and rejection tests --------------------------------------------
   Matrix6d H, M;
-  problem.information(xi.data(), H, M);
+  // The whitened point and line residuals spread by the robust scale s (>= 1, MAD): their
+  // covariance is s^2 Sigma_r, not Sigma_r (on real images s ~ 1.5; 1 on synthetic ones).
+  problem.information(xi.data(), o.tukey_mad_scale ? est.robust_scale * est.robust_scale : 1.0, H,
+                      M);
   Eigen::Matrix<double, 6, 1> dinv_sqrt;
   bool diag_ok = H.allFinite() && M.allFinite();
   for (int i = 0; i < 6; ++i) {

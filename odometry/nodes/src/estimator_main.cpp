@@ -78,11 +78,12 @@ int main(int argc, char** argv) {
     const nodes::EstimatorCounts& k = node.counts();
     std::fprintf(stderr,
                  "[pplvo-estimator] done: in %lld out %lld dropped %lld skipped %lld; tracking "
-                 "%lld velocity %lld lost %lld reinit %lld\n%s",
+                 "%lld velocity %lld lost %lld reinit %lld; keyframes %lld (fallbacks %lld)\n%s",
                  static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_out),
                  static_cast<long long>(c.frames_dropped), static_cast<long long>(c.frames_skipped),
                  static_cast<long long>(k.tracking), static_cast<long long>(k.velocity_model),
                  static_cast<long long>(k.lost), static_cast<long long>(k.reinitialised),
+                 static_cast<long long>(k.keyframes), static_cast<long long>(k.keyframe_fallbacks),
                  node.allTimings().table().c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pplvo-estimator: %s\n", e.what());

@@ -108,6 +108,9 @@ void EstimatorNode::processWaiting() {
     waiting_.pop_front();
     pipeline::FrameOdometryStats stats;
     const TrackerOutput out = odometry_.track(reference_, current, &stats);
+    counts_.keyframes = odometry_.keyframeCount();
+    if (stats.new_keyframe) ++counts_.keyframe_reasons[static_cast<int>(stats.keyframe_reason)];
+    if (stats.keyframe_fallback) ++counts_.keyframe_fallbacks;
     have_reference_ = false;  // the next frame needs this one's 3D features
     drops_without_reference_ = 0;
     publish(out, current, stats);

@@ -3,7 +3,43 @@
 #include <cmath>
 #include <limits>
 
+#include "pplvo/estimator/pose_parameterisation.h"
+#include "pplvo/features/line_extractor.h"
+
 namespace pplvo::pipeline {
+
+bool parseTrackingReference(const std::string& text, TrackingReference* out) {
+  if (text == "frame") {
+    *out = TrackingReference::kFrame;
+  } else if (text == "keyframe") {
+    *out = TrackingReference::kKeyframe;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* toString(KeyframeReason reason) {
+  switch (reason) {
+    case KeyframeReason::kNone:
+      return "none";
+    case KeyframeReason::kStart:
+      return "start";
+    case KeyframeReason::kFallback:
+      return "fallback";
+    case KeyframeReason::kOverlap:
+      return "overlap";
+    case KeyframeReason::kUncertainty:
+      return "uncertainty";
+    case KeyframeReason::kMotion:
+      return "motion";
+  }
+  return "?";
+}
+
+const char* toString(TrackingReference reference) {
+  return reference == TrackingReference::kKeyframe ? "keyframe" : "frame";
+}
 
 FrameOdometry::FrameOdometry(const FrameOdometryOptions& options)
     : options_(options), tracker_(options.tracker) {}
@@ -14,16 +50,29 @@ void FrameOdometry::setFamilies(const FeatureFamilies& families) {
   options_.tracker.estimator.use_planes = families.planes;
   tracker_ = OdometryTracker(options_.tracker);
   last_seq_ = -1;
+  keyframe_.reset();
+  pending_keyframe_seq_ = -1;
+  keyframe_count_ = 0;
+}
+
+void FrameOdometry::resetKeyframes(int64_t next_keyframe_seq, KeyframeReason reason) {
+  keyframe_.reset();
+  pending_keyframe_covariance_.reset();
+  const bool keyframes = options_.reference == TrackingReference::kKeyframe;
+  pending_keyframe_seq_ = keyframes ? next_keyframe_seq : -1;
+  pending_reason_ = keyframes ? reason : KeyframeReason::kNone;
 }
 
 TrackerOutput FrameOdometry::initialise(const FrameFeatures& first) {
   last_seq_ = first.seq;
+  resetKeyframes(first.seq, KeyframeReason::kStart);
   return tracker_.initialise(first.seq);
 }
 
 TrackerOutput FrameOdometry::restart(const FrameFeatures& current) {
   const Pose3 T_w_c = tracker_.T_w_c();
   last_seq_ = current.seq;
+  resetKeyframes(current.seq, KeyframeReason::kStart);
   TrackerOutput out = tracker_.initialise(current.seq, T_w_c);
   out.status = TrackingStatus::kReinitialised;
   return out;
@@ -52,7 +101,24 @@ FeatureMatches FrameOdometry::match(const FrameFeatures& reference, const FrameF
   }
   if (use.use_lines && !reference.lines.empty() && !current.lines.empty()) {
     ScopedStageTimer t(timings_, "match_lines");
-    m.lines = features::matchLines(reference, current, options_.line_matching).pairs;
+    if (options_.predict_line_positions) {
+      // The reference lines' 2D equations moved to where their 3D segments project under the
+      // predicted motion, so the gate is centred there (as for points).
+      std::vector<LineFeature> predicted = reference.lines;
+      for (LineFeature& l : predicted) {
+        if (!l.has_3d) continue;
+        const Eigen::Vector3d a = T_curr_ref * l.line.p1, b = T_curr_ref * l.line.p2;
+        if (a.z() <= 1e-3 || b.z() <= 1e-3) continue;
+        const Eigen::Vector3d eq =
+            features::lineEquation(current.camera.project(a), current.camera.project(b));
+        if (eq.allFinite()) l.eq = eq;
+      }
+      m.lines = features::matchLines(predicted, reference.line_descriptors, current.lines,
+                                     current.line_descriptors, options_.line_matching)
+                    .pairs;
+    } else {
+      m.lines = features::matchLines(reference, current, options_.line_matching).pairs;
+    }
   }
   if (use.use_planes && !reference.planes.empty() && !current.planes.empty()) {
     ScopedStageTimer t(timings_, "match_planes");
@@ -77,17 +143,240 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
     s.reinitialised = true;
     return last_seq_ < 0 ? initialise(current) : restart(current);
   }
+  const bool keyframes = options_.reference == TrackingReference::kKeyframe;
+  if (keyframes && pending_keyframe_seq_ == reference.seq) {
+    takeKeyframe(reference);
+  }
+  if (keyframes && keyframe_ && pending_fusion_.seq == reference.seq) {
+    ScopedStageTimer t(timings_, "landmark_fusion");
+    fuseIntoKeyframe(reference);
+  }
+  pending_fusion_.seq = -1;
+  if (keyframes && keyframe_ && keyframe_->seq != reference.seq) {
+    std::optional<PoseEstimate> through_keyframe = estimateFromKeyframe(current, &s);
+    if (through_keyframe) {
+      TrackerOutput out = tracker_.update(current.seq, *through_keyframe);
+      last_seq_ = current.seq;
+      if (out.status != TrackingStatus::kTracking) {
+        resetKeyframes(current.seq, KeyframeReason::kStart);
+      }
+      s.new_keyframe = pending_keyframe_seq_ == current.seq;
+      if (s.new_keyframe) s.keyframe_reason = pending_reason_;
+      return out;
+    }
+    // The keyframe failed (matches lost, degenerate or too uncertain): the previous frame
+    // serves, and this frame starts a new keyframe.
+    s.keyframe_fallback = true;
+  }
   const FeatureMatches matches = match(reference, current, tracker_.predictedMotion());
   s.point_matches = static_cast<int>(matches.points.size());
   s.line_matches = static_cast<int>(matches.lines.size());
   s.plane_matches = static_cast<int>(matches.planes.size());
+  s.reference_seq = reference.seq;
   TrackerOutput out;
   {
     ScopedStageTimer t(timings_, "pose");
     out = tracker_.track(reference, current, matches);
   }
   last_seq_ = current.seq;
+  if (keyframes) {
+    const bool first_against_keyframe = keyframe_ && keyframe_->seq == reference.seq;
+    if (first_against_keyframe && out.estimate.accepted() &&
+        out.status == TrackingStatus::kTracking) {
+      // The keyframe's reference quality: what the next frames are compared with.
+      keyframe_first_rows_ = out.estimate.n_residuals;
+      keyframe_first_var_t_ = out.estimate.max_translation_variance_m2;
+      keyframe_first_var_q_ = out.estimate.max_rotation_variance;
+    } else {
+      resetKeyframes(current.seq,
+                     s.keyframe_fallback ? KeyframeReason::kFallback : KeyframeReason::kStart);
+    }
+    s.new_keyframe = pending_keyframe_seq_ == current.seq;
+    if (s.new_keyframe) s.keyframe_reason = pending_reason_;
+  }
   return out;
+}
+
+std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatures& current,
+                                                                FrameOdometryStats* stats) {
+  if (current.camera != keyframe_->camera) return std::nullopt;
+  // Indices of the active keyframe's features come first in the local map.
+  const FrameFeatures keyframe_or_map = map_.empty() ? FrameFeatures() : localMap();
+  const FrameFeatures& keyframe = map_.empty() ? *keyframe_ : keyframe_or_map;
+  // The tracker's pose is the previous frame's: T_prev_kf chains the prediction.
+  const Pose3 T_prev_kf = tracker_.T_w_c().inverse() * T_w_kf_;
+  const Pose3 T_curr_kf_predicted = tracker_.predictedMotion() * T_prev_kf;
+  const FeatureMatches matches = match(keyframe, current, T_curr_kf_predicted);
+  stats->point_matches = static_cast<int>(matches.points.size());
+  stats->line_matches = static_cast<int>(matches.lines.size());
+  stats->plane_matches = static_cast<int>(matches.planes.size());
+  stats->reference_seq = keyframe.seq;
+  PoseEstimate est;
+  {
+    ScopedStageTimer t(timings_, "pose");
+    const PoseEstimator estimator(options_.tracker.estimator);
+    est = estimator.estimate(
+        buildCorrespondences(keyframe, current, matches, options_.tracker.estimator),
+        current.camera, T_curr_kf_predicted);
+  }
+  if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
+    return std::nullopt;
+  }
+  const Pose3 T_curr_kf = est.T_curr_prev;
+  if (options_.keyframe.fuse_landmarks) {
+    pending_fusion_.seq = current.seq;
+    pending_fusion_.T_kf_frame = T_curr_kf.inverse();
+    pending_fusion_.covariance = invertedPoseCovariance(T_curr_kf, est.covariance);
+    pending_fusion_.points = matches.points;
+  }
+  const KeyframeReason exhausted = keyframeExhausted(est, T_curr_kf);
+  if (exhausted != KeyframeReason::kNone) {
+    pending_keyframe_seq_ = current.seq;
+    pending_reason_ = exhausted;
+    pending_keyframe_covariance_ = est.covariance;  // of xi(T_curr_kf)
+  }
+  // The motion from the previous frame, T_curr_prev = T_curr_kf * T_kf_prev, with the
+  // previous frame's pose relative to the keyframe held fixed: its covariance is that of the
+  // estimate against the keyframe (conservative: the two frames' errors relative to the same
+  // keyframe are positively correlated, so their difference varies less).
+  const Pose3 T_kf_prev = T_prev_kf.inverse();
+  est.T_curr_prev = T_curr_kf * T_kf_prev;
+  est.covariance =
+      propagateCompositionCovariance(T_kf_prev, Matrix6d::Zero(), T_curr_kf, est.covariance);
+  est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
+  est.max_rotation_variance = maxRotationVariance(est.covariance);
+  return est;
+}
+
+void FrameOdometry::takeKeyframe(const FrameFeatures& reference) {
+  // The previous frame was chosen as keyframe: its 3D features (lifted on its fused depth)
+  // are the keyframe's landmarks, its pose is the tracker's current one.
+  const int max_map = std::max(0, options_.keyframe.local_map_keyframes);
+  if (max_map > 0 && keyframe_ && pending_keyframe_covariance_) {
+    const Pose3 T_new_old = tracker_.T_w_c().inverse() * T_w_kf_;
+    const Matrix6d& cov = *pending_keyframe_covariance_;
+    for (MapKeyframe& e : map_) {
+      e.covariance = propagateCompositionCovariance(e.T_kf_this, e.covariance, T_new_old, cov);
+      e.T_kf_this = T_new_old * e.T_kf_this;
+    }
+    map_.push_back({std::move(*keyframe_), T_new_old, cov});
+    while (static_cast<int>(map_.size()) > max_map) map_.pop_front();
+  } else {
+    map_.clear();
+  }
+  keyframe_ = reference;
+  T_w_kf_ = tracker_.T_w_c();
+  pending_keyframe_seq_ = -1;
+  pending_keyframe_covariance_.reset();
+  keyframe_first_rows_ = 0;
+  ++keyframe_count_;
+  pending_fusion_ = PendingFusion{};
+  // The map's features in the new keyframe, the relative pose's uncertainty added to each.
+  map_points_.clear();
+  map_lines_.clear();
+  std::vector<int> point_rows, line_rows;
+  std::vector<const cv::Mat*> point_desc, line_desc;
+  map_point_descriptors_ = cv::Mat();
+  map_line_descriptors_ = cv::Mat();
+  for (const MapKeyframe& e : map_) {
+    const Eigen::Matrix3d R = e.T_kf_this.linear();
+    const Eigen::Vector3d q_xyz = poseToXi(e.T_kf_this).tail<3>();
+    auto moved = [&](const Eigen::Vector3d& p, const Eigen::Matrix3d& cov, Eigen::Vector3d* p_out,
+                     Eigen::Matrix3d* cov_out) {
+      Eigen::Matrix<double, 3, 6> J;
+      J.leftCols<3>().setIdentity();
+      J.rightCols<3>() = rotatedPointJacobian(q_xyz, p);
+      *p_out = e.T_kf_this * p;
+      *cov_out = R * cov * R.transpose() + J * e.covariance * J.transpose();
+    };
+    for (size_t i = 0; i < e.features.points.size(); ++i) {
+      PointFeature f = e.features.points[i];
+      if (!f.has_3d || static_cast<int>(i) >= e.features.point_descriptors.rows) continue;
+      moved(f.point.p, f.point.cov, &f.point.p, &f.point.cov);
+      map_points_.push_back(f);
+      map_point_descriptors_.push_back(e.features.point_descriptors.row(static_cast<int>(i)));
+    }
+    if (!options_.predict_line_positions) continue;  // old 2D lines say nothing here
+    for (size_t i = 0; i < e.features.lines.size(); ++i) {
+      LineFeature l = e.features.lines[i];
+      if (!l.has_3d || static_cast<int>(i) >= e.features.line_descriptors.rows) continue;
+      moved(l.line.p1, l.line.cov1, &l.line.p1, &l.line.cov1);
+      moved(l.line.p2, l.line.cov2, &l.line.p2, &l.line.cov2);
+      map_lines_.push_back(l);
+      map_line_descriptors_.push_back(e.features.line_descriptors.row(static_cast<int>(i)));
+    }
+  }
+}
+
+FrameFeatures FrameOdometry::localMap() const {
+  FrameFeatures map = *keyframe_;
+  if (!map_points_.empty() && map.point_descriptors.type() == map_point_descriptors_.type() &&
+      map.point_descriptors.cols == map_point_descriptors_.cols) {
+    map.points.insert(map.points.end(), map_points_.begin(), map_points_.end());
+    cv::vconcat(keyframe_->point_descriptors, map_point_descriptors_, map.point_descriptors);
+  }
+  if (!map_lines_.empty() && map.line_descriptors.type() == map_line_descriptors_.type() &&
+      map.line_descriptors.cols == map_line_descriptors_.cols) {
+    map.lines.insert(map.lines.end(), map_lines_.begin(), map_lines_.end());
+    cv::vconcat(keyframe_->line_descriptors, map_line_descriptors_, map.line_descriptors);
+  }
+  return map;
+}
+
+void FrameOdometry::fuseIntoKeyframe(const FrameFeatures& observed) {
+  std::vector<PointFeature>& landmarks = keyframe_->points;
+  const Pose3& T = pending_fusion_.T_kf_frame;
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d q_xyz = poseToXi(T).tail<3>();
+  for (const auto& [i, j] : pending_fusion_.points) {
+    if (i < 0 || j < 0 || i >= static_cast<int>(landmarks.size()) ||
+        j >= static_cast<int>(observed.points.size())) {
+      continue;
+    }
+    PointFeature& landmark = landmarks[i];
+    const PointFeature& seen = observed.points[j];
+    if (!landmark.has_3d || !seen.has_3d) continue;
+    // The observation in the keyframe, with the pose's uncertainty (first order in xi).
+    const Eigen::Vector3d p = T * seen.point.p;
+    Eigen::Matrix<double, 3, 6> J;
+    J.leftCols<3>().setIdentity();
+    J.rightCols<3>() = rotatedPointJacobian(q_xyz, seen.point.p);
+    const Eigen::Matrix3d C =
+        R * seen.point.cov * R.transpose() + J * pending_fusion_.covariance * J.transpose();
+    const Eigen::Vector3d d = p - landmark.point.p;
+    const Eigen::Matrix3d S = landmark.point.cov + C;
+    const Eigen::LDLT<Eigen::Matrix3d> S_ldlt(S);
+    if (S_ldlt.info() != Eigen::Success || !(S_ldlt.vectorD().minCoeff() > 0)) continue;
+    const double chi2 = d.dot(S_ldlt.solve(d));
+    if (!(chi2 < options_.keyframe.fusion_gate_chi2)) continue;
+    // Information-weighted mean, in the update form that needs only S^-1:
+    // p' = p_L + C_L S^-1 d, C' = C_L - C_L S^-1 C_L.
+    const Eigen::Matrix3d K = S_ldlt.solve(landmark.point.cov).transpose();
+    const Eigen::Vector3d fused_p = landmark.point.p + K * d;
+    Eigen::Matrix3d fused_cov = landmark.point.cov - K * landmark.point.cov;
+    fused_cov = 0.5 * (fused_cov + fused_cov.transpose());
+    if (!fused_p.allFinite() || !fused_cov.allFinite()) continue;
+    landmark.point.p = fused_p;
+    landmark.point.cov = fused_cov;
+  }
+}
+
+KeyframeReason FrameOdometry::keyframeExhausted(const PoseEstimate& against_keyframe,
+                                                const Pose3& T_curr_kf) {
+  const KeyframeOptions& k = options_.keyframe;
+  if (against_keyframe.n_residuals < k.min_inlier_fraction * keyframe_first_rows_) {
+    return KeyframeReason::kOverlap;
+  }
+  if (against_keyframe.max_translation_variance_m2 >
+          k.max_variance_growth * keyframe_first_var_t_ ||
+      against_keyframe.max_rotation_variance > k.max_variance_growth * keyframe_first_var_q_) {
+    return KeyframeReason::kUncertainty;
+  }
+  const double angle_deg = Eigen::AngleAxisd(T_curr_kf.linear()).angle() * 180.0 / M_PI;
+  if (T_curr_kf.translation().norm() > k.max_translation_m || angle_deg > k.max_rotation_deg) {
+    return KeyframeReason::kMotion;
+  }
+  return KeyframeReason::kNone;
 }
 
 }  // namespace pplvo::pipeline

@@ -128,6 +128,15 @@ struct EnumText<LineFitOptions::Weighting> {
   static const char* choices() { return "residual_covariance, paper_scalar"; }
 };
 
+template <>
+struct EnumText<TrackingReference> {
+  static bool parse(const std::string& s, TrackingReference* out) {
+    return parseTrackingReference(s, out);
+  }
+  static std::string name(TrackingReference r) { return toString(r); }
+  static const char* choices() { return "frame, keyframe"; }
+};
+
 std::string toText(bool b) { return b ? "true" : "false"; }
 std::string toText(int i) { return std::to_string(i); }
 std::string toText(uint64_t i) { return std::to_string(i); }
@@ -322,8 +331,8 @@ void listFields(V& v, features::LineExtractorOptions& o) {
           "compute LBD on the full-resolution image");
   v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)", atLeast(0));
   v.field("max_lines", o.max_lines, "segments kept per frame, longest first", atLeast(1));
-  v.field("lsd_refine", o.lsd_refine, "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)",
-          between(0, 2));
+  v.field("lsd_refine", o.lsd_refine,
+          "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)", between(0, 2));
   v.field("lbd_band_width", o.lbd_band_width, "LBD band width (rows per band, LBD's 7)",
           between(1, 64));
   v.field("lbd_octaves", o.lbd_octaves,
@@ -433,8 +442,8 @@ void listFields(V& v, geometry::LiftOptions& o) {
           "a line sample on a depth step (depths this far to either side of the segment differ "
           "by more than line_max_depth_step) takes the nearer side's depth (px; 0 disables)",
           atLeast(0));
-  v.field("line_max_depth_step", o.line_max_depth_step,
-          "that depth step, as max/min - 1", atLeast(0));
+  v.field("line_max_depth_step", o.line_max_depth_step, "that depth step, as max/min - 1",
+          atLeast(0));
   v.field("max_line_samples", o.max_line_samples,
           "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)", atLeast(2));
   v.field("line_ransac_threshold_m", o.line_ransac_threshold_m,
@@ -578,7 +587,38 @@ void listFields(V& v, geometry::PlaneMatchOptions& o) {
 }
 
 template <class V>
+void listFields(V& v, KeyframeOptions& o) {
+  v.field("min_inlier_fraction", o.min_inlier_fraction,
+          "new keyframe when the inlier rows against it fall below this fraction of the first "
+          "frame's (feature overlap)",
+          between(0, 1));
+  v.field("max_variance_growth", o.max_variance_growth,
+          "new keyframe when the pose variance relative to it grows beyond this factor of the "
+          "first frame's (largest eigenvalue, translation or rotation block)",
+          atLeast(1));
+  v.field("max_translation_m", o.max_translation_m, "new keyframe beyond this translation (m)",
+          positive());
+  v.field("max_rotation_deg", o.max_rotation_deg, "new keyframe beyond this rotation (deg)",
+          openClosed(0, 180));
+  v.field("fuse_landmarks", o.fuse_landmarks,
+          "refine the keyframe's 3D points with every frame tracked against it (information "
+          "weighting, chi-square gate)");
+  v.field("local_map_keyframes", o.local_map_keyframes,
+          "earlier keyframes whose 3D points and lines are matched with the active one's "
+          "(0: the active keyframe alone)",
+          between(0, 10));
+  v.field("fusion_gate_chi2", o.fusion_gate_chi2,
+          "gate on the squared Mahalanobis distance of an observation (3 dof; 7.81 = 95 %)",
+          positive());
+}
+
+template <class V>
 void listFields(V& v, FrameOdometryOptions& o) {
+  v.field("reference", o.reference,
+          "what a frame is tracked against: frame (the previous one, as in the paper) or "
+          "keyframe (the active keyframe, the previous frame as fallback; docs/estimator.md)");
+  v.section("keyframe", "When a new keyframe is taken (reference: keyframe)",
+            [&] { listFields(v, o.keyframe); });
   v.section("tracker", "Frame-to-frame tracking, pose estimation and window uncertainty",
             [&] { listFields(v, o.tracker); });
   v.section("point_matching", "Point matching (Sec. 4.5)",
@@ -590,6 +630,8 @@ void listFields(V& v, FrameOdometryOptions& o) {
           "gate points around their position predicted by the constant-velocity model");
   v.field("predict_plane_positions", o.predict_plane_positions,
           "move the previous planes by the predicted motion before the plane gate");
+  v.field("predict_line_positions", o.predict_line_positions,
+          "gate lines around the projection of their 3D segment under the predicted motion");
 }
 
 /// The whole file. `families` stands for frontend.families and estimator.use_* together.

@@ -1,7 +1,11 @@
 // pplvo-eval GT EST [--fps F] [--max-difference 0.02] [--delta 1] [--plot-data FILE] [--json]
 // ATE and RPE (1 s fixed delta) exactly as the TUM RGB-D benchmark scripts define them.
+// pplvo-eval --nees GT COV|LOG [--fps F] [--gt-sigma-t-m S] [--gt-sigma-rot-deg S]
+// [--stamp-sigma-s S] [--exact-gt] [--nees-data FILE] [--json]: consistency of the published
+// relative-pose covariances (NEES).
 // Exit status: 0 when both figures were computed, 2 on any error (usage, unreadable file,
 // too few pose pairs). See docs/evaluation.md.
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <exception>
@@ -10,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/eval/nees.h"
+#include "pplvo/eval/pose_records.h"
 #include "pplvo/eval/report.h"
 #include "pplvo/eval/tum_file.h"
 
@@ -25,7 +31,112 @@ const char* kUsage =
     "  --max-difference S ATE association tolerance in seconds (default 0.02)\n"
     "  --delta S          RPE fixed delta in seconds (default 1)\n"
     "  --plot-data FILE   write per-pair ATE and RPE errors to FILE\n"
-    "  --json             print one JSON object instead of 'key value' lines\n";
+    "  --json             print one JSON object instead of 'key value' lines\n"
+    "usage: pplvo-eval --nees GT EST [--fps F] [ground-truth noise options] [--nees-data FILE]\n"
+    "                  [--json]\n"
+    "  EST                a covariance file (pplvo-run --covariance) or an LCM event log\n"
+    "                     (pplvo-run --log, pplvo-logger) whose PPLVO_POSE messages are read\n"
+    "  --gt-sigma-t-m S   white noise of each ground-truth position, per axis (m; default:\n"
+    "                     estimated from the ground truth's third differences)\n"
+    "  --gt-sigma-rot-deg S  of each ground-truth orientation, per axis (deg; same default)\n"
+    "  --stamp-sigma-s S  error of each frame stamp (default 0.002 s)\n"
+    "  --exact-gt         all three 0 (ICL-NUIM, synthetic sequences)\n"
+    "  --no-velocity-model  leave frames posed by the velocity model out\n"
+    "  --nees-data FILE   per-pair NEES for pplvo-plot --nees\n";
+
+bool parseNonNegative(const std::string& text, double* value) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v) || v < 0.0) return false;
+  *value = v;
+  return true;
+}
+
+/// Which ground-truth noise figures are estimated from the ground truth itself.
+struct GtNoiseSource {
+  bool sigma_t_from_data = true, sigma_rot_from_data = true;
+};
+
+int runNees(const std::string& gt_path, const std::string& est_path,
+            pplvo::eval::NeesOptions options, const GtNoiseSource& source, double fps,
+            const std::string& data_path, bool json) {
+  pplvo::eval::TumReadOptions read_options;
+  read_options.fps = fps;
+  const auto gt = pplvo::eval::readTumFile(gt_path, read_options);
+  if (!gt.ok) {
+    std::cerr << "pplvo-eval: ground truth: " << gt.error << '\n';
+    return kExitError;
+  }
+  if (source.sigma_t_from_data || source.sigma_rot_from_data) {
+    const pplvo::eval::GtJitter j = pplvo::eval::estimateGtJitter(gt.file);
+    if (!j.ok) {
+      std::cerr << "pplvo-eval: too few ground-truth samples to estimate their noise: give "
+                   "--gt-sigma-t-m and --gt-sigma-rot-deg\n";
+      return kExitError;
+    }
+    if (source.sigma_t_from_data) options.gt.sigma_t_m = j.sigma_t_m;
+    if (source.sigma_rot_from_data) options.gt.sigma_rot_rad = j.sigma_rot_rad;
+    std::cout << "# ground-truth white noise estimated from its samples (third differences): "
+              << j.sigma_t_m * 1e3 << " mm, " << j.sigma_rot_rad * 180 / M_PI
+              << " deg per axis (RMS over axes)\n";
+  }
+  std::vector<pplvo::eval::RelativePoseRecord> records;
+  if (pplvo::eval::isLcmEventLog(est_path)) {
+    const pplvo::eval::PoseLogReadResult log = pplvo::eval::readPoseLog(est_path);
+    if (!log.ok) {
+      std::cerr << "pplvo-eval: " << log.error << '\n';
+      return kExitError;
+    }
+    if (log.truncated) std::cout << "# " << est_path << " ends with an incomplete event\n";
+    if (log.invalid_messages > 0) {
+      std::cout << "# " << log.invalid_messages << " invalid pose messages skipped\n";
+    }
+    std::cout << "# " << log.poses.size() << " poses read from the event log\n";
+    // Internal consistency without ground truth: 2 * final cost / (residual rows - 6) is the
+    // reduced chi-square of the whitened residuals (about 1 when the per-measurement noise
+    // model is right; Tukey weights lower it, the planes' alpha too).
+    std::vector<double> reduced, matches;
+    for (const pplvo::FramePose& p : log.poses) {
+      if (p.status != pplvo::TrackingStatus::kTracking) continue;
+      const int rows = 2 * (p.n_point_matches + p.n_line_matches) + 3 * p.n_plane_matches;
+      if (rows <= 6) continue;
+      reduced.push_back(2.0 * p.final_cost / (rows - 6));
+      matches.push_back(p.n_point_matches + p.n_line_matches + p.n_plane_matches);
+    }
+    if (!reduced.empty()) {
+      std::sort(reduced.begin(), reduced.end());
+      std::sort(matches.begin(), matches.end());
+      std::cout << "residuals.reduced_chi2_median " << reduced[reduced.size() / 2] << "\n"
+                << "residuals.matches_median " << matches[matches.size() / 2] << "\n";
+    }
+    records = pplvo::eval::relativePoseRecords(log.poses, fps);
+  } else {
+    const auto file = pplvo::eval::readRelativePoseFile(est_path, fps);
+    if (!file.ok) {
+      std::cerr << "pplvo-eval: estimate: " << file.error << '\n';
+      return kExitError;
+    }
+    records = file.records;
+  }
+  const pplvo::eval::NeesResult r = pplvo::eval::evaluateNees(gt.file, records, options);
+  std::cout << "# nees: gt '" << gt_path << "' est '" << est_path << "'\n";
+  std::cout << (json ? pplvo::eval::formatNeesJson(r) : pplvo::eval::formatNeesText(r));
+  std::cout.flush();
+  if (!r.ok) {
+    std::cerr << "pplvo-eval: NEES: " << r.error << '\n';
+    return kExitError;
+  }
+  if (!data_path.empty()) {
+    std::ofstream out(data_path);
+    out << pplvo::eval::formatNeesData(r);
+    out.flush();
+    if (!out) {
+      std::cerr << "pplvo-eval: cannot write NEES data to '" << data_path << "'\n";
+      return kExitError;
+    }
+  }
+  return 0;
+}
 
 bool parsePositive(const std::string& text, double* value) {
   char* end = nullptr;
@@ -38,8 +149,10 @@ bool parsePositive(const std::string& text, double* value) {
 int run(int argc, char** argv) {
   std::vector<std::string> positional;
   pplvo::eval::EvalOptions options;
-  std::string plot_path;
-  bool json = false;
+  std::string plot_path, nees_data_path;
+  bool json = false, nees = false;
+  pplvo::eval::NeesOptions nees_options;
+  bool t_given = false, rot_given = false, exact_gt = false;
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
     auto needValue = [&](double* target) {
@@ -71,6 +184,31 @@ int run(int argc, char** argv) {
       plot_path = argv[++k];
     } else if (arg == "--json") {
       json = true;
+    } else if (arg == "--nees") {
+      nees = true;
+    } else if (arg == "--exact-gt") {
+      nees_options.gt = {0.0, 0.0, 0.0};
+      exact_gt = true;
+    } else if (arg == "--no-velocity-model") {
+      nees_options.include_velocity_model = false;
+    } else if (arg == "--gt-sigma-t-m" || arg == "--gt-sigma-rot-deg" || arg == "--stamp-sigma-s") {
+      double v = 0.0;
+      if (k + 1 >= argc || !parseNonNegative(argv[k + 1], &v)) {
+        std::cerr << "pplvo-eval: " << arg << " needs a number >= 0\n";
+        return kExitError;
+      }
+      ++k;
+      t_given = t_given || arg == "--gt-sigma-t-m";
+      rot_given = rot_given || arg == "--gt-sigma-rot-deg";
+      if (arg == "--gt-sigma-t-m") nees_options.gt.sigma_t_m = v;
+      if (arg == "--gt-sigma-rot-deg") nees_options.gt.sigma_rot_rad = v * M_PI / 180.0;
+      if (arg == "--stamp-sigma-s") nees_options.gt.sigma_stamp_s = v;
+    } else if (arg == "--nees-data") {
+      if (k + 1 >= argc) {
+        std::cerr << "pplvo-eval: --nees-data needs a file name\n";
+        return kExitError;
+      }
+      nees_data_path = argv[++k];
     } else if (arg.size() > 1 && arg[0] == '-') {
       std::cerr << "pplvo-eval: unknown option '" << arg << "'\n" << kUsage;
       return kExitError;
@@ -82,6 +220,15 @@ int run(int argc, char** argv) {
     std::cerr << "pplvo-eval: expected two files (GT EST), got " << positional.size() << "\n"
               << kUsage;
     return kExitError;
+  }
+  if (nees) {
+    if (exact_gt && (t_given || rot_given)) {
+      std::cerr << "pplvo-eval: --exact-gt and --gt-sigma-* exclude each other\n";
+      return kExitError;
+    }
+    const GtNoiseSource source{!exact_gt && !t_given, !exact_gt && !rot_given};
+    return runNees(positional[0], positional[1], nees_options, source, options.fps, nees_data_path,
+                   json);
   }
   pplvo::eval::TumReadOptions read_options;
   read_options.fps = options.fps;

@@ -19,12 +19,18 @@ void usage(std::ostream& out) {
          "                           [--method rgbd|icp|rgbd_icp] [--max-frames N]\n"
          "                           [--failure hold|constant_velocity] [--signed-camera]\n"
          "                           [--max-points-part F] [--max-depth M]\n"
+         "                           [--keyframes [--keyframe-translation M]\n"
+         "                            [--keyframe-rotation DEG]]\n"
          "  Runs OpenCV contrib's cv::rgbd odometry (default rgbd) on a TUM-layout folder and\n"
          "  writes camera-to-world poses (world = first camera) with the dataset's stamps.\n"
          "  --signed-camera passes a mirrored camera matrix (fy < 0) to OpenCV unchanged\n"
          "  instead of flipping the images (for comparison only).\n"
          "  --max-points-part: fraction of valid pixels OpenCV samples (default 0.07);\n"
          "  --max-depth: depths at or beyond this are ignored, metres (default 4).\n"
+         "  --keyframes: register each frame to a keyframe instead of the previous frame;\n"
+         "  a frame becomes the keyframe when its motion from the keyframe passes\n"
+         "  --keyframe-translation (default 0.10 m) or --keyframe-rotation (default 10 deg),\n"
+         "  or when only the previous frame could track it.\n"
          "exit codes: 0 ok, 1 dataset or output error, 2 bad arguments\n";
 }
 
@@ -52,6 +58,7 @@ int main(int argc, char** argv) {
   std::string dataset_dir, output;
   long max_frames = -1;
   peer::PeerOdometryOptions options;
+  bool keyframe_threshold_given = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](std::string* out) {
@@ -105,6 +112,18 @@ int main(int argc, char** argv) {
         return 2;
       }
       (part ? options.max_points_part : options.max_depth_m) = static_cast<float>(x);
+    } else if (a == "--keyframe-translation" || a == "--keyframe-rotation") {
+      if (!value(&v)) return 2;
+      double x = 0;
+      if (!parseDouble(v, &x) || x < 0) {
+        std::cerr << "pplvo-peer-odometry: " << a << " needs a number >= 0, got '" << v << "'\n";
+        return 2;
+      }
+      (a == "--keyframe-translation" ? options.keyframe_translation_m
+                                     : options.keyframe_rotation_deg) = x;
+      keyframe_threshold_given = true;
+    } else if (a == "--keyframes") {
+      options.reference_mode = peer::ReferenceMode::kKeyframe;
     } else if (a == "--signed-camera") {
       options.mirror_handling = peer::MirrorHandling::kSignedMatrix;
     } else {
@@ -112,6 +131,11 @@ int main(int argc, char** argv) {
       usage(std::cerr);
       return 2;
     }
+  }
+  if (keyframe_threshold_given && options.reference_mode != peer::ReferenceMode::kKeyframe) {
+    std::cerr << "pplvo-peer-odometry: --keyframe-translation and --keyframe-rotation need "
+                 "--keyframes\n";
+    return 2;
   }
   if (dataset_dir.empty() || output.empty()) {
     std::cerr << "pplvo-peer-odometry: --dataset and --output are required\n";
@@ -136,6 +160,13 @@ int main(int argc, char** argv) {
               << (options.mirror_handling == peer::MirrorHandling::kFlipImage ? "flip images"
                                                                               : "signed matrix")
               << ")\n";
+    if (options.reference_mode == peer::ReferenceMode::kKeyframe) {
+      std::cout << "reference: keyframe (new keyframe beyond " << options.keyframe_translation_m
+                << " m or " << options.keyframe_rotation_deg
+                << " deg from it, or after a fallback to the previous frame)\n";
+    } else {
+      std::cout << "reference: previous frame\n";
+    }
 
     size_t n = data.size();
     if (max_frames > 0 && static_cast<size_t>(max_frames) < n) n = static_cast<size_t>(max_frames);
@@ -178,6 +209,13 @@ int main(int argc, char** argv) {
         static_cast<long long>(s.not_converged), static_cast<long long>(s.bad_input),
         static_cast<long long>(s.opencv_errors), static_cast<long long>(s.reference_resets),
         static_cast<long long>(load_failures));
+    if (options.reference_mode == peer::ReferenceMode::kKeyframe) {
+      std::printf(
+          "keyframes: %lld (%lld by motion, %lld after a fallback to the previous frame, the "
+          "rest first frame or reference resets)\n",
+          static_cast<long long>(s.keyframes), static_cast<long long>(s.keyframes_by_motion),
+          static_cast<long long>(s.keyframe_fallbacks));
+    }
     if (load_failures > 0) std::printf("first unreadable frame: %s\n", first_load_error.c_str());
     const double mean_ms = s.meanMs();
     std::printf("time per frame: mean %.2f ms, max %.2f ms; %.1f frames/s (odometry only)\n",

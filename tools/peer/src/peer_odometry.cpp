@@ -52,6 +52,16 @@ const char* statusName(PeerStatus status) {
   return "?";
 }
 
+const char* referenceModeName(ReferenceMode mode) {
+  switch (mode) {
+    case ReferenceMode::kPreviousFrame:
+      return "previous_frame";
+    case ReferenceMode::kKeyframe:
+      return "keyframe";
+  }
+  return "?";
+}
+
 PinholeCamera unmirroredCamera(const PinholeCamera& camera, int* flip_code) {
   PinholeCamera c = camera;
   const bool flip_x = camera.fx < 0;
@@ -113,6 +123,13 @@ struct PeerOdometry::Impl {
   Pose3 T_prev_curr = Pose3::Identity();  ///< last estimated motion per frame (T_{k-1}_k)
   Pose3 T_w_last = Pose3::Identity();     ///< pose output for the last frame
 
+  // ReferenceMode::kKeyframe only; `reference` above is then the last tracked frame (the
+  // fallback), which may be the keyframe itself.
+  cv::Ptr<cv::rgbd::OdometryFrame> keyframe;
+  int64_t keyframe_seq = -1;
+  Pose3 T_w_kf = Pose3::Identity();
+  Pose3 T_kf_ref = Pose3::Identity();  ///< the last tracked frame relative to the keyframe
+
   void build(const PeerOdometryOptions& o, const PinholeCamera& cam) {
     camera = cam;
     PinholeCamera used = cam;
@@ -158,6 +175,104 @@ struct PeerOdometry::Impl {
     reference_seq = -1;
     frames_since_reference = 0;
     consecutive_failures = 0;
+    keyframe.release();
+    keyframe_seq = -1;
+  }
+
+  /// Makes `frame` (tracked, or starting/restarting the sequence, at T_w_frame) the reference:
+  /// the frame registered to next (kPreviousFrame), the fallback (kKeyframe).
+  void setReference(const cv::Ptr<cv::rgbd::OdometryFrame>& frame, int64_t seq,
+                    const Pose3& T_w_frame) {
+    reference = frame;
+    reference_seq = seq;
+    T_w_ref = T_w_frame;
+    frames_since_reference = 0;
+    consecutive_failures = 0;
+  }
+
+  void setKeyframe(const cv::Ptr<cv::rgbd::OdometryFrame>& frame, int64_t seq,
+                   const Pose3& T_w_frame, PeerStats* stats) {
+    keyframe = frame;
+    keyframe_seq = seq;
+    T_w_kf = T_w_frame;
+    T_kf_ref = Pose3::Identity();
+    ++stats->keyframes;
+  }
+
+  /// OpenCV's registration of `target` to `source` from the initial guess T_source_target;
+  /// returns T_source_target, or nothing (with r->status and r->message set) on failure.
+  /// (OpenCV prepares the frames' pyramids in place, hence the non-const frames.)
+  bool registerTo(cv::Ptr<cv::rgbd::OdometryFrame>& source,
+                  cv::Ptr<cv::rgbd::OdometryFrame>& target, const Pose3& T_src_tgt_guess,
+                  Pose3* T_src_tgt, PeerFrameResult* r) {
+    // OpenCV's Rt maps source points into the target frame: Rt = T_tgt_src.
+    cv::Mat Rt;
+    if (!odometry->compute(source, target, Rt, poseToMat(T_src_tgt_guess.inverse()))) {
+      r->status = PeerStatus::kNotConverged;
+      r->message = "OpenCV odometry did not converge or the motion exceeded its limits";
+      return false;
+    }
+    *T_src_tgt = matToPose(Rt).inverse();
+    if (!T_src_tgt->matrix().allFinite()) {
+      r->status = PeerStatus::kNotConverged;
+      r->message = "non-finite motion";
+      return false;
+    }
+    return true;
+  }
+
+  /// ReferenceMode::kKeyframe, a frame with enough depth: registers `current` to the keyframe
+  /// and, if that fails, to the last tracked frame. True when either succeeded: r holds the
+  /// pose and the state has moved on (keyframe switched if the rule says so). False: r holds
+  /// the failure, the state is unchanged.
+  bool trackAgainstKeyframe(const PeerOdometryOptions& o, cv::Ptr<cv::rgbd::OdometryFrame>& current,
+                            int64_t seq, PeerFrameResult* r, PeerStats* stats) {
+    const int steps = frames_since_reference + 1;
+    // Motion expected since the last tracked frame (identity without the prior).
+    const Pose3 T_ref_pred =
+        o.use_motion_prior && has_motion ? scaledMotion(T_prev_curr, steps) : Pose3::Identity();
+    Pose3 T_kf_c;
+    if (registerTo(keyframe, current, T_kf_ref * T_ref_pred, &T_kf_c, r)) {
+      // With the keyframe as the last tracked frame this is T_kf_c itself, so that zero
+      // thresholds give exactly the frame-to-frame poses.
+      const Pose3 T_ref_c = keyframe_seq == reference_seq ? T_kf_c : T_kf_ref.inverse() * T_kf_c;
+      r->status = PeerStatus::kOk;
+      r->message.clear();
+      r->reference_seq = keyframe_seq;
+      r->T_ref_c = T_kf_c;
+      r->T_w_c = T_w_kf * T_kf_c;
+      T_prev_curr = scaledMotion(T_ref_c, 1.0 / steps);
+      has_motion = true;
+      setReference(current, seq, r->T_w_c);
+      T_kf_ref = T_kf_c;
+      // The keyframe rule: the motion from the keyframe passes either threshold.
+      if (T_kf_c.translation().norm() > o.keyframe_translation_m ||
+          rotationAngle(T_kf_c.linear()) * 180.0 / M_PI > o.keyframe_rotation_deg) {
+        setKeyframe(current, seq, r->T_w_c, stats);
+        ++stats->keyframes_by_motion;
+        r->new_keyframe = true;
+      }
+      return true;
+    }
+    if (reference_seq == keyframe_seq) return false;  // the fallback would repeat the same call
+    Pose3 T_ref_c;
+    if (!registerTo(reference, current, T_ref_pred, &T_ref_c, r)) {
+      r->message = "keyframe and previous frame: " + r->message;
+      return false;
+    }
+    r->status = PeerStatus::kOk;
+    r->message.clear();
+    r->reference_seq = reference_seq;
+    r->T_ref_c = T_ref_c;
+    r->T_w_c = T_w_ref * T_ref_c;
+    r->fell_back = true;
+    r->new_keyframe = true;
+    T_prev_curr = scaledMotion(T_ref_c, 1.0 / steps);
+    has_motion = true;
+    setReference(current, seq, r->T_w_c);
+    setKeyframe(current, seq, r->T_w_c, stats);
+    ++stats->keyframe_fallbacks;
+    return true;
   }
 };
 
@@ -290,23 +405,26 @@ PeerFrameResult PeerOdometry::process(const RgbdFrame& frame) {
         return finish(r);
       }
       s.has_reference = true;
-      s.reference = current;
-      s.reference_seq = frame.seq;
-      s.T_w_ref = stats_.frames == 0 ? Pose3::Identity() : s.T_w_last;
-      s.frames_since_reference = 0;
-      s.consecutive_failures = 0;
+      s.setReference(current, frame.seq, stats_.frames == 0 ? Pose3::Identity() : s.T_w_last);
+      if (o.reference_mode == ReferenceMode::kKeyframe) {
+        s.setKeyframe(current, frame.seq, s.T_w_ref, &stats_);
+        r.new_keyframe = true;
+      }
       r.status = PeerStatus::kFirst;
       r.T_w_c = s.T_w_ref;
       r.reference_seq = frame.seq;
       return finish(r);
     }
 
-    r.reference_seq = s.reference_seq;
+    r.reference_seq =
+        o.reference_mode == ReferenceMode::kKeyframe ? s.keyframe_seq : s.reference_seq;
     bool ok = false;
     Pose3 T_ref_c = Pose3::Identity();
     if (!enough_depth) {
       r.status = PeerStatus::kNoDepth;
       r.message = "too few valid depth pixels";
+    } else if (o.reference_mode == ReferenceMode::kKeyframe) {
+      if (s.trackAgainstKeyframe(o, current, frame.seq, &r, &stats_)) return finish(r);
     } else {
       const int steps = s.frames_since_reference + 1;
       cv::Mat init;
@@ -334,22 +452,18 @@ PeerFrameResult PeerOdometry::process(const RgbdFrame& frame) {
         r.T_w_c = s.T_w_ref * T_ref_c;
         s.T_prev_curr = scaledMotion(T_ref_c, 1.0 / steps);
         s.has_motion = true;
-        s.reference = current;
-        s.reference_seq = frame.seq;
-        s.T_w_ref = r.T_w_c;
-        s.frames_since_reference = 0;
-        s.consecutive_failures = 0;
+        s.setReference(current, frame.seq, r.T_w_c);
         return finish(r);
       }
     }
     // Failure: keep the reference unless it has failed too often.
     PeerFrameResult res = finish(r);
     if (s.consecutive_failures >= o.max_consecutive_failures && enough_depth) {
-      s.reference = current;
-      s.reference_seq = frame.seq;
-      s.T_w_ref = res.T_w_c;
-      s.frames_since_reference = 0;
-      s.consecutive_failures = 0;
+      s.setReference(current, frame.seq, res.T_w_c);
+      if (o.reference_mode == ReferenceMode::kKeyframe) {
+        s.setKeyframe(current, frame.seq, res.T_w_c, &stats_);
+        res.new_keyframe = true;
+      }
       ++stats_.reference_resets;
     }
     return res;

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <map>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -12,16 +13,19 @@
 
 namespace pplvo::peer::test {
 
-inline synth::SynthOptions synthOptions(double fy, int frames) {
+/// trajectory_scale 0 gives a camera that stays put (with independent sensor noise per frame).
+inline synth::SynthOptions synthOptions(double fy, int frames, double trajectory_scale = 1.0) {
   synth::SynthOptions o;
   o.scene = "room";
   o.frames = frames;
   o.seed = 3;
   o.fy = fy;  // cy stays 239.5, the image centre, so a mirrored render sees the same scene
+  o.trajectory_scale = trajectory_scale;
   return o;
 }
 
-/// Rendered frames of one sequence, cached per (fy, frames): rendering is the slow part.
+/// Rendered frames of one sequence, cached per (fy, frames, trajectory_scale): rendering is the
+/// slow part.
 /// Tests must not write into these buffers (assign new cv::Mats instead).
 struct Rendered {
   std::vector<RgbdFrame> frames;  ///< noisy sensor frames
@@ -29,12 +33,12 @@ struct Rendered {
   std::vector<Pose3> T_w_c;  ///< ground truth, world = the synthetic room
 };
 
-inline const Rendered& rendered(double fy, int frames) {
-  static std::map<std::pair<double, int>, Rendered> cache;
-  const auto key = std::make_pair(fy, frames);
+inline const Rendered& rendered(double fy, int frames, double trajectory_scale = 1.0) {
+  static std::map<std::tuple<double, int, double>, Rendered> cache;
+  const auto key = std::make_tuple(fy, frames, trajectory_scale);
   auto it = cache.find(key);
   if (it != cache.end()) return it->second;
-  const synth::SyntheticSequence seq(synthOptions(fy, frames));
+  const synth::SyntheticSequence seq(synthOptions(fy, frames, trajectory_scale));
   Rendered r;
   for (int i = 0; i < seq.size(); ++i) {
     synth::SynthFrame f = seq.render(i);

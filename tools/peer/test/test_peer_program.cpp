@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -102,6 +103,48 @@ TEST_F(PeerProgram, WritesTheTrajectoryWithVerbatimStamps) {
   }
 }
 
+TEST_F(PeerProgram, KeyframeModeWritesTheLibrarysPosesAndCountsKeyframes) {
+  // Thresholds of 1 cm: the 12 frames (about 3 mm apart) make a few keyframes.
+  const fs::path traj = *tmp_ / "keyframes.txt";
+  const ProgramRun r =
+      runProgram("--dataset '" + (*tmp_ / "seq").string() + "' --output '" + traj.string() +
+                     "' --keyframes --keyframe-translation 0.01 "
+                     "--keyframe-rotation 5",
+                 *tmp_);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("reference: keyframe (new keyframe beyond 0.01 m or 5 deg"),
+            std::string::npos)
+      << r.out;
+  const TrajectoryReadResult t = readTumTrajectory(traj.string());
+  ASSERT_EQ(t.poses.size(), 12u);
+  const dataset::Dataset data = dataset::Dataset::open((*tmp_ / "seq").string());
+  peer::PeerOdometryOptions o;
+  o.reference_mode = peer::ReferenceMode::kKeyframe;
+  o.keyframe_translation_m = 0.01;
+  o.keyframe_rotation_deg = 5.0;
+  peer::PeerOdometry odo(o);
+  for (size_t i = 0; i < 12; ++i) {
+    const peer::PeerFrameResult res = odo.process(data.loadFrame(i));
+    EXPECT_LT((res.T_w_c.translation() - t.poses[i].T_w_c.translation()).norm(), 1e-6) << i;
+    EXPECT_LT(rotationAngle(res.T_w_c.linear().transpose() * t.poses[i].T_w_c.linear()), 1e-6) << i;
+  }
+  const peer::PeerStats& s = odo.stats();
+  EXPECT_GE(s.keyframes, 2);
+  char line[160];
+  std::snprintf(line, sizeof line, "keyframes: %lld (%lld by motion, %lld after a fallback",
+                static_cast<long long>(s.keyframes), static_cast<long long>(s.keyframes_by_motion),
+                static_cast<long long>(s.keyframe_fallbacks));
+  EXPECT_NE(r.out.find(line), std::string::npos) << r.out;
+
+  // Frame to frame (the default) says so and prints no keyframe count.
+  const ProgramRun d = runProgram("--dataset '" + (*tmp_ / "seq").string() + "' --output '" +
+                                      (*tmp_ / "f2f.txt").string() + "' --max-frames 3",
+                                  *tmp_);
+  ASSERT_EQ(d.exit_code, 0) << d.out << d.err;
+  EXPECT_NE(d.out.find("reference: previous frame"), std::string::npos) << d.out;
+  EXPECT_EQ(d.out.find("keyframes:"), std::string::npos) << d.out;
+}
+
 TEST_F(PeerProgram, UnreadableFrameIsSkippedAndCounted) {
   // A copy of the folder with one corrupt depth PNG.
   const fs::path dir = *tmp_ / "corrupt";
@@ -165,6 +208,15 @@ TEST_F(PeerProgram, BadArgumentsExitWithTwo) {
   EXPECT_EQ(runProgram(ds + "--output x.txt --max-points-part 1.5", *tmp_).exit_code, 2);
   EXPECT_EQ(runProgram(ds + "--output x.txt --max-depth -1", *tmp_).exit_code, 2);
   EXPECT_EQ(runProgram(ds + "--output x.txt --failure sometimes", *tmp_).exit_code, 2);
+  EXPECT_EQ(
+      runProgram(ds + "--output x.txt --keyframes --keyframe-translation -0.1", *tmp_).exit_code,
+      2);
+  EXPECT_EQ(runProgram(ds + "--output x.txt --keyframes --keyframe-rotation ten", *tmp_).exit_code,
+            2);
+  EXPECT_EQ(runProgram(ds + "--output x.txt --keyframes --keyframe-rotation", *tmp_).exit_code, 2);
+  const ProgramRun k = runProgram(ds + "--output x.txt --keyframe-translation 0.2", *tmp_);
+  EXPECT_EQ(k.exit_code, 2);
+  EXPECT_NE(k.err.find("need --keyframes"), std::string::npos) << k.err;
   const ProgramRun r = runProgram(ds + "--output x.txt --method fast", *tmp_);
   EXPECT_NE(r.err.find("unknown --method"), std::string::npos) << r.err;
   EXPECT_EQ(runProgram("--help", *tmp_).exit_code, 0);

@@ -7,6 +7,7 @@
 
 #include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
+#include "pplvo/eval/pose_records.h"
 #include "pplvo/pipeline/pipeline_args.h"
 #include "pplvo/run/run_pipeline.h"
 
@@ -23,6 +24,8 @@ void usage() {
       "  --start N               first associated frame (0)\n"
       "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
       "  --skip-bad              skip (and count) corrupt frames instead of stopping\n"
+      "  --progress/--no-progress  progress line (frames, frames/s, ETA) on stderr (default:\n"
+      "                          when stderr is a terminal and not --quiet)\n"
       "  --in-flight N           frames published before the previous one's pose (2: the next\n"
       "                          frame's features are extracted while this one is fused;\n"
       "                          1: one frame at a time; same trajectory either way)\n"
@@ -30,6 +33,8 @@ void usage() {
       "                          camera); the throughput then leaves the decoding out\n"
       "  --summary FILE          write the run summary as YAML\n"
       "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
+      "  --covariance FILE       relative pose T_prev_curr and its 6x6 covariance per frame\n"
+      "                          (docs/evaluation.md; pplvo-eval --nees)\n"
       "  --quiet                 no summary on stdout\n%s",
       pplvo::pipeline::pipelineOptionsUsage());
 }
@@ -42,17 +47,21 @@ int main(int argc, char** argv) {
   run::RunOptions o;
   pipeline::PipelineArgs pa;
   bool quiet = false;
+  bool progress = false;
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   p.option("--dataset", &o.dataset_dir)
       .option("--output", &o.output)
       .option("--summary", &o.summary)
       .option("--log", &o.log)
+      .option("--covariance", &o.covariance)
       .option("--max-frames", &o.max_frames, int64_t{0})
       .option("--in-flight", &o.in_flight, 1, 1000)
       .option("--start", &o.start, int64_t{0})
       .option("--fps", &o.fps, 0.0)
       .flag("--skip-bad", &o.skip_bad)
+      .flag("--progress", &progress)
+      .flag("--no-progress", &progress, false)
       .flag("--preload", &o.preload)
       .flag("--quiet", &quiet);
   p.parse(argsFromArgv(argc, argv));
@@ -68,7 +77,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   // Outputs are checked before the first frame, not found unwritable after the whole run.
-  for (const std::string* path : {&o.output, &o.summary, &o.log}) {
+  for (const std::string* path : {&o.output, &o.summary, &o.log, &o.covariance}) {
     const std::string why = path->empty() ? "" : run::outputFileError(*path);
     if (!why.empty()) {
       std::fprintf(stderr, "pplvo-run: cannot write %s: %s\n", path->c_str(), why.c_str());
@@ -76,6 +85,9 @@ int main(int argc, char** argv) {
     }
   }
   o.progress = !quiet && isatty(STDERR_FILENO);
+  for (const std::string& a : argsFromArgv(argc, argv)) {
+    if (a == "--progress" || a == "--no-progress") o.progress = progress;  // explicit choice
+  }
   std::fprintf(stderr, "[pplvo-run] %s: features %s, depth model %s\n", o.dataset_dir.c_str(),
                pipeline::toString(o.pipeline.families()).c_str(),
                depth_filter::toString(o.pipeline.depth_filter.model));
@@ -90,6 +102,18 @@ int main(int argc, char** argv) {
                    r.trajectory.size());
     } catch (const std::exception& e) {
       std::fprintf(stderr, "pplvo-run: cannot write %s: %s\n", o.output.c_str(), e.what());
+      code = 1;
+    }
+  }
+  if (!o.covariance.empty()) {
+    std::ofstream out(o.covariance);
+    out << pplvo::eval::relativePoseFileHeader();
+    for (const auto& rec : pplvo::eval::relativePoseRecords(r.frame_poses, o.fps)) {
+      out << pplvo::eval::formatRelativePoseLine(rec);
+    }
+    out.flush();
+    if (!out) {
+      std::fprintf(stderr, "pplvo-run: cannot write %s\n", o.covariance.c_str());
       code = 1;
     }
   }

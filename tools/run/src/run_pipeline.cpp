@@ -34,6 +34,7 @@ class PoseCollector {
       s.stamp_text = p.stamp;
       s.T_w_c = p.T_w_c;
       result_.trajectory.push_back(s);
+      result_.frame_poses.push_back(p);
       ++result_.poses;
       switch (p.status) {
         case TrackingStatus::kFirstFrame:
@@ -111,6 +112,11 @@ std::string RunResult::text() const {
                 static_cast<long long>(lost), static_cast<long long>(reinitialised));
   out << buf;
   if (!index.source.empty()) out << "dataset: " << index.text() << "\n";
+  if (keyframes > 0) {
+    std::snprintf(buf, sizeof buf, "keyframes: %lld (fallbacks to the previous frame %lld)\n",
+                  static_cast<long long>(keyframes), static_cast<long long>(keyframe_fallbacks));
+    out << buf << "  chosen for: " << keyframe_reasons << "\n";
+  }
   for (const NodeReport& n : nodes) {
     std::snprintf(buf, sizeof buf, "%s: in %lld out %lld dropped %lld skipped %lld errors %lld\n",
                   n.name.c_str(), static_cast<long long>(n.counters.frames_in),
@@ -142,6 +148,7 @@ std::string RunResult::yaml() const {
       << "status: {first: " << first << ", tracking: " << tracking
       << ", velocity_model: " << velocity_model << ", lost: " << lost
       << ", reinitialised: " << reinitialised << "}\n"
+      << "keyframes: {taken: " << keyframes << ", fallbacks: " << keyframe_fallbacks << "}\n"
       << "elapsed_s: " << elapsed_s << "\n"
       << "preload_s: " << preload_s << "\n"
       << "frames_per_s: " << framesPerSecond() << "\n"
@@ -232,6 +239,13 @@ RunResult runPipeline(const RunOptions& options) {
         {nodes::FrontendNode::kName, frontend.counters(), frontend.allTimings()});
     result.nodes.push_back(
         {nodes::EstimatorNode::kName, estimator.counters(), estimator.allTimings()});
+    result.keyframes = estimator.counts().keyframes;
+    result.keyframe_fallbacks = estimator.counts().keyframe_fallbacks;
+    for (int r = 1; r < pipeline::kKeyframeReasons; ++r) {
+      result.keyframe_reasons += (r > 1 ? ", " : "");
+      result.keyframe_reasons += pipeline::toString(static_cast<pipeline::KeyframeReason>(r));
+      result.keyframe_reasons += " " + std::to_string(estimator.counts().keyframe_reasons[r]);
+    }
     if (recorder && recorder->counters().errors > 0) {
       result.failed = true;
       result.error = "event log: " + recorder->counters().last_warning;

@@ -3,11 +3,15 @@
 // counted skip.
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
 #include "pplvo/dataset/dataset.h"
+#include "pplvo/eval/nees.h"
+#include "pplvo/eval/pose_records.h"
+#include "pplvo/eval/relative_pose_file.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
 #include "pplvo/run/run_pipeline.h"
 #include "pplvo/synth/synthetic_sequence.h"
@@ -217,7 +221,7 @@ TEST_F(RunPipelineTest, UnwritableOutputIsRefusedBeforeTheFirstFrame) {
   const std::string bin = std::string(std::getenv("PPLVO_BINARY_DIR")) + "/bin/pplvo-run";
   const fs::path err = fs::path(sequenceDir() + "_err.txt");
   const fs::path out = fs::path(sequenceDir() + "_stdout.txt");
-  for (const std::string option : {"--output", "--summary", "--log"}) {
+  for (const std::string option : {"--output", "--summary", "--log", "--covariance"}) {
     const std::string cmd = bin + " --dataset " + sequenceDir() + " " + option +
                             " /nonexistent_pplvo_dir/x >" + out.string() + " 2>" + err.string();
     EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 1) << cmd;
@@ -231,6 +235,61 @@ TEST_F(RunPipelineTest, UnwritableOutputIsRefusedBeforeTheFirstFrame) {
   }
   fs::remove(err);
   fs::remove(out);
+}
+
+TEST_F(RunPipelineTest, CovarianceFileHoldsThePublishedRelativePoses) {
+  // --covariance: one line per frame after the first, T_prev_curr and pose_t.rel_covariance
+  // exactly (17 digits), stamps verbatim; the event log of the same run gives the same records.
+  const std::string bin = std::string(std::getenv("PPLVO_BINARY_DIR")) + "/bin/pplvo-run";
+  const fs::path out = fs::path(sequenceDir() + "_cov");
+  fs::create_directories(out);
+  const std::string cov = (out / "cov.txt").string(), log = (out / "run.lcmlog").string();
+  const std::string cmd = bin + " --dataset " + sequenceDir() + " --max-frames 10 --covariance " +
+                          cov + " --log " + log + " --quiet 2>/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const eval::RelativePoseReadResult file = eval::readRelativePoseFile(cov);
+  ASSERT_TRUE(file.ok) << file.error;
+  ASSERT_EQ(file.records.size(), 9u);
+
+  RunOptions o;
+  o.dataset_dir = sequenceDir();
+  o.max_frames = 10;
+  const RunResult r = runPipeline(o);
+  ASSERT_FALSE(r.failed) << r.error;
+  ASSERT_EQ(r.frame_poses.size(), 10u);
+  for (size_t k = 0; k < file.records.size(); ++k) {
+    const eval::RelativePoseRecord& rec = file.records[k];
+    const FramePose& p = r.frame_poses[k + 1];
+    EXPECT_EQ(rec.stamp_text, p.stamp);
+    EXPECT_EQ(rec.prev_stamp_text, r.frame_poses[k].stamp);
+    EXPECT_EQ(rec.status, static_cast<int>(p.status));
+    EXPECT_EQ(rec.covariance, p.rel_covariance) << "frame " << k + 1;
+    EXPECT_LT((rec.T_prev_curr.matrix() - p.T_prev_curr.matrix()).cwiseAbs().maxCoeff(), 1e-15);
+    // A tracked frame's covariance is a proper one: symmetric, positive definite.
+    if (p.status == TrackingStatus::kTracking) {
+      EXPECT_EQ(Eigen::LLT<Matrix6d>(rec.covariance).info(), Eigen::Success);
+      EXPECT_GT(rec.covariance(0, 0), 0.0);
+    }
+    // T_prev_curr is the motion between the two published T_w_c.
+    const Pose3 rel = r.frame_poses[k].T_w_c.inverse() * p.T_w_c;
+    EXPECT_LT((rel.matrix() - p.T_prev_curr.matrix()).cwiseAbs().maxCoeff(), 1e-6);
+  }
+  const eval::PoseLogReadResult from_log = eval::readPoseLog(log);
+  ASSERT_TRUE(from_log.ok) << from_log.error;
+  const auto log_records = eval::relativePoseRecords(from_log.poses);
+  ASSERT_EQ(log_records.size(), file.records.size());
+  for (size_t k = 0; k < log_records.size(); ++k) {
+    EXPECT_EQ(log_records[k].covariance, file.records[k].covariance);
+  }
+  // And the evaluator takes it against the sequence's ground truth.
+  eval::TumReadResult gt = eval::readTumFile(sequenceDir() + "/groundtruth.txt");
+  ASSERT_TRUE(gt.ok) << gt.error;
+  eval::NeesOptions no;
+  no.gt = {0.0, 0.0, 0.0};
+  const eval::NeesResult nees = eval::evaluateNees(gt.file, file.records, no);
+  ASSERT_TRUE(nees.ok) << nees.error;
+  EXPECT_EQ(nees.pairs.size(), 9u);
+  fs::remove_all(out);
 }
 
 }  // namespace

@@ -143,7 +143,10 @@ struct SyntheticSequence::Impl {
     const double heading0 = traj.yaw0 + traj.yaw(0.0);
     scene = detail::buildScene(o.scene, o.seed, o.moving_object, heading0 - 0.9);
     poses.reserve(o.frames);
-    for (int i = 0; i < o.frames; ++i) poses.push_back(traj.pose(i / o.fps));
+    for (int i = 0; i < o.frames; ++i) {
+      const Pose3 hand_held = traj.pose(i / o.fps);
+      poses.push_back(o.trajectory ? o.trajectory(i, hand_held) : hand_held);
+    }
     dynamic_surface.resize(scene.surfaces.size());
     for (size_t s = 0; s < scene.surfaces.size(); ++s) {
       dynamic_surface[s] = scene.objects[scene.surfaces[s].object].dynamic ? 1 : 0;

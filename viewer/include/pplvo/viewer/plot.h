@@ -61,6 +61,22 @@ cv::Mat renderPlotImage(const PlotData& data, cv::Size size = {1400, 900},
 std::string renderPlotSvg(const PlotData& data, cv::Size size = {1400, 900},
                           const std::string& title = "");
 
+/// NEES over time (pplvo-eval --nees --nees-data, read with eval::readNeesData), one run.
+struct NeesPlotData {
+  std::string label;
+  std::vector<double> t_s;                   ///< seconds from the first pair
+  std::vector<double> nees, nees_t, nees_r;  ///< 6 dof, translation (3), rotation (3)
+  double confidence = 0.95;                  ///< of the chi-square bounds drawn
+};
+
+/// Three stacked axes (6 dof, translation, rotation), log10 of the NEES over time, with the
+/// dof (ideal mean), the one-sided upper bound chi2_c(dof) and the two-sided band
+/// [chi2_(1-c)/2, chi2_(1+c)/2] as horizontal lines; the legend gives mean and share inside.
+cv::Mat renderNeesPlotImage(const NeesPlotData& data, cv::Size size = {1400, 900},
+                            const std::string& title = "");
+std::string renderNeesPlotSvg(const NeesPlotData& data, cv::Size size = {1400, 900},
+                              const std::string& title = "");
+
 /// How the live viewer places the ground truth next to the estimate.
 enum class GtAlignment {
   kFirstPose,  ///< the first associated pair's poses coincide: T_w_gt = T_w_c0 * T_gt_c0^-1

@@ -67,6 +67,11 @@ struct ParseResult {
 ParseResult parsePlayerArgs(const std::vector<std::string>& args);
 std::string playerUsage();
 
+/// The progress line (without "\r"): "[name] done/total frames, R frames/s, ETA m:ss,
+/// skipped S". With total <= 0 (unknown: --loop) the total and the ETA are left out.
+std::string progressLine(const std::string& name, int64_t done, int64_t total, double elapsed_s,
+                         int64_t skipped);
+
 /// What a run did.
 struct PlayerResult {
   int64_t published = 0;

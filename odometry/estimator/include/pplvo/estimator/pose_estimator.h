@@ -93,6 +93,8 @@ struct PoseEstimatorOptions {
   double tukey_c = 4.685;
   /// Robust scale of the whitened residuals: max(1, 1.4826 * median |r_w|) (MAD). With 1.0
   /// the Tukey threshold stays at c (whitened residuals are then assumed unit-variance).
+  /// The scale s also enters the covariance: the point and line terms of the sandwich count
+  /// s^2 times (their residuals spread s times their model; docs/estimator.md).
   bool tukey_mad_scale = true;
 
   /// IRLS: outer re-weighting iterations around a Ceres Levenberg-Marquardt solve.

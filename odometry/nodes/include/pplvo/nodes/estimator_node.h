@@ -14,6 +14,7 @@
 /// the same reference over a longer motion). If the reference never comes (an upstream
 /// process died or dropped it), tracking restarts at the newest waiting frame with the last
 /// pose held (status REINITIALISED), so a lost message never stalls the pipeline.
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <lcm/lcm-cpp.hpp>
@@ -29,7 +30,7 @@
 namespace pplvo::nodes {
 
 struct EstimatorNodeOptions {
-  std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::string lcm_url;                     ///< empty: $LCM_DEFAULT_URL
   std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string features_channel = channels::kFeatures;
   std::string features_3d_channel = channels::kFeatures3d;
@@ -54,6 +55,11 @@ struct EstimatorNodeOptions {
 struct EstimatorCounts {
   int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
   int64_t restarts_missing_reference = 0;
+  /// Keyframe tracking (odometry.reference: keyframe): keyframes chosen, and frames whose
+  /// keyframe estimate failed so that the previous frame served.
+  int64_t keyframes = 0, keyframe_fallbacks = 0;
+  /// Keyframes chosen, by pipeline::KeyframeReason.
+  std::array<int64_t, pipeline::kKeyframeReasons> keyframe_reasons{};
 };
 
 class EstimatorNode {

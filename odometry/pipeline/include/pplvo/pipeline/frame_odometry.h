@@ -1,9 +1,13 @@
 #pragma once
-/// Frame-to-frame odometry as one object (paper Sec. "Matching" and "Pose Estimation"): the
-/// current frame's 2D features (points, lines, C-GM planes) are matched against the previous
-/// frame's 3D features (lifted on its fused depth), and the tracker estimates the motion,
-/// its covariance and the window uncertainties the depth filter needs. No LCM.
+/// Visual odometry as one object (paper Sec. "Matching" and "Pose Estimation"): the current
+/// frame's 2D features (points, lines, C-GM planes) are matched against 3D features lifted on
+/// fused depth, either the previous frame's (the paper) or an active keyframe's
+/// (docs/estimator.md, "Keyframes"), and the tracker estimates the motion, its covariance and
+/// the window uncertainties the depth filter needs. No LCM.
 #include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
 
 #include "pplvo/core/features.h"
 #include "pplvo/core/stage_timer.h"
@@ -14,7 +18,47 @@
 
 namespace pplvo::pipeline {
 
+/// What the current frame's 2D features are matched against.
+enum class TrackingReference {
+  kFrame,     ///< the previous frame (the paper)
+  kKeyframe,  ///< the active keyframe, the previous frame as fallback
+};
+bool parseTrackingReference(const std::string& text, TrackingReference* out);
+const char* toString(TrackingReference reference);
+
+/// When a new keyframe is taken (docs/estimator.md, "Keyframes"). The current frame becomes
+/// the keyframe of the next one when any of these holds.
+struct KeyframeOptions {
+  /// Feature overlap: the estimate against the keyframe kept fewer inlier residual rows than
+  /// this fraction of the rows the first frame tracked against it kept (the keyframe's view
+  /// is leaving the image, or its features no longer match).
+  double min_inlier_fraction = 0.5;
+  /// Uncertainty: the largest eigenvalue of the translation (or q_xyz) block of the pose
+  /// covariance relative to the keyframe grew beyond this factor of the first frame's; a
+  /// new keyframe then restarts from the smaller frame-to-frame uncertainty.
+  double max_variance_growth = 2.0;
+  /// Parallax bound: translation (m) and rotation (deg) from the keyframe; beyond either,
+  /// depth errors of the keyframe's primitives weigh more than a keyframe change costs.
+  double max_translation_m = 0.3;
+  double max_rotation_deg = 20.0;
+  /// The keyframe's 3D points are refined by every later frame tracked against it: the
+  /// frame's own 3D point (lifted on its fused depth), moved into the keyframe by the
+  /// estimated pose (its covariance included), is fused by information weighting when it
+  /// passes the chi-square gate below (docs/estimator.md, "Keyframe landmarks").
+  bool fuse_landmarks = true;
+  /// Gate on the squared Mahalanobis distance between the keyframe point and the moved
+  /// observation (3 dof; 7.81 = 95 %).
+  double fusion_gate_chi2 = 7.81;
+  /// Local map: the 3D points and lines of up to this many earlier keyframes, moved into the
+  /// active keyframe by the chain of keyframe poses (their covariance added), are matched and
+  /// used together with the active keyframe's (0: the active keyframe alone). The chain
+  /// restarts when a keyframe is taken after a fallback or a restart.
+  int local_map_keyframes = 0;
+};
+
 struct FrameOdometryOptions {
+  TrackingReference reference = TrackingReference::kKeyframe;
+  KeyframeOptions keyframe;
   OdometryTrackerOptions tracker;  ///< tracker.estimator.use_* select the families
   features::PointMatchOptions point_matching;
   features::LineMatchOptions line_matching;
@@ -23,11 +67,30 @@ struct FrameOdometryOptions {
   bool predict_point_positions = true;
   /// Move the previous planes by the predicted motion before the plane gate.
   bool predict_plane_positions = true;
+  /// Gate lines around the projection of their 3D segment under the predicted motion
+  /// (reference lines without 3D keep their own 2D equation).
+  bool predict_line_positions = true;
 };
+
+/// Why a frame was chosen as the next keyframe.
+enum class KeyframeReason : int8_t {
+  kNone = 0,
+  kStart,        ///< first frame, or tracking restarted / not tracking
+  kFallback,     ///< the keyframe's estimate failed
+  kOverlap,      ///< inlier rows below min_inlier_fraction of the first frame's
+  kUncertainty,  ///< pose variance grew beyond max_variance_growth
+  kMotion,       ///< translation or rotation bound
+};
+constexpr int kKeyframeReasons = 6;
+const char* toString(KeyframeReason reason);
 
 struct FrameOdometryStats {
   int point_matches = 0, line_matches = 0, plane_matches = 0;
-  bool reinitialised = false;  ///< no usable reference: tracking restarted at this frame
+  bool reinitialised = false;      ///< no usable reference: tracking restarted at this frame
+  int64_t reference_seq = -1;      ///< the frame whose 3D features the pose was estimated from
+  bool keyframe_fallback = false;  ///< the keyframe estimate failed; the previous frame served
+  bool new_keyframe = false;       ///< this frame becomes the next frame's keyframe
+  KeyframeReason keyframe_reason = KeyframeReason::kNone;  ///< why, if new_keyframe
 };
 
 class FrameOdometry {
@@ -47,11 +110,18 @@ class FrameOdometry {
   /// Estimates the pose of `current` (2D stage) from `reference`, the 3D stage of the frame
   /// tracked last. `reference.seq` must be that frame; otherwise (frames lost in between)
   /// tracking restarts at `current` (see restart()) and stats->reinitialised is set.
+  /// With TrackingReference::kKeyframe, `reference` is kept as the keyframe when the last
+  /// call chose it, and `current` is matched against the active keyframe (falling back to
+  /// `reference` when that estimate is rejected).
   TrackerOutput track(const FrameFeatures& reference, const FrameFeatures& current,
                       FrameOdometryStats* stats = nullptr);
 
   /// Sequence number of the last frame given a pose (-1 before the first).
   int64_t lastSeq() const { return last_seq_; }
+  /// The active keyframe's sequence number (-1: none yet, or frame-to-frame tracking).
+  int64_t keyframeSeq() const { return keyframe_ ? keyframe_->seq : -1; }
+  /// Keyframes taken since construction (or setFamilies()).
+  int64_t keyframeCount() const { return keyframe_count_; }
   const OdometryTracker& tracker() const { return tracker_; }
   const FrameOdometryOptions& options() const { return options_; }
   const StageTimings& timings() const { return timings_; }
@@ -62,10 +132,59 @@ class FrameOdometry {
                        const Pose3& T_curr_ref_predicted);
 
  private:
+  /// The estimate of T_curr_prev through the keyframe, or nullopt when it was rejected.
+  std::optional<PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
+                                                   FrameOdometryStats* stats);
+  /// Applies the keyframe rule to an accepted estimate against the keyframe.
+  KeyframeReason keyframeExhausted(const PoseEstimate& against_keyframe, const Pose3& T_curr_kf);
+  void resetKeyframes(int64_t next_keyframe_seq, KeyframeReason reason);
+  /// Fuses the 3D points of `observed` (the frame last tracked against the keyframe) into
+  /// the keyframe's points they were matched to.
+  void fuseIntoKeyframe(const FrameFeatures& observed);
+  /// Takes `reference` as the active keyframe; the one it replaces joins the local map when
+  /// the new one was chosen through it.
+  void takeKeyframe(const FrameFeatures& reference);
+  /// The active keyframe with the local map's points and lines appended (in its frame).
+  FrameFeatures localMap() const;
+
   FrameOdometryOptions options_;
   OdometryTracker tracker_;
   int64_t last_seq_ = -1;
   StageTimings timings_;
+
+  // Keyframe state (bounded: one keyframe's features).
+  std::optional<FrameFeatures> keyframe_;
+  Pose3 T_w_kf_ = Pose3::Identity();
+  int64_t pending_keyframe_seq_ = -1;  ///< the frame whose 3D features become the keyframe
+  KeyframeReason pending_reason_ = KeyframeReason::kNone;
+  int keyframe_first_rows_ = 0;  ///< inlier rows of the first frame tracked against it
+  double keyframe_first_var_t_ = 0, keyframe_first_var_q_ = 0;
+  int64_t keyframe_count_ = 0;
+  /// The last frame tracked against the keyframe, waiting for its 3D features to refine the
+  /// keyframe's points: its pose in the keyframe and the point matches (keyframe, frame).
+  struct PendingFusion {
+    int64_t seq = -1;
+    Pose3 T_kf_frame = Pose3::Identity();
+    Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_kf_frame)
+    std::vector<std::pair<int, int>> points;
+  };
+  PendingFusion pending_fusion_;
+  /// Covariance of xi(T_pending_kf), the pending keyframe's pose in the active keyframe,
+  /// when it was chosen through an estimate against the active keyframe.
+  std::optional<Matrix6d> pending_keyframe_covariance_;
+  /// Earlier keyframes of the local map, oldest first, with their pose in the active
+  /// keyframe and its covariance; `map_points_`/`map_lines_` hold their 3D features moved
+  /// into the active keyframe (with descriptors), rebuilt at each keyframe.
+  struct MapKeyframe {
+    FrameFeatures features;
+    Pose3 T_kf_this = Pose3::Identity();
+    Matrix6d covariance = Matrix6d::Zero();
+  };
+  std::deque<MapKeyframe> map_;
+  std::vector<PointFeature> map_points_;
+  cv::Mat map_point_descriptors_;
+  std::vector<LineFeature> map_lines_;
+  cv::Mat map_line_descriptors_;
 };
 
 }  // namespace pplvo::pipeline

@@ -34,6 +34,19 @@ enum class FailurePolicy {
   kConstantVelocity,
 };
 
+/// What each frame is registered to.
+enum class ReferenceMode {
+  /// The last tracked frame (frame to frame; the default, and the benchmark's original peer).
+  kPreviousFrame,
+  /// The current keyframe, as DVO and Fovis do: a frame becomes the keyframe when its motion
+  /// from the keyframe passes keyframe_translation_m or keyframe_rotation_deg, or when it could
+  /// be tracked only against the previous frame (docs/peer_odometry.md, "Keyframe mode").
+  kKeyframe,
+};
+
+/// "previous_frame", "keyframe".
+const char* referenceModeName(ReferenceMode mode);
+
 /// How a mirrored camera model (fx < 0 and/or fy < 0, e.g. ICL-NUIM's fy = -480) is handed
 /// to OpenCV.
 enum class MirrorHandling {
@@ -78,6 +91,12 @@ struct PeerOdometryOptions {
   /// frame (with its predicted pose) becomes the reference, so that tracking can restart.
   int max_consecutive_failures = 5;
   MirrorHandling mirror_handling = MirrorHandling::kFlipImage;
+  ReferenceMode reference_mode = ReferenceMode::kPreviousFrame;
+  /// kKeyframe: a tracked frame whose motion from the keyframe has a translation above this
+  /// (metres) or a rotation above keyframe_rotation_deg (degrees) becomes the new keyframe.
+  /// 0 makes every tracked frame a keyframe (the same poses as kPreviousFrame).
+  double keyframe_translation_m = 0.10;
+  double keyframe_rotation_deg = 10.0;
 };
 
 /// Outcome of one frame.
@@ -99,8 +118,15 @@ struct PeerFrameResult {
   /// PeerOdometryOptions::failure_policy.
   Pose3 T_w_c = Pose3::Identity();
   /// Estimated motion from the reference frame to this one (T_ref_c); identity on failure.
+  /// kKeyframe: the reference is the keyframe, or the previous tracked frame after a fallback.
   Pose3 T_ref_c = Pose3::Identity();
   int64_t reference_seq = -1;  ///< RgbdFrame::seq of the reference frame used
+  /// kKeyframe: tracking against the keyframe failed and this frame was registered to the last
+  /// tracked frame instead (it then becomes the keyframe).
+  bool fell_back = false;
+  /// kKeyframe: this frame is the keyframe from now on (first frame, motion threshold passed,
+  /// fallback, or reference reset).
+  bool new_keyframe = false;
   int valid_depth_pixels = 0;  ///< in this frame: finite, inside (min, max) depth
   double compute_ms = 0.0;     ///< wall time of process(): conversion + OpenCV
   std::string message;         ///< why it failed (empty when ok)
@@ -116,17 +142,28 @@ struct PeerStats {
   int64_t bad_input = 0;
   int64_t opencv_errors = 0;
   int64_t reference_resets = 0;  ///< reference replaced after max_consecutive_failures
+  /// kKeyframe only (0 in kPreviousFrame mode): frames that became the keyframe, of any cause
+  /// (the first frame, resets and camera changes included) ...
+  int64_t keyframes = 0;
+  /// ... of which because the motion from the keyframe passed a threshold ...
+  int64_t keyframes_by_motion = 0;
+  /// ... and because only the fallback to the previous frame tracked them.
+  int64_t keyframe_fallbacks = 0;
   double total_ms = 0.0;
   double max_ms = 0.0;
   double meanMs() const { return frames > 0 ? total_ms / static_cast<double>(frames) : 0.0; }
 };
 
-/// Frame-to-frame OpenCV odometry chained into camera poses.
+/// OpenCV odometry chained into camera poses, frame to frame or frame to keyframe.
 ///
-/// Each frame is registered to the reference frame, which is the last frame tracked (or the
-/// first frame). A failed frame does not become the reference: the next frame is registered to
-/// the last good one, so one bad frame (no depth, motion blur) costs no drift. Failure poses
-/// follow FailurePolicy. Not thread-safe; one instance per sequence.
+/// kPreviousFrame: each frame is registered to the reference frame, which is the last frame
+/// tracked (or the first frame). A failed frame does not become the reference: the next frame is
+/// registered to the last good one, so one bad frame (no depth, motion blur) costs no drift.
+/// kKeyframe: each frame is registered to the keyframe (OpenCV's source = the keyframe, target
+/// = the frame, initial guess = the last tracked pose relative to the keyframe, moved on by the
+/// motion prior); if that fails, to the last tracked frame, and the frame becomes the keyframe;
+/// if that fails too, the frame is a failure as in kPreviousFrame. Failure poses follow
+/// FailurePolicy. Not thread-safe; one instance per sequence.
 class PeerOdometry {
  public:
   explicit PeerOdometry(const PeerOdometryOptions& options = {});

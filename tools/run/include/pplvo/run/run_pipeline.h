@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/frame_pose.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/core/trajectory.h"
 #include "pplvo/msgs/convert.h"
@@ -21,6 +22,7 @@ struct RunOptions {
   std::string output;       ///< --output: TUM trajectory (empty: not written)
   std::string summary;      ///< --summary: YAML run summary (empty: not written)
   std::string log;          ///< --log: every message as an LCM event log (for replay)
+  std::string covariance;   ///< --covariance: T_prev_curr + covariance per frame (main)
   int64_t max_frames = 0;   ///< --max-frames (0: all)
   int64_t start = 0;        ///< --start: first associated frame
   double fps = 0.0;         ///< --fps: frame rate of integer-stamped datasets
@@ -45,9 +47,14 @@ struct NodeReport {
 
 struct RunResult {
   Trajectory trajectory;  ///< T_w_c per posed frame, stamps verbatim from the dataset
+  /// Every published pose as received (stamp, status, T_prev_curr and its covariance), for
+  /// --covariance (pplvo/eval/pose_records.h).
+  std::vector<FramePose> frame_poses;
   int64_t frames_published = 0, frames_skipped = 0;
   int64_t poses = 0;
   int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
+  int64_t keyframes = 0, keyframe_fallbacks = 0;  ///< the estimator's (reference: keyframe)
+  std::string keyframe_reasons;  ///< "overlap N, uncertainty N, ..." (chosen keyframes)
   double elapsed_s = 0.0;  ///< wall time of the run (reading the dataset included)
   double preload_s = 0.0;  ///< of which decoding the frames beforehand (--preload)
   std::vector<NodeReport> nodes;

@@ -2,6 +2,7 @@
 /// Ray-cast synthetic RGB-D sequences with known ground truth (no LCM, no I/O except
 /// writeTumFolder). Deterministic for a given SynthOptions (seed included).
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,6 +42,10 @@ struct SynthOptions {
   double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
   double trajectory_scale = 1.0;  ///< scales the hand-held motion amplitude
   bool moving_object = false;     ///< a box that moves independently of the room
+  /// Replaces the hand-held trajectory (e.g. a still camera, or one that turns away and
+  /// back): called once per frame with the frame index and the hand-held pose of that frame,
+  /// returns T_w_c. Empty: the hand-held trajectory.
+  std::function<Pose3(int frame, const Pose3& hand_held_T_w_c)> trajectory;
   DepthNoiseOptions noise;
 };
 
