@@ -8,6 +8,19 @@
 
 namespace pplvo::pipeline {
 
+namespace {
+
+/// A variance of an estimate without its frame's measured image noise: the covariance counts
+/// the robust scale s^2 on the point and line terms (pose_estimator.h), which is the same for
+/// an estimate against the keyframe and one against any other frame; the keyframe rule
+/// compares what the geometry (overlap, parallax, depth of the landmarks) does to it.
+double geometricVariance(const PoseEstimate& estimate, double variance) {
+  const double s = std::max(1.0, estimate.robust_scale);
+  return variance / (s * s);
+}
+
+}  // namespace
+
 bool parseTrackingReference(const std::string& text, TrackingReference* out) {
   if (text == "frame") {
     *out = TrackingReference::kFrame;
@@ -185,8 +198,9 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
         out.status == TrackingStatus::kTracking) {
       // The keyframe's reference quality: what the next frames are compared with.
       keyframe_first_rows_ = out.estimate.n_residuals;
-      keyframe_first_var_t_ = out.estimate.max_translation_variance_m2;
-      keyframe_first_var_q_ = out.estimate.max_rotation_variance;
+      keyframe_first_var_t_ =
+          geometricVariance(out.estimate, out.estimate.max_translation_variance_m2);
+      keyframe_first_var_q_ = geometricVariance(out.estimate, out.estimate.max_rotation_variance);
     } else {
       resetKeyframes(current.seq,
                      s.keyframe_fallback ? KeyframeReason::kFallback : KeyframeReason::kStart);
@@ -367,9 +381,11 @@ KeyframeReason FrameOdometry::keyframeExhausted(const PoseEstimate& against_keyf
   if (against_keyframe.n_residuals < k.min_inlier_fraction * keyframe_first_rows_) {
     return KeyframeReason::kOverlap;
   }
-  if (against_keyframe.max_translation_variance_m2 >
-          k.max_variance_growth * keyframe_first_var_t_ ||
-      against_keyframe.max_rotation_variance > k.max_variance_growth * keyframe_first_var_q_) {
+  const double var_t =
+      geometricVariance(against_keyframe, against_keyframe.max_translation_variance_m2);
+  const double var_q = geometricVariance(against_keyframe, against_keyframe.max_rotation_variance);
+  if (var_t > k.max_variance_growth * keyframe_first_var_t_ ||
+      var_q > k.max_variance_growth * keyframe_first_var_q_) {
     return KeyframeReason::kUncertainty;
   }
   const double angle_deg = Eigen::AngleAxisd(T_curr_kf.linear()).angle() * 180.0 / M_PI;
