@@ -4,9 +4,11 @@
 #
 #   scripts/fuzz.sh [SECONDS_PER_HARNESS] [BUILD_DIR]     # defaults: 60, build-fuzz
 #
-# Seeds: the shared sequences' PNG images and index files when ../shared/data is there
-# (copied into BUILD_DIR/corpus, never into the repository); the LCM harness starts from
-# nothing (libFuzzer's comparison tracing finds the type hashes). Each harness's corpus is
+# Seeds: the shared sequences' PNG images, index files and calib_params.xml when
+# ../shared/data is there (copied into BUILD_DIR/corpus, never into the repository), the
+# camera YAML example of docs/player.md, config/pplvo.yaml, and small image_t planes (zlib
+# label, depth and float planes, raw planes) made here; the LCM harness starts from nothing
+# (libFuzzer's comparison tracing finds the type hashes). Each harness's corpus is
 # kept in BUILD_DIR/corpus/NAME between runs. A crash leaves BUILD_DIR/crash-* and makes the
 # script exit 1; turn each into a regression test with its input. Prints per harness the
 # inputs run. Needs: clang, libclang-rt-14-dev (scripts/install_deps.sh).
@@ -15,7 +17,8 @@ set -euo pipefail
 seconds=${1:-60}
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${2:-$root/build-fuzz}
-harnesses=(fuzz_lcm_decode fuzz_png_decode fuzz_index_file)
+harnesses=(fuzz_lcm_decode fuzz_png_decode fuzz_index_file fuzz_image_decode fuzz_camera_file
+  fuzz_pipeline_config)
 
 export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
 launcher=()
@@ -30,8 +33,10 @@ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DPPLVO_BUILD_FUZZERS=ON -DPPLVO_BUILD_BENCHMARKS=OFF >"$build/fuzz-cmake.log" 2>&1 ||
   { cat "$build/fuzz-cmake.log"; exit 1; }
+start=$(date +%s)
 cmake --build "$build" -j"$(nproc)" --target "${harnesses[@]}" >"$build/fuzz-build.log" 2>&1 ||
   { tail -40 "$build/fuzz-build.log"; exit 1; }
+echo "fuzz harnesses built in $(($(date +%s) - start)) s ($build)"
 
 data=$root/../shared/data
 mkdir -p "$build/corpus"
@@ -43,7 +48,34 @@ if [ -d "$data" ]; then
   find "$data" -name '*.txt' | while read -r f; do
     head -c 4000 "$f" >"$build/corpus/fuzz_index_file/$(echo "$f" | md5sum | cut -c1-16)"
   done
+  find "$data" -name 'calib_params.xml' | while read -r f; do
+    cp -n "$f" "$build/corpus/fuzz_camera_file/$(echo "$f" | md5sum | cut -c1-16)"
+  done
+  # One colour PNG as an image_t plane (header: width, height, encoding 4 = png).
+  f=$(find "$data" -path '*rgb*' -name '*.png' -size -400k | sort | head -1)
+  if [ -n "$f" ]; then
+    python3 - "$f" "$build/corpus/fuzz_image_decode/png" <<'PY'
+import struct, sys
+png = open(sys.argv[1], "rb").read()
+w, h = struct.unpack(">II", png[16:24])
+open(sys.argv[2], "wb").write(struct.pack("<iib", w, h, 4) + png)
+PY
+  fi
 fi
+printf 'fx: 535.4\nfy: 539.2\ncx: 320.1\ncy: 247.6\ndistortion: [0, 0, 0, 0, 0]\ndepth_scale: 5000\nwidth: 640\nheight: 480\n' \
+  >"$build/corpus/fuzz_camera_file/camera.yaml"
+cp "$root/config/pplvo.yaml" "$build/corpus/fuzz_pipeline_config/pplvo.yaml"
+# image_t planes: zlib u8 labels, u16 depth, f32, and the raw encodings, 8x6 pixels each.
+python3 - "$build/corpus/fuzz_image_decode" <<'PY'
+import os, struct, sys, zlib
+out = sys.argv[1]
+w, h = 8, 6
+for enc, bpp in ((11, 1), (6, 2), (9, 4)):
+    plane = bytes((i * 37 + 11) % 256 for i in range(w * h * bpp))
+    open(os.path.join(out, "zlib%d" % enc), "wb").write(struct.pack("<iib", w, h, enc) + zlib.compress(plane))
+for enc, bpp in ((1, 3), (2, 1), (5, 2), (8, 4), (10, 1)):
+    open(os.path.join(out, "raw%d" % enc), "wb").write(struct.pack("<iib", w, h, enc) + bytes(w * h * bpp))
+PY
 
 status=0
 cd "$build"

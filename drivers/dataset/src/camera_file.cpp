@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <opencv2/core/persistence.hpp>
 #include <set>
 #include <sstream>
@@ -43,6 +45,16 @@ DatasetCamera loadCalibParamsXml(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw DatasetError("calibration file does not exist: " + path);
+  }
+  {
+    // OpenCV 4.6's FileStorage parser dereferences a null pointer on some files with NUL
+    // bytes (found by tests/fuzz/fuzz_camera_file); a text calibration file has none.
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in.good() && !in.eof()) throw DatasetError("cannot read calibration file " + path);
+    if (text.find('\0') != std::string::npos) {
+      throw DatasetError("calibration file " + path + " is not text (it contains NUL bytes)");
+    }
   }
   try {
     cv::FileStorage fs(path, cv::FileStorage::READ);
