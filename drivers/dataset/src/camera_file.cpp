@@ -36,6 +36,36 @@ void checkIntrinsics(const DatasetCamera& cam, const std::string& path,
   }
 }
 
+/// Reads an opencv-matrix node into `out` only when its declared size is at most `max_elements`
+/// values and its data holds exactly that many: `node >> mat` allocates rows x cols first, so a
+/// corrupt <rows> would otherwise ask for gigabytes (found by tests/fuzz/fuzz_camera_file).
+/// An absent node leaves `out` empty.
+void readSmallMatrix(const cv::FileNode& node, const char* name, int max_elements, cv::Mat* out,
+                     std::vector<std::string>& errors) {
+  if (node.empty() || node.isNone()) return;
+  if (!node.isMap()) {
+    errors.push_back(std::string(name) + " must be an opencv-matrix with rows, cols, dt and data");
+    return;
+  }
+  const cv::FileNode rows = node["rows"], cols = node["cols"], data = node["data"];
+  if (!rows.isInt() || !cols.isInt() || !node["dt"].isString() || !data.isSeq()) {
+    errors.push_back(std::string(name) + " must be an opencv-matrix with rows, cols, dt and data");
+    return;
+  }
+  const long long r = static_cast<int>(rows), c = static_cast<int>(cols);
+  if (r < 1 || c < 1 || r * c > max_elements) {
+    errors.push_back(std::string(name) + " has " + std::to_string(r) + "x" + std::to_string(c) +
+                     " values, at most " + std::to_string(max_elements) + " expected");
+    return;
+  }
+  if (static_cast<long long>(data.size()) != r * c) {
+    errors.push_back(std::string(name) + " declares " + std::to_string(r) + "x" +
+                     std::to_string(c) + " values but holds " + std::to_string(data.size()));
+    return;
+  }
+  node >> *out;
+}
+
 }  // namespace
 
 DatasetCamera loadCalibParamsXml(const std::string& path) {
@@ -60,10 +90,11 @@ DatasetCamera loadCalibParamsXml(const std::string& path) {
     cv::FileStorage fs(path, cv::FileStorage::READ);
     if (!fs.isOpened()) throw DatasetError("cannot open calibration file " + path);
     cv::Mat K, D;
-    fs["RGB_intrinsic_params"] >> K;
-    fs["RGB_distortion_coefficients"] >> D;
+    readSmallMatrix(fs["RGB_intrinsic_params"], "RGB_intrinsic_params", 9, &K, errors);
+    readSmallMatrix(fs["RGB_distortion_coefficients"], "RGB_distortion_coefficients", 5, &D,
+                    errors);
     if (K.empty()) {
-      errors.push_back("missing RGB_intrinsic_params");
+      if (fs["RGB_intrinsic_params"].empty()) errors.push_back("missing RGB_intrinsic_params");
     } else if (K.rows != 3 || K.cols != 3) {
       errors.push_back("RGB_intrinsic_params must be 3x3");
     } else {

@@ -517,6 +517,47 @@ TEST(Camera, CalibParamsXmlWithNulBytesIsAnError) {
   }
 }
 
+// Found by tests/fuzz/fuzz_camera_file: a huge <rows> made `fs[...] >> K` ask cv::Mat::create for
+// ~48 GB before the 3x3 check could run (out of memory under ASan, bad_alloc or the OOM killer
+// without). The reader checks the declared size against the data before converting.
+TEST(Camera, CalibParamsXmlWithHugeOrInconsistentMatrixSizesIsAnError) {
+  auto matrix = [](const std::string& name, const std::string& rows, const std::string& cols,
+                   const std::string& data) {
+    return "<" + name + " type_id=\"opencv-matrix\">\n  <rows>" + rows + "</rows>\n  <cols>" +
+           cols + "</cols>\n  <dt>d</dt>\n  <data>" + data + "</data></" + name + ">\n";
+  };
+  const std::string k = "481.2 0 319.5 0 480 239.5 0 0 1";
+  struct Case {
+    std::string body, expected;
+  };
+  const std::vector<Case> cases = {
+      {matrix("RGB_intrinsic_params", "2000000000", "3", k), "at most 9"},
+      {matrix("RGB_intrinsic_params", "3", "3", "1 2 3 4"), "holds 4"},
+      {matrix("RGB_intrinsic_params", "-3", "3", k), "at most 9"},
+      {matrix("RGB_intrinsic_params", "3", "3", k) +
+           matrix("RGB_distortion_coefficients", "1", "1000000000", "0 0 0 0 0"),
+       "at most 5"},
+      {"<RGB_intrinsic_params>7</RGB_intrinsic_params>\n", "opencv-matrix"},
+  };
+  TempDir t("hugexml");
+  for (const Case& c : cases) {
+    writeText(t.path / "calib.xml",
+              "<?xml version=\"1.0\"?>\n<opencv_storage>\n" + c.body + "</opencv_storage>\n");
+    try {
+      loadCalibParamsXml((t.path / "calib.xml").string());
+      ADD_FAILURE() << "accepted:\n" << c.body;
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos)
+          << e.what() << "\nexpected: " << c.expected;
+    }
+  }
+  // A well-formed file is still read.
+  writeText(t.path / "calib.xml", "<?xml version=\"1.0\"?>\n<opencv_storage>\n" +
+                                      matrix("RGB_intrinsic_params", "3", "3", k) +
+                                      "</opencv_storage>\n");
+  EXPECT_DOUBLE_EQ(loadCalibParamsXml((t.path / "calib.xml").string()).camera.fy, 480.0);
+}
+
 TEST(Camera, YamlCameraFile) {
   TempDir t("yaml");
   const fs::path p = t.path / "cam.yaml";
