@@ -196,6 +196,18 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
     case Img::ENCODING_PNG_U16: flags = cv::IMREAD_ANYDEPTH; break;
     default: throw MessageError("unknown image encoding " + encodingName(msg.encoding));
   }
+  // cv::imdecode takes any format OpenCV knows (some through temporary files): only the
+  // signature the encoding names may reach it.
+  static const uint8_t kPng[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  static const uint8_t kJpeg[] = {0xff, 0xd8, 0xff};
+  const bool jpeg = msg.encoding == Img::ENCODING_JPEG;
+  const uint8_t* signature = jpeg ? kJpeg : kPng;
+  const size_t signature_size = jpeg ? sizeof(kJpeg) : sizeof(kPng);
+  if (msg.data.size() < signature_size ||
+      std::memcmp(msg.data.data(), signature, signature_size) != 0) {
+    throw MessageError("corrupt " + encodingName(msg.encoding) + " payload: no " +
+                       (jpeg ? "JPEG" : "PNG") + " signature");
+  }
   cv::Mat out;
   try {
     out = cv::imdecode(msg.data, flags);

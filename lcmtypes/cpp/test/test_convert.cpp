@@ -115,6 +115,33 @@ TEST(Convert, CorruptCompressedPayloadsThrow) {
   }
 }
 
+// Only a PNG or JPEG file reaches cv::imdecode for those encodings: other formats OpenCV would
+// also read (a Radiance HDR file goes through a temporary file in /tmp) are corrupt payloads.
+TEST(Convert, PayloadsWithoutTheirEncodingsSignatureThrow) {
+  const cv::Mat grey(16, 16, CV_8UC1, cv::Scalar(90));
+  cv::Mat bgr;
+  cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+  auto png = encodeImage(grey, Img::ENCODING_PNG);
+  auto jpeg = encodeImage(bgr, Img::ENCODING_JPEG);
+  EXPECT_NO_THROW(decodeImage(png));
+  EXPECT_NO_THROW(decodeImage(jpeg));
+  // The same bytes under the other's encoding, then an HDR header under each.
+  std::swap(png.encoding, jpeg.encoding);
+  EXPECT_THROW(decodeImage(png), MessageError);
+  EXPECT_THROW(decodeImage(jpeg), MessageError);
+  const std::string hdr = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16 +X 16\n";
+  for (auto* m : {&png, &jpeg}) {
+    m->data.assign(hdr.begin(), hdr.end());
+    m->size = static_cast<int32_t>(m->data.size());
+    try {
+      decodeImage(*m);
+      ADD_FAILURE() << "accepted an HDR header as " << encodingName(m->encoding);
+    } catch (const MessageError& e) {
+      EXPECT_NE(std::string(e.what()).find("signature"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Convert, FrameWithMismatchedDepthSizeThrows) {
   RgbdFrame f = makeFrame();
   auto m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);
