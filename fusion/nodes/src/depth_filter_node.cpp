@@ -62,13 +62,15 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   p.utime = msg.utime;
   p.stamp = msg.stamp;
   p.camera = frame.camera;
+  // Depth in the undistorted pinhole model, as every later stage reads it.
+  const cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
   if (options_.model == DepthModel::kSensor) {
     ScopedStageTimer t(timings_, "sensor");
-    p.depth = depth_filter::applySensorModel(sensor_, frame.depth_m);
+    p.depth = depth_filter::applySensorModel(sensor_, depth_m);
     p.stage = pplvo_msgs::depth_map_t::STAGE_SENSOR;
   } else {
     ScopedStageTimer t(timings_, "cgm");
-    p.depth = cgm_.apply(frame.depth_m);
+    p.depth = cgm_.apply(depth_m);
     p.stage = pplvo_msgs::depth_map_t::STAGE_CGM;
   }
   publishDepth(options_.cgm_channel, p, p.depth, p.stage);

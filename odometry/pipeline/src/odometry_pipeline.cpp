@@ -20,14 +20,15 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
                                 ": depth size or type disagrees with the camera");
   }
   PipelineFrameResult r;
-  // Stage 1-2 of the depth filter.
+  // Stage 1-2 of the depth filter, on depth in the undistorted pinhole model.
+  const cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
   DepthWithVariance depth;
   if (options_.depth_filter.model == depth_filter::DepthModel::kSensor) {
     ScopedStageTimer t(depth_timings_, "sensor");
-    depth = depth_filter::applySensorModel(sensor_, frame.depth_m);
+    depth = depth_filter::applySensorModel(sensor_, depth_m);
   } else {
     ScopedStageTimer t(depth_timings_, "cgm");
-    depth = cgm_.apply(frame.depth_m);
+    depth = cgm_.apply(depth_m);
   }
   // Frontend, 2D stage; then the pose against the last frame's 3D features.
   FrameFeatures features = frontend_.extract2d(frame, depth, &r.frontend);

@@ -19,6 +19,7 @@
 
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/depth_filter/cgm_filter.h"
+#include "pplvo/depth_filter/depth_rectification.h"
 #include "pplvo/depth_filter/depth_model.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
 #include "pplvo/msgs/bus.h"
@@ -112,6 +113,7 @@ class DepthFilterNode {
   DepthFilterNodeOptions options_;
   msgs::Bus bus_;
   std::vector<msgs::BusSubscription> subscriptions_;
+  depth_filter::DepthRectifier rectifier_;
   depth_filter::QuadraticSensorModel sensor_;
   depth_filter::CgmFilter cgm_;
   depth_filter::OgmFusion ogm_;
