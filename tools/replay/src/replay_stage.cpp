@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "pplvo/core/enum_names.h"
 #include "pplvo/logging/event_log.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/nodes/depth_filter_node.h"
@@ -15,29 +16,17 @@
 
 namespace pplvo::replay {
 
+namespace {
+constexpr EnumName<Stage> kStageNames[] = {{Stage::kDepthFilter, "depth-filter"},
+                                           {Stage::kFrontend, "frontend"},
+                                           {Stage::kEstimator, "estimator"}};
+}  // namespace
+
 bool parseStage(const std::string& text, Stage* stage) {
-  if (text == "depth-filter")
-    *stage = Stage::kDepthFilter;
-  else if (text == "frontend")
-    *stage = Stage::kFrontend;
-  else if (text == "estimator")
-    *stage = Stage::kEstimator;
-  else
-    return false;
-  return true;
+  return parseEnum(kStageNames, text, stage);
 }
 
-const char* toString(Stage stage) {
-  switch (stage) {
-    case Stage::kDepthFilter:
-      return "depth-filter";
-    case Stage::kFrontend:
-      return "frontend";
-    case Stage::kEstimator:
-      return "estimator";
-  }
-  return "?";
-}
+const char* toString(Stage stage) { return enumName(kStageNames, stage); }
 
 bool ReplayResult::allIdentical() const {
   if (failed || outputs.empty()) return false;
