@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "analytic_scene.h"
+#include "pplvo/depth_filter_node/depth_filter_convert.h"
+#include "pplvo/depth_filter_node/depth_filter_node.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/msgs/convert_pose.h"
-#include "pplvo/nodes/depth_filter_convert.h"
-#include "pplvo/nodes/depth_filter_node.h"
 
 namespace pplvo::nodes {
 namespace {

@@ -8,11 +8,11 @@
 #include <sstream>
 
 #include "pplvo/core/enum_names.h"
+#include "pplvo/depth_filter_node/depth_filter_node.h"
 #include "pplvo/logging/event_log.h"
 #include "pplvo/msgs/channels.h"
-#include "pplvo/nodes/depth_filter_node.h"
-#include "pplvo/nodes/estimator_node.h"
-#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/odometry_nodes/estimator_node.h"
+#include "pplvo/odometry_nodes/frontend_node.h"
 
 namespace pplvo::replay {
 
