@@ -12,12 +12,12 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/depth_filter_node/depth_filter_node.h"
+#include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/msgs/channels.h"
-#include "pplvo/nodes/depth_filter_node.h"
-#include "pplvo/nodes/estimator_node.h"
-#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/odometry_nodes/estimator_node.h"
+#include "pplvo/odometry_nodes/frontend_node.h"
 #include "pplvo/player/player_node.h"
-#include "pplvo/synth/synthetic_sequence.h"
 
 namespace fs = std::filesystem;
 

@@ -1,16 +1,20 @@
 #include "pplvo/core/frame_pose.h"
 
+#include "pplvo/core/enum_names.h"
+
 namespace pplvo {
 
+namespace {
+constexpr EnumName<TrackingStatus> kTrackingStatusNames[] = {
+    {TrackingStatus::kFirstFrame, "first_frame"},
+    {TrackingStatus::kTracking, "tracking"},
+    {TrackingStatus::kVelocityModel, "velocity_model"},
+    {TrackingStatus::kLost, "lost"},
+    {TrackingStatus::kReinitialised, "reinitialised"}};
+}  // namespace
+
 const char* toString(TrackingStatus status) {
-  switch (status) {
-    case TrackingStatus::kFirstFrame: return "first_frame";
-    case TrackingStatus::kTracking: return "tracking";
-    case TrackingStatus::kVelocityModel: return "velocity_model";
-    case TrackingStatus::kLost: return "lost";
-    case TrackingStatus::kReinitialised: return "reinitialised";
-  }
-  return "unknown";
+  return enumName(kTrackingStatusNames, status, "unknown");
 }
 
 }  // namespace pplvo

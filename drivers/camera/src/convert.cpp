@@ -7,6 +7,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "pplvo/core/enum_names.h"
 #include "pplvo/dataset/dataset.h"
 
 namespace pplvo::camera {
@@ -348,18 +349,21 @@ bool RateLimiter::allow(int64_t utime) {
 
 // ----------------------------------------------------------------------------- options
 
+namespace {
+constexpr EnumName<RgbEncoding> kRgbEncodingNames[] = {{RgbEncoding::Raw, "raw"},
+                                                       {RgbEncoding::Jpeg, "jpeg"},
+                                                       {RgbEncoding::Jpeg, "jpg"},
+                                                       {RgbEncoding::Png, "png"}};
+constexpr EnumName<DepthEncoding> kDepthEncodingNames[] = {
+    {DepthEncoding::Raw, "raw"}, {DepthEncoding::Zlib, "zlib"}, {DepthEncoding::Png, "png"}};
+}  // namespace
+
 std::optional<RgbEncoding> parseRgbEncoding(const std::string& s) {
-  if (s == "raw") return RgbEncoding::Raw;
-  if (s == "jpeg" || s == "jpg") return RgbEncoding::Jpeg;
-  if (s == "png") return RgbEncoding::Png;
-  return std::nullopt;
+  return parseEnum(kRgbEncodingNames, s);
 }
 
 std::optional<DepthEncoding> parseDepthEncoding(const std::string& s) {
-  if (s == "raw") return DepthEncoding::Raw;
-  if (s == "zlib") return DepthEncoding::Zlib;
-  if (s == "png") return DepthEncoding::Png;
-  return std::nullopt;
+  return parseEnum(kDepthEncodingNames, s);
 }
 
 RegistrationDecision decideRegistration(bool requested, bool hardware_supported) {

@@ -18,7 +18,7 @@
 #include "pplvo/dataset/dataset.h"
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
-#include "pplvo/synth/synthetic_sequence.h"
+#include "pplvo/fixtures/synthetic_sequence.h"
 
 using namespace pplvo;
 using namespace pplvo::depth_filter;

@@ -1,29 +1,18 @@
 #include "pplvo/depth_filter/depth_model.h"
 
+#include "pplvo/core/enum_names.h"
+
 namespace pplvo::depth_filter {
 
+namespace {
+constexpr EnumName<DepthModel> kDepthModelNames[] = {
+    {DepthModel::kSensor, "sensor"}, {DepthModel::kCgm, "cgm"}, {DepthModel::kOgm, "ogm"}};
+}  // namespace
+
 bool parseDepthModel(const std::string& text, DepthModel* model) {
-  if (text == "sensor")
-    *model = DepthModel::kSensor;
-  else if (text == "cgm")
-    *model = DepthModel::kCgm;
-  else if (text == "ogm")
-    *model = DepthModel::kOgm;
-  else
-    return false;
-  return true;
+  return parseEnum(kDepthModelNames, text, model);
 }
 
-const char* toString(DepthModel model) {
-  switch (model) {
-    case DepthModel::kSensor:
-      return "sensor";
-    case DepthModel::kCgm:
-      return "cgm";
-    case DepthModel::kOgm:
-      return "ogm";
-  }
-  return "?";
-}
+const char* toString(DepthModel model) { return enumName(kDepthModelNames, model); }
 
 }  // namespace pplvo::depth_filter

@@ -10,16 +10,16 @@
 #include <string>
 #include <vector>
 
-#include "analytic_scene.h"
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
+#include "pplvo/fixtures/analytic_scene.h"
 
 namespace pplvo::depth_filter {
 namespace {
 
-using test::AnalyticScene;
-using test::SceneFrame;
-using test::SceneOptions;
+using fixtures::AnalyticScene;
+using fixtures::SceneFrame;
+using fixtures::SceneOptions;
 
 PinholeCamera smallCamera() {
   PinholeCamera c;
@@ -363,7 +363,7 @@ class SceneTest : public ::testing::Test {
         bool all = true;
         for (int dv = -4; dv <= 4 && all; ++dv)
           for (int du = -4; du <= 4 && all; ++du)
-            all = f.label.at<uint8_t>(v + dv, u + du) == test::kWall;
+            all = f.label.at<uint8_t>(v + dv, u + du) == fixtures::kWall;
         m.at<uint8_t>(v, u) = all ? 255 : 0;
       }
     return m;
@@ -380,7 +380,7 @@ class SceneTest : public ::testing::Test {
             hi = std::max(hi, z);
           }
         m.at<uint8_t>(v, u) =
-            (hi - lo > 0.1f && f.label.at<uint8_t>(v, u) != test::kMoving) ? 255 : 0;
+            (hi - lo > 0.1f && f.label.at<uint8_t>(v, u) != fixtures::kMoving) ? 255 : 0;
       }
     return m;
   }
@@ -468,7 +468,7 @@ TEST_F(SceneTest, DepthRmseOgm10BelowCgmAndRaw) {
     const SceneFrame& f = (*frames_)[i];
     for (int v = 0; v < f.depth_m.rows; ++v)
       for (int u = 0; u < f.depth_m.cols; ++u) {
-        if (!evaluable(f, v, u) || f.label.at<uint8_t>(v, u) == test::kMoving) continue;
+        if (!evaluable(f, v, u) || f.label.at<uint8_t>(v, u) == fixtures::kMoving) continue;
         const double t = f.depth_true_m.at<float>(v, u);
         raw.add(f.depth_m.at<float>(v, u) - t);
         cgm.add((*cgm_)[i].depth_m.at<float>(v, u) - t);
@@ -521,7 +521,7 @@ TEST_F(SceneTest, UncertaintyCalibratedAndHigherAtEdgesAndMovingObject) {
         const double t = f.depth_true_m.at<float>(v, u);
         const float vc = (*cgm_)[i].var_m2.at<float>(v, u);
         const float vo = o10.var_m2.at<float>(v, u);
-        if (evaluable(f, v, u) && f.label.at<uint8_t>(v, u) != test::kMoving) {
+        if (evaluable(f, v, u) && f.label.at<uint8_t>(v, u) != fixtures::kMoving) {
           ++n;
           const float zr = f.depth_m.at<float>(v, u);
           in2_raw += std::abs(zr - t) < 2 * std::sqrt(sensor.varianceM2(zr));
@@ -537,7 +537,7 @@ TEST_F(SceneTest, UncertaintyCalibratedAndHigherAtEdgesAndMovingObject) {
           edge_var.push_back(vo);
           if (vc > 0) edge_var_cgm.push_back(vc);
         }
-        if (f.label.at<uint8_t>(v, u) == test::kMoving && o10.depth_m.at<float>(v, u) > 0)
+        if (f.label.at<uint8_t>(v, u) == fixtures::kMoving && o10.depth_m.at<float>(v, u) > 0)
           moving_var.push_back(vo);
       }
   }

@@ -1,4 +1,4 @@
-// Acceptance of the full depth filter on the shared synthetic sequence (pplvo_synth): noisy
+// Acceptance of the full depth filter on the shared synthetic sequence (pplvo_fixtures): noisy
 // Kinect-like depth (paper eq. 1 + 1/8 px disparity quantisation + edge dropout), true poses,
 // noiseless truth, and a moving object.
 #include <gtest/gtest.h>
@@ -12,7 +12,7 @@
 
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
-#include "pplvo/synth/synthetic_sequence.h"
+#include "pplvo/fixtures/synthetic_sequence.h"
 
 namespace pplvo::depth_filter {
 namespace {

@@ -1,4 +1,4 @@
-#include "pplvo/nodes/depth_filter_convert.h"
+#include "pplvo/depth_filter_node/depth_filter_convert.h"
 
 #include "pplvo/msgs/convert.h"
 

@@ -1,4 +1,4 @@
-// pplvo-depth-filter: see pplvo/nodes/depth_filter_node.h and docs/depth_filter.md.
+// pplvo-depth-filter: see pplvo/depth_filter_node/depth_filter_node.h and docs/depth_filter.md.
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -6,8 +6,8 @@
 #include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
 #include "pplvo/core/stage_timer.h"
+#include "pplvo/depth_filter_node/depth_filter_node.h"
 #include "pplvo/msgs/node_runtime.h"
-#include "pplvo/nodes/depth_filter_node.h"
 #include "pplvo/pipeline/pipeline_args.h"
 
 namespace {

@@ -1,13 +1,13 @@
-#include "pplvo/nodes/depth_filter_node.h"
+#include "pplvo/depth_filter_node/depth_filter_node.h"
 
 #include <algorithm>
 #include <optional>
 #include <pplvo_msgs/depth_map_t.hpp>
 #include <utility>
 
+#include "pplvo/depth_filter_node/depth_filter_convert.h"
 #include "pplvo/msgs/convert_pose.h"
 #include "pplvo/msgs/node_runtime.h"
-#include "pplvo/nodes/depth_filter_convert.h"
 
 namespace pplvo::nodes {
 

@@ -11,17 +11,17 @@
 #include <string>
 #include <vector>
 
-#include "analytic_scene.h"
+#include "pplvo/depth_filter_node/depth_filter_convert.h"
+#include "pplvo/depth_filter_node/depth_filter_node.h"
+#include "pplvo/fixtures/analytic_scene.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/msgs/convert_pose.h"
-#include "pplvo/nodes/depth_filter_convert.h"
-#include "pplvo/nodes/depth_filter_node.h"
 
 namespace pplvo::nodes {
 namespace {
 
-using depth_filter::test::AnalyticScene;
-using depth_filter::test::SceneOptions;
+using fixtures::AnalyticScene;
+using fixtures::SceneOptions;
 
 SceneOptions smallScene() {
   SceneOptions o;

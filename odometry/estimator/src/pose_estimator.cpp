@@ -8,27 +8,22 @@
 #include <cmath>
 #include <limits>
 
+#include "pplvo/core/enum_names.h"
 #include "pplvo/estimator/pose_parameterisation.h"
 
 namespace pplvo {
 
-const char* toString(EstimateStatus s) {
-  switch (s) {
-    case EstimateStatus::kOk:
-      return "ok";
-    case EstimateStatus::kNoConstraints:
-      return "no_constraints";
-    case EstimateStatus::kTooFewConstraints:
-      return "too_few_constraints";
-    case EstimateStatus::kDegenerate:
-      return "degenerate";
-    case EstimateStatus::kUncertain:
-      return "uncertain";
-    case EstimateStatus::kSolverFailure:
-      return "solver_failure";
-  }
-  return "unknown";
-}
+namespace {
+constexpr EnumName<EstimateStatus> kEstimateStatusNames[] = {
+    {EstimateStatus::kOk, "ok"},
+    {EstimateStatus::kNoConstraints, "no_constraints"},
+    {EstimateStatus::kTooFewConstraints, "too_few_constraints"},
+    {EstimateStatus::kDegenerate, "degenerate"},
+    {EstimateStatus::kUncertain, "uncertain"},
+    {EstimateStatus::kSolverFailure, "solver_failure"}};
+}  // namespace
+
+const char* toString(EstimateStatus s) { return enumName(kEstimateStatusNames, s, "unknown"); }
 
 namespace {
 

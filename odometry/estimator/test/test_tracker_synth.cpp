@@ -1,4 +1,4 @@
-// Integration: the tracker on a ray-cast synthetic sequence (pplvo_synth) with its Kinect-like
+// Integration: the tracker on a ray-cast synthetic sequence (pplvo_fixtures) with its Kinect-like
 // depth noise (quantised disparity, dropouts). Correspondences come from the ground truth
 // (no feature matching here): point pixels sampled in the previous frame with their *noisy*
 // sensor depth, lines from the scene's straight edges, planes from the visible surfaces.
@@ -10,7 +10,7 @@
 #include <random>
 
 #include "pplvo/estimator/odometry_tracker.h"
-#include "pplvo/synth/synthetic_sequence.h"
+#include "pplvo/fixtures/synthetic_sequence.h"
 
 namespace pplvo {
 namespace {

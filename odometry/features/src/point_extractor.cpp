@@ -1,42 +1,26 @@
 #include "pplvo/features/point_extractor.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
+#include "pplvo/core/enum_names.h"
+
 namespace pplvo::features {
 
+namespace {
+constexpr EnumName<PointDetector> kPointDetectorNames[] = {{PointDetector::kOrb, "orb"},
+                                                           {PointDetector::kAkaze, "akaze"},
+                                                           {PointDetector::kSift, "sift"},
+                                                           {PointDetector::kBrisk, "brisk"}};
+}  // namespace
+
 bool parsePointDetector(const std::string& name, PointDetector* out) {
-  std::string n = name;
-  for (auto& ch : n) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  if (n == "orb")
-    *out = PointDetector::kOrb;
-  else if (n == "akaze")
-    *out = PointDetector::kAkaze;
-  else if (n == "sift")
-    *out = PointDetector::kSift;
-  else if (n == "brisk")
-    *out = PointDetector::kBrisk;
-  else
-    return false;
-  return true;
+  return parseEnum(kPointDetectorNames, name, out, EnumCase::kIgnore);
 }
 
-const char* pointDetectorName(PointDetector d) {
-  switch (d) {
-    case PointDetector::kOrb:
-      return "orb";
-    case PointDetector::kAkaze:
-      return "akaze";
-    case PointDetector::kSift:
-      return "sift";
-    case PointDetector::kBrisk:
-      return "brisk";
-  }
-  return "?";
-}
+const char* pointDetectorName(PointDetector d) { return enumName(kPointDetectorNames, d); }
 
 namespace {
 

@@ -10,14 +10,14 @@
 #include "pplvo/features/line_extractor.h"
 #include "pplvo/features/matching.h"
 #include "pplvo/features/point_extractor.h"
-#include "synthetic_scene.h"
+#include "pplvo/fixtures/textured_plane.h"
 
 using namespace pplvo;
 using namespace pplvo::features;
 using namespace pplvo::features::testdata;
-using pplvo::features::test::PlaneScene;
-using pplvo::features::test::makeTexture;
-using pplvo::features::test::vgaCamera;
+using pplvo::fixtures::PlaneScene;
+using pplvo::fixtures::makeTexture;
+using pplvo::fixtures::kinectVgaCamera;
 
 namespace {
 
@@ -150,7 +150,7 @@ TEST(SelectSpread, CapsAndSpreadsOverTheGrid) {
 class PlanePairTest : public ::testing::TestWithParam<double> {};
 
 TEST_P(PlanePairTest, PointMatchingPrecision) {
-  const Pair p = makePair(vgaCamera(GetParam()));
+  const Pair p = makePair(kinectVgaCamera(GetParam()));
   PointExtractor ex;
   const PointExtraction a = ex.extract(p.gray1, p.cam), b = ex.extract(p.gray2, p.cam);
   ASSERT_GT(a.points.size(), 300u);
@@ -168,7 +168,7 @@ TEST_P(PlanePairTest, PointMatchingPrecision) {
 }
 
 TEST_P(PlanePairTest, LineMatchingPrecision) {
-  const Pair p = makePair(vgaCamera(GetParam()));
+  const Pair p = makePair(kinectVgaCamera(GetParam()));
   LineExtractor ex;
   const LineExtraction a = ex.extract(p.gray1, p.cam), b = ex.extract(p.gray2, p.cam);
   ASSERT_GT(a.lines.size(), 40u);
@@ -192,7 +192,7 @@ TEST_P(PlanePairTest, LineMatchingPrecision) {
 INSTANTIATE_TEST_SUITE_P(SignedFy, PlanePairTest, ::testing::Values(1.0, -1.0));
 
 TEST(PointMatching, EveryDetectorMatchesAccurately) {
-  const Pair p = makePair(vgaCamera());
+  const Pair p = makePair(kinectVgaCamera());
   for (auto det : {PointDetector::kOrb, PointDetector::kAkaze, PointDetector::kSift,
                    PointDetector::kBrisk}) {
     PointExtractorOptions o;
@@ -213,7 +213,7 @@ TEST(PointMatching, EveryDetectorMatchesAccurately) {
 }
 
 TEST(PointMatching, PredictedPositionsGateTheSearch) {
-  const Pair p = makePair(vgaCamera(), 2.0);  // larger motion: ~40 px
+  const Pair p = makePair(kinectVgaCamera(), 2.0);  // larger motion: ~40 px
   PointExtractor ex;
   const PointExtraction a = ex.extract(p.gray1, p.cam), b = ex.extract(p.gray2, p.cam);
   std::vector<Eigen::Vector2d> pred(a.points.size(), Eigen::Vector2d::Constant(NAN));
@@ -250,7 +250,7 @@ TEST(PointMatching, PredictedPositionsGateTheSearch) {
 }
 
 TEST(Undistortion, FeaturesAreUndistortedLikePinholeCamera) {
-  PinholeCamera cam = vgaCamera();
+  PinholeCamera cam = kinectVgaCamera();
   cam.distortion = {0.12, -0.25, 0.001, -0.0015, 0.1};
   const Pair p = makePair(cam);
   PointExtractor ex;
@@ -278,7 +278,7 @@ TEST(Undistortion, FeaturesAreUndistortedLikePinholeCamera) {
   EXPECT_GT(lp.judged, 20);
   EXPECT_GE(lp.value(), 0.95);
   // Without distortion the undistortion is the identity.
-  const PinholeCamera plain = vgaCamera();
+  const PinholeCamera plain = kinectVgaCamera();
   const PointExtraction c = ex.extract(p.gray1, plain);
   for (size_t i = 0; i < c.points.size(); ++i) {
     EXPECT_EQ(c.points[i].px.x(), double(c.keypoints[i].pt.x));
@@ -287,7 +287,7 @@ TEST(Undistortion, FeaturesAreUndistortedLikePinholeCamera) {
 }
 
 TEST(Degenerate, BlankTinyAndOddImagesGiveEmptyResults) {
-  const PinholeCamera cam = vgaCamera();
+  const PinholeCamera cam = kinectVgaCamera();
   PointExtractor pex;
   LineExtractor lex;
   std::vector<cv::Mat> images = {cv::Mat(), cv::Mat::zeros(480, 640, CV_8UC1),
@@ -318,7 +318,7 @@ TEST(Degenerate, BlankTinyAndOddImagesGiveEmptyResults) {
 }
 
 TEST(Degenerate, MatchingEmptyOrInconsistentInputs) {
-  const Pair p = makePair(vgaCamera());
+  const Pair p = makePair(kinectVgaCamera());
   PointExtractor ex;
   const PointExtraction a = ex.extract(p.gray1, p.cam);
   const std::vector<PointFeature> none;
@@ -345,7 +345,7 @@ TEST(Degenerate, MatchingEmptyOrInconsistentInputs) {
 }
 
 TEST(FrameFeatures, ExtractIntoFillsFields) {
-  const Pair p = makePair(vgaCamera());
+  const Pair p = makePair(kinectVgaCamera());
   FrameFeatures f1, f2;
   PointExtractor pex;
   LineExtractor lex;
@@ -463,7 +463,7 @@ TEST(LineExtractor, ReducedScaleKeepsSubpixelEdgePosition) {
   for (double scale : {1.0, 0.5, 0.4}) {
     LineExtractorOptions o;
     o.detection_scale = scale;
-    const LineExtraction r = LineExtractor(o).extract(img, vgaCamera());
+    const LineExtraction r = LineExtractor(o).extract(img, kinectVgaCamera());
     ASSERT_EQ(r.lines.size(), 2u) << scale;
     for (const auto& l : r.lines) {
       const bool vertical = std::abs(l.px1.x() - l.px2.x()) < 1.0;
@@ -483,7 +483,7 @@ TEST(LineExtractor, ReducedScaleKeepsSubpixelEdgePosition) {
 // Sub-pixel keypoints: the test texture translated by known fractions of a pixel (cubic
 // resampling). Refined keypoints follow the shift better than integer FAST keypoints.
 TEST(SubpixelRefinement, FollowsSubPixelShifts) {
-  const PinholeCamera cam = vgaCamera();
+  const PinholeCamera cam = kinectVgaCamera();
   cv::Mat texture;
   cv::GaussianBlur(scene().texture, texture, cv::Size(0, 0), 1.0);  // band-limit before shifting
   auto render = [&](double shift_px) {

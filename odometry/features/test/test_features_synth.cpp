@@ -9,7 +9,7 @@
 #include "pplvo/features/line_extractor.h"
 #include "pplvo/features/matching.h"
 #include "pplvo/features/point_extractor.h"
-#include "pplvo/synth/synthetic_sequence.h"
+#include "pplvo/fixtures/synthetic_sequence.h"
 
 using namespace pplvo;
 using namespace pplvo::features;

@@ -11,7 +11,7 @@
 #include "pplvo/features/lbd.h"
 #include "pplvo/features/line_extractor.h"
 #include "pplvo/features/lsd.h"
-#include "synthetic_scene.h"
+#include "pplvo/fixtures/textured_plane.h"
 
 using namespace pplvo;
 using namespace pplvo::features;
@@ -40,7 +40,7 @@ std::vector<cv::Vec4f> interiorSegments(const cv::Mat& gray, float min_length, f
 }  // namespace
 
 TEST(Lbd, ShiftingOrTurningTheImageLeavesTheDescriptor) {
-  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
+  const cv::Mat gray = pplvo::fixtures::texturedPlaneView();
   const auto segments = interiorSegments(gray, 20.f, 12.f);
   ASSERT_GT(segments.size(), 20u);
   const cv::Mat d = describeLineSegments(gray, segments);
@@ -79,7 +79,7 @@ TEST(Lbd, ShiftingOrTurningTheImageLeavesTheDescriptor) {
 }
 
 TEST(Lbd, GainAndOffsetOfTheImageBarelyChangeIt) {
-  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
+  const cv::Mat gray = pplvo::fixtures::texturedPlaneView();
   const auto segments = interiorSegments(gray, 20.f, 0.f);
   ASSERT_GT(segments.size(), 20u);
   cv::Mat dimmer;
@@ -96,7 +96,7 @@ TEST(Lbd, GainAndOffsetOfTheImageBarelyChangeIt) {
 TEST(Lbd, TellsSegmentsApartLikeOpenCvsLbd) {
   // On the same segments, the nearest other segment's descriptor is as far from each one with
   // pplvo's LBD as with OpenCV's: the median distance to the closest different segment.
-  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
+  const cv::Mat gray = pplvo::fixtures::texturedPlaneView();
   const auto segments = interiorSegments(gray, 15.f, 0.f);
   ASSERT_GT(segments.size(), 30u);
   const cv::Mat ours = describeLineSegments(gray, segments);
@@ -125,7 +125,7 @@ TEST(Lbd, TellsSegmentsApartLikeOpenCvsLbd) {
 }
 
 TEST(Lbd, DegenerateInputs) {
-  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
+  const cv::Mat gray = pplvo::fixtures::texturedPlaneView();
   EXPECT_EQ(describeLineSegments(gray, {}).rows, 0);
   EXPECT_EQ(describeLineSegments(gray, {}).cols, kLbdBytes);
   // Zero length, not finite, outside the image, beyond int range: all-zero rows, one per

@@ -11,7 +11,7 @@
 #include "pplvo/features/line_extractor.h"
 #include "pplvo/features/lsd.h"
 #include "shared_sequence.h"
-#include "synthetic_scene.h"
+#include "pplvo/fixtures/textured_plane.h"
 
 using namespace pplvo;
 using namespace pplvo::features;
@@ -120,7 +120,7 @@ TEST(Lsd, SlantedEdgeFollowsItsAngle) {
 
 TEST(Lsd, FindsTheSegmentsOfOpenCvsLsdOnATexturedScene) {
   // The feature tests' textured plane, seen at an angle, at full and reduced resolution.
-  const cv::Mat gray = pplvo::features::test::texturedPlaneView();
+  const cv::Mat gray = pplvo::fixtures::texturedPlaneView();
   ASSERT_FALSE(gray.empty());
   expectSameAsOpenCv(gray, "textured plane, VGA");
   cv::Mat small;
@@ -188,7 +188,7 @@ TEST(LineExtractor, OpenCvsLsdAndLbdRemainAvailable) {
   // combination gives its four sides with a descriptor each, and the sides agree.
   cv::Mat img(480, 640, CV_8UC1, cv::Scalar(50));
   img(cv::Rect(200, 150, 240, 180)).setTo(200);
-  const LineExtraction ours = LineExtractor().extract(img, pplvo::features::test::vgaCamera());
+  const LineExtraction ours = LineExtractor().extract(img, pplvo::fixtures::kinectVgaCamera());
   ASSERT_EQ(ours.lines.size(), 4u);
   for (const bool use_opencv : {false, true}) {
     for (const int refine : {cv::LSD_REFINE_NONE, cv::LSD_REFINE_STD}) {
@@ -197,7 +197,7 @@ TEST(LineExtractor, OpenCvsLsdAndLbdRemainAvailable) {
         o.use_opencv = use_opencv;
         o.lsd_refine = refine;
         o.lbd_octaves = octaves;
-        const LineExtraction r = LineExtractor(o).extract(img, pplvo::features::test::vgaCamera());
+        const LineExtraction r = LineExtractor(o).extract(img, pplvo::fixtures::kinectVgaCamera());
         const std::string what = "opencv " + std::to_string(use_opencv) + " refine " +
                                  std::to_string(refine) + " octaves " + std::to_string(octaves);
         EXPECT_TRUE(r.stats.error.empty()) << what << ": " << r.stats.error;

@@ -4,23 +4,20 @@
 #include <Eigen/LU>
 #include <cmath>
 
+#include "pplvo/core/enum_names.h"
+
 namespace pplvo::geometry {
 
-const char* toString(FitStatus s) {
-  switch (s) {
-    case FitStatus::kOk:
-      return "ok";
-    case FitStatus::kTooFewPoints:
-      return "too_few_points";
-    case FitStatus::kThroughCameraCentre:
-      return "through_camera_centre";
-    case FitStatus::kDegenerate:
-      return "degenerate";
-    case FitStatus::kNonFinite:
-      return "non_finite";
-  }
-  return "unknown";
-}
+namespace {
+constexpr EnumName<FitStatus> kFitStatusNames[] = {
+    {FitStatus::kOk, "ok"},
+    {FitStatus::kTooFewPoints, "too_few_points"},
+    {FitStatus::kThroughCameraCentre, "through_camera_centre"},
+    {FitStatus::kDegenerate, "degenerate"},
+    {FitStatus::kNonFinite, "non_finite"}};
+}  // namespace
+
+const char* toString(FitStatus s) { return enumName(kFitStatusNames, s, "unknown"); }
 
 PlaneWithCov hessianFromMinimal(const Eigen::Vector3d& theta_m, const Eigen::Matrix3d& cov_theta_m,
                                 Eigen::Matrix<double, 4, 3>* jacobian) {

@@ -3,8 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <random>
 
+#include "pplvo/fixtures/box_room.h"
 #include "pplvo/geometry/backprojection.h"
-#include "scene.h"
 
 namespace pplvo::geometry {
 namespace {
@@ -38,13 +38,13 @@ void checkMonteCarlo(const PinholeCamera& cam, double u, double v, double z, dou
 }
 
 TEST(Backprojection, CovarianceMatchesMonteCarlo) {
-  checkMonteCarlo(test::vgaCamera(false), 100.3, 400.7, 2.5, 1.425e-3 * 2.5 * 2.5);
-  checkMonteCarlo(test::vgaCamera(true), 600.0, 20.0, 1.2, 0.004);  // signed fy < 0
-  checkMonteCarlo(test::vgaCamera(true), 319.5, 239.5, 4.0, 0.02);  // principal point
+  checkMonteCarlo(fixtures::iclVgaCamera(false), 100.3, 400.7, 2.5, 1.425e-3 * 2.5 * 2.5);
+  checkMonteCarlo(fixtures::iclVgaCamera(true), 600.0, 20.0, 1.2, 0.004);  // signed fy < 0
+  checkMonteCarlo(fixtures::iclVgaCamera(true), 319.5, 239.5, 4.0, 0.02);  // principal point
 }
 
 TEST(Backprojection, SignedFocalLengthKeepsProjectionConsistent) {
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   const Point3WithCov p = backprojectWithCov(cam, 500.0, 100.0, 3.0, 1e-4);
   const Eigen::Vector2d px = cam.project(p.p);
   EXPECT_NEAR(px.x(), 500.0, 1e-9);

@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
+#include "pplvo/fixtures/box_room.h"
 #include "pplvo/geometry/lifting.h"
-#include "scene.h"
 
 namespace pplvo::geometry {
 namespace {
@@ -13,9 +13,10 @@ FrameFeatures frameWith(const PinholeCamera& cam) {
 }
 
 TEST(LiftPoints, BackprojectsNearestPixelAndNeighbourFallback) {
-  const PinholeCamera cam = test::vgaCamera(true);
-  const Pose3 T = test::cornerView();
-  const test::Rendered r = test::renderRoom(cam, T, test::boxRoom(-2, 2, -1.2, 1.5, -2, 3), -1);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
+  const Pose3 T = fixtures::cornerView();
+  const fixtures::Rendered r =
+      fixtures::renderRoom(cam, T, fixtures::boxRoom(-2, 2, -1.2, 1.5, -2, 3), -1);
   FrameFeatures f = frameWith(cam);
   PointFeature a;
   a.px = {200.3, 150.6};
@@ -45,7 +46,7 @@ TEST(LiftPoints, BackprojectsNearestPixelAndNeighbourFallback) {
 
 TEST(LiftPoints, KeypointsOnDepthDiscontinuitiesAreNotLifted) {
   // Left half a wall at 1.5 m, right half one at 3 m; a slanted floor-like gradient below.
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   DepthWithVariance d;
   d.depth_m = cv::Mat(480, 640, CV_32F, cv::Scalar(1.5f));
   d.depth_m(cv::Rect(320, 0, 320, 240)).setTo(3.0f);
@@ -81,7 +82,7 @@ TEST(LiftPoints, KeypointsOnDepthDiscontinuitiesAreNotLifted) {
 }
 
 TEST(LiftPoints, RejectsBadDepthInput) {
-  FrameFeatures f = frameWith(test::vgaCamera(true));
+  FrameFeatures f = frameWith(fixtures::iclVgaCamera(true));
   f.points.resize(3);
   DepthWithVariance d;  // empty
   LiftStats st = liftPoints(f, d);
@@ -100,10 +101,10 @@ TEST(LiftPoints, RejectsBadDepthInput) {
 
 // The projection of a true 3D segment lying on a wall; depth from the rendered (noisy) room.
 TEST(LiftLines, RecoversSegmentOnWallAndAcrossDiscontinuity) {
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   const Pose3 T_w_c = Pose3::Identity();
-  const auto room = test::boxRoom(-2, 2, -1.5, 1.5, -1, 3);
-  const test::Rendered r = test::renderRoom(cam, T_w_c, room, 11);
+  const auto room = fixtures::boxRoom(-2, 2, -1.5, 1.5, -1, 3);
+  const fixtures::Rendered r = fixtures::renderRoom(cam, T_w_c, room, 11);
   FrameFeatures f = frameWith(cam);
   // Segment on the back wall z = 3 (camera frame == world frame).
   const Eigen::Vector3d A(-0.8, 0.4, 3.0), B(0.9, -0.3, 3.0);
@@ -155,7 +156,7 @@ TEST(LiftLines, RecoversSegmentOnWallAndAcrossDiscontinuity) {
 TEST(LiftLines, OutlineTakesTheNearerSurface) {
   // The outline of a near box (1.5 m, left) against a far wall (3 m): the segment lies on the
   // depth step, where the sampled pixel may fall on either surface (here mostly the far one).
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   DepthWithVariance d;
   d.depth_m = cv::Mat(480, 640, CV_32F, cv::Scalar(3.0f));
   d.depth_m(cv::Rect(0, 0, 320, 480)).setTo(1.5f);
@@ -185,7 +186,7 @@ TEST(LiftLines, OutlineTakesTheNearerSurface) {
 }
 
 TEST(LiftLines, NoDepthAndNanEndpoints) {
-  FrameFeatures f = frameWith(test::vgaCamera(true));
+  FrameFeatures f = frameWith(fixtures::iclVgaCamera(true));
   LineFeature a;
   a.px1 = {10, 10};
   a.px2 = {300, 200};

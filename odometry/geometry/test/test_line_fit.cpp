@@ -3,9 +3,9 @@
 #include <Eigen/Dense>
 #include <random>
 
+#include "pplvo/fixtures/box_room.h"
 #include "pplvo/geometry/backprojection.h"
 #include "pplvo/geometry/line_fit.h"
-#include "scene.h"
 
 namespace pplvo::geometry {
 namespace {
@@ -41,14 +41,14 @@ Samples sampleLine(const PinholeCamera& cam, const Eigen::Vector3d& A, const Eig
 }
 
 TEST(LineFit, RecoversTrueLine) {
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   std::mt19937 rng(2);
   const Eigen::Vector3d A(-0.6, 0.3, 2.0), B(0.5, -0.2, 2.8);
   const Samples s = sampleLine(cam, A, B, 100, rng);
   const LineFitResult f = fitLineWls(s.P, s.C, s.V, s.P.front(), s.P.back());
   ASSERT_TRUE(f.ok()) << toString(f.status);
   EXPECT_DOUBLE_EQ(f.theta(f.fixed_dim), 1.0);
-  EXPECT_LT(test::angleDeg(f.theta, B - A), 1.0);
+  EXPECT_LT(fixtures::angleDeg(f.theta, B - A), 1.0);
   const Eigen::Vector3d u = (B - A).normalized();
   auto distToLine = [&](const Eigen::Vector3d& p) { return (p - A).cross(u).norm(); };
   EXPECT_LT(distToLine(f.centroid), 0.01);
@@ -67,7 +67,7 @@ struct NeesOut {
   double dir = 0, centroid = 0, end1 = 0, end2 = 0;
 };
 NeesOut neesExperiment(const Eigen::Vector3d& A, const Eigen::Vector3d& B, int n) {
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   std::mt19937 rng(99);
   const int trials = 1000;
   NeesOut out;

@@ -2,8 +2,8 @@
 
 #include <map>
 
+#include "pplvo/fixtures/box_room.h"
 #include "pplvo/geometry/plane_extraction.h"
-#include "scene.h"
 
 namespace pplvo::geometry {
 namespace {
@@ -17,8 +17,9 @@ struct Check {
 
 // Each extracted plane must be one true plane (majority of its pixels' surface ids) with
 // normal < 2 deg and d < 2 cm from it; each true plane seen by >= min_px pixels must be found.
-Check checkExtraction(const PlaneExtractionResult& res, const test::Rendered& r,
-                      const std::vector<test::WorldPlane>& room, const Pose3& T_w_c, int min_px) {
+Check checkExtraction(const PlaneExtractionResult& res, const fixtures::Rendered& r,
+                      const std::vector<fixtures::WorldPlane>& room, const Pose3& T_w_c,
+                      int min_px) {
   Check c;
   std::vector<int> visible(room.size(), 0);
   for (int v = 0; v < r.surface_id.rows; ++v)
@@ -46,8 +47,8 @@ Check checkExtraction(const PlaneExtractionResult& res, const test::Rendered& r,
       continue;
     }
     c.min_purity = std::min(c.min_purity, static_cast<double>(best_n) / total);
-    const Eigen::Vector4d truth = test::planeInCamera(room[best], T_w_c);
-    const double ang = test::angleDeg(p.plane.normal(), truth.head<3>());
+    const Eigen::Vector4d truth = fixtures::planeInCamera(room[best], T_w_c);
+    const double ang = fixtures::angleDeg(p.plane.normal(), truth.head<3>());
     const double derr = std::abs(p.plane.d() - truth(3));
     if (ang > 2.0 || derr > 0.02 || found[best]) ++c.n_spurious;  // wrong or duplicate
     if (ang > 2.0 || derr > 0.02 || found[best] || best_n < 0.97 * total) {
@@ -72,12 +73,12 @@ Check checkExtraction(const PlaneExtractionResult& res, const test::Rendered& r,
 }
 
 TEST(PlaneExtraction, RoomCornerFindsEachPlane) {
-  const PinholeCamera cam = test::vgaCamera(true);
-  const auto room = test::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
+  const auto room = fixtures::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
   for (int seed : {-1, 5, 6}) {  // noiseless and two noisy renders
-    for (const Pose3& T : {test::cornerView(), test::cornerView(-50, -15, {0.2, 0.0, 0.5}),
-                           test::cornerView(10, 35, {-0.5, 0.8, -0.5})}) {
-      const test::Rendered r = test::renderRoom(cam, T, room, seed);
+    for (const Pose3& T : {fixtures::cornerView(), fixtures::cornerView(-50, -15, {0.2, 0.0, 0.5}),
+                           fixtures::cornerView(10, 35, {-0.5, 0.8, -0.5})}) {
+      const fixtures::Rendered r = fixtures::renderRoom(cam, T, room, seed);
       PlaneExtractor ex(cam);
       const PlaneExtractionResult res = ex.extract(r.depth);
       ASSERT_TRUE(res.stats.error.empty());
@@ -106,10 +107,10 @@ TEST(PlaneExtraction, RoomCornerFindsEachPlane) {
 }
 
 TEST(PlaneExtraction, ResultsDoNotDependOnTheThreadCount) {
-  const PinholeCamera cam = test::vgaCamera(true);
-  const auto room = test::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
-  const test::Rendered r =
-      test::renderRoom(cam, test::cornerView(-50, -15, {0.2, 0.0, 0.5}), room, 5);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
+  const auto room = fixtures::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
+  const fixtures::Rendered r =
+      fixtures::renderRoom(cam, fixtures::cornerView(-50, -15, {0.2, 0.0, 0.5}), room, 5);
   PlaneExtractionOptions o;
   o.threads = 1;
   const PlaneExtractionResult ref = PlaneExtractor(cam, o).extract(r.depth);
@@ -131,10 +132,10 @@ TEST(PlaneExtraction, ResultsDoNotDependOnTheThreadCount) {
 }
 
 TEST(PlaneExtraction, WithoutRefinementAndWithOtherCellSize) {
-  const PinholeCamera cam = test::vgaCamera(false);
-  const auto room = test::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
-  const Pose3 T = test::cornerView();
-  const test::Rendered r = test::renderRoom(cam, T, room, 8);
+  const PinholeCamera cam = fixtures::iclVgaCamera(false);
+  const auto room = fixtures::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
+  const Pose3 T = fixtures::cornerView();
+  const fixtures::Rendered r = fixtures::renderRoom(cam, T, room, 8);
   for (int cell : {16, 24}) {
     for (bool refine : {false, true}) {
       PlaneExtractionOptions o;
@@ -150,7 +151,7 @@ TEST(PlaneExtraction, WithoutRefinementAndWithOtherCellSize) {
 }
 
 TEST(PlaneExtraction, DegenerateDepthMaps) {
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   PlaneExtractor ex(cam);
   DepthWithVariance d;
   d.depth_m = cv::Mat::zeros(480, 640, CV_32F);  // no depth at all
@@ -178,9 +179,9 @@ TEST(PlaneExtraction, DegenerateDepthMaps) {
 }
 
 TEST(PlaneExtraction, FrameFeaturesConvenience) {
-  const PinholeCamera cam = test::vgaCamera(true);
-  const auto room = test::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
-  const test::Rendered r = test::renderRoom(cam, test::cornerView(), room, 4);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
+  const auto room = fixtures::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
+  const fixtures::Rendered r = fixtures::renderRoom(cam, fixtures::cornerView(), room, 4);
   FrameFeatures f;
   f.camera = cam;
   const PlaneExtractionStats st = extractPlanes(f, r.depth);

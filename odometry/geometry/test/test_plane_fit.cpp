@@ -3,9 +3,9 @@
 #include <Eigen/Dense>
 #include <random>
 
+#include "pplvo/fixtures/box_room.h"
 #include "pplvo/geometry/backprojection.h"
 #include "pplvo/geometry/plane_fit.h"
-#include "scene.h"
 
 namespace pplvo::geometry {
 namespace {
@@ -46,13 +46,13 @@ Eigen::Vector4d makePlane(Eigen::Vector3d n, double d) {
 }
 
 TEST(PlaneFit, RecoversTruePlane) {
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   std::mt19937 rng(1);
   const Eigen::Vector4d truth = makePlane({0.3, -0.2, -1.0}, 2.5);
   const Samples s = samplePlane(cam, truth, 100, 80, 400, 300, 4, rng);
   const PlaneFitResult f = fitPlaneWls(s.P, s.C, s.V);
   ASSERT_TRUE(f.ok()) << toString(f.status);
-  EXPECT_LT(test::angleDeg(f.plane.normal(), truth.head<3>()), 0.2);
+  EXPECT_LT(fixtures::angleDeg(f.plane.normal(), truth.head<3>()), 0.2);
   EXPECT_NEAR(f.plane.d(), truth(3), 0.005);
   EXPECT_GT(f.plane.d(), 0.0);
   EXPECT_NEAR(f.plane.normal().norm(), 1.0, 1e-12);
@@ -64,7 +64,7 @@ TEST(PlaneFit, RecoversTruePlane) {
 // (two normal directions + d). Mean within [0.8, 1.25] x dof.
 void neesExperiment(const Eigen::Vector4d& truth, int u0, int v0, int w, int h, int step,
                     double* nees_m, double* nees_h) {
-  const PinholeCamera cam = test::vgaCamera(true);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
   std::mt19937 rng(12345);
   const Eigen::Vector3d theta_true = truth.head<3>() / truth(3);
   const int trials = 1000;

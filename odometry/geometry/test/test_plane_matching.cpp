@@ -1,14 +1,14 @@
 #include <gtest/gtest.h>
 
+#include "pplvo/fixtures/box_room.h"
 #include "pplvo/geometry/plane_extraction.h"
 #include "pplvo/geometry/plane_matching.h"
-#include "scene.h"
 
 namespace pplvo::geometry {
 namespace {
 
 // True surface id of an extracted plane: the majority surface under its label.
-int trueId(const FrameFeatures& f, int i, const test::Rendered& r) {
+int trueId(const FrameFeatures& f, int i, const fixtures::Rendered& r) {
   std::vector<int> votes(6, 0);
   for (int v = 0; v < f.plane_labels.rows; ++v)
     for (int u = 0; u < f.plane_labels.cols; ++u)
@@ -18,13 +18,13 @@ int trueId(const FrameFeatures& f, int i, const test::Rendered& r) {
 }
 
 TEST(PlaneMatching, TwoViewsWithKnownMotion) {
-  const PinholeCamera cam = test::vgaCamera(true);
-  const auto room = test::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
-  const Pose3 T_w_prev = test::cornerView(35, 20, {0.5, 0.6, 0.3});
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
+  const auto room = fixtures::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
+  const Pose3 T_w_prev = fixtures::cornerView(35, 20, {0.5, 0.6, 0.3});
   // Small motion: 4 cm and 3 deg.
-  const Pose3 T_w_curr = test::cornerView(38, 19, {0.53, 0.58, 0.33});
-  const test::Rendered rp = test::renderRoom(cam, T_w_prev, room, 21);
-  const test::Rendered rc = test::renderRoom(cam, T_w_curr, room, 22);
+  const Pose3 T_w_curr = fixtures::cornerView(38, 19, {0.53, 0.58, 0.33});
+  const fixtures::Rendered rp = fixtures::renderRoom(cam, T_w_prev, room, 21);
+  const fixtures::Rendered rc = fixtures::renderRoom(cam, T_w_curr, room, 22);
   FrameFeatures prev, curr;
   prev.camera = curr.camera = cam;
   PlaneExtractor ex(cam);
@@ -61,12 +61,12 @@ TEST(PlaneMatching, TwoViewsWithKnownMotion) {
 }
 
 TEST(PlaneMatching, GatesRejectLargeMotionWithoutPrediction) {
-  const PinholeCamera cam = test::vgaCamera(true);
-  const auto room = test::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
-  const Pose3 T_w_prev = test::cornerView(35, 20, {0.5, 0.6, 0.3});
-  const Pose3 T_w_curr = test::cornerView(35, 20, {0.5, 0.6, 0.6});  // 30 cm forward-ish
-  const test::Rendered rp = test::renderRoom(cam, T_w_prev, room, -1);
-  const test::Rendered rc = test::renderRoom(cam, T_w_curr, room, -1);
+  const PinholeCamera cam = fixtures::iclVgaCamera(true);
+  const auto room = fixtures::boxRoom(-2, 2, -1.2, 1.5, -2, 3);
+  const Pose3 T_w_prev = fixtures::cornerView(35, 20, {0.5, 0.6, 0.3});
+  const Pose3 T_w_curr = fixtures::cornerView(35, 20, {0.5, 0.6, 0.6});  // 30 cm forward-ish
+  const fixtures::Rendered rp = fixtures::renderRoom(cam, T_w_prev, room, -1);
+  const fixtures::Rendered rc = fixtures::renderRoom(cam, T_w_curr, room, -1);
   FrameFeatures prev, curr;
   prev.camera = curr.camera = cam;
   extractPlanes(prev, rp.depth);

@@ -7,9 +7,9 @@
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 
+#include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/geometry/plane_extraction.h"
 #include "pplvo/geometry/plane_matching.h"
-#include "pplvo/synth/synthetic_sequence.h"
 
 namespace pplvo::geometry {
 namespace {

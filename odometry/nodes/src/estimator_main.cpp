@@ -1,4 +1,4 @@
-// pplvo-estimator: see pplvo/nodes/estimator_node.h and docs/estimator.md.
+// pplvo-estimator: see pplvo/odometry_nodes/estimator_node.h and docs/estimator.md.
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -7,7 +7,7 @@
 #include "pplvo/core/args.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
-#include "pplvo/nodes/estimator_node.h"
+#include "pplvo/odometry_nodes/estimator_node.h"
 #include "pplvo/pipeline/pipeline_args.h"
 
 namespace {

@@ -1,4 +1,4 @@
-#include "pplvo/nodes/estimator_node.h"
+#include "pplvo/odometry_nodes/estimator_node.h"
 
 #include <algorithm>
 #include <pplvo_msgs/pose_t.hpp>

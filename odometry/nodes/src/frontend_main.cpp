@@ -1,4 +1,4 @@
-// pplvo-frontend: see pplvo/nodes/frontend_node.h and docs/features.md.
+// pplvo-frontend: see pplvo/odometry_nodes/frontend_node.h and docs/features.md.
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -7,7 +7,7 @@
 #include "pplvo/core/args.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/node_runtime.h"
-#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/odometry_nodes/frontend_node.h"
 #include "pplvo/pipeline/pipeline_args.h"
 
 namespace {

@@ -1,4 +1,4 @@
-#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/odometry_nodes/frontend_node.h"
 
 #include <chrono>
 #include <pplvo_msgs/features_t.hpp>

@@ -14,12 +14,12 @@
 
 #include "pplvo/core/args.h"
 #include "pplvo/depth_filter/cgm_filter.h"
+#include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/convert_pose.h"
-#include "pplvo/nodes/estimator_node.h"
-#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/odometry_nodes/estimator_node.h"
+#include "pplvo/odometry_nodes/frontend_node.h"
 #include "pplvo/pipeline/pipeline_args.h"
-#include "pplvo/synth/synthetic_sequence.h"
 
 namespace pplvo::nodes {
 namespace {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pplvo/core/enum_names.h"
 #include "pplvo/estimator/pose_parameterisation.h"
 #include "pplvo/features/line_extractor.h"
 
@@ -19,39 +20,27 @@ double geometricVariance(const PoseEstimate& estimate, double variance) {
   return variance / (s * s);
 }
 
+constexpr EnumName<TrackingReference> kTrackingReferenceNames[] = {
+    {TrackingReference::kFrame, "frame"}, {TrackingReference::kKeyframe, "keyframe"}};
+
+constexpr EnumName<KeyframeReason> kKeyframeReasonNames[] = {
+    {KeyframeReason::kNone, "none"},
+    {KeyframeReason::kStart, "start"},
+    {KeyframeReason::kFallback, "fallback"},
+    {KeyframeReason::kOverlap, "overlap"},
+    {KeyframeReason::kUncertainty, "uncertainty"},
+    {KeyframeReason::kMotion, "motion"}};
+
 }  // namespace
 
 bool parseTrackingReference(const std::string& text, TrackingReference* out) {
-  if (text == "frame") {
-    *out = TrackingReference::kFrame;
-  } else if (text == "keyframe") {
-    *out = TrackingReference::kKeyframe;
-  } else {
-    return false;
-  }
-  return true;
+  return parseEnum(kTrackingReferenceNames, text, out);
 }
 
-const char* toString(KeyframeReason reason) {
-  switch (reason) {
-    case KeyframeReason::kNone:
-      return "none";
-    case KeyframeReason::kStart:
-      return "start";
-    case KeyframeReason::kFallback:
-      return "fallback";
-    case KeyframeReason::kOverlap:
-      return "overlap";
-    case KeyframeReason::kUncertainty:
-      return "uncertainty";
-    case KeyframeReason::kMotion:
-      return "motion";
-  }
-  return "?";
-}
+const char* toString(KeyframeReason reason) { return enumName(kKeyframeReasonNames, reason); }
 
 const char* toString(TrackingReference reference) {
-  return reference == TrackingReference::kKeyframe ? "keyframe" : "frame";
+  return enumName(kTrackingReferenceNames, reference);
 }
 
 FrameOdometry::FrameOdometry(const FrameOdometryOptions& options)

@@ -11,20 +11,13 @@
 #include <random>
 #include <string>
 
+#include "pplvo/fixtures/cameras.h"
 #include "pplvo/pipeline/frame_odometry.h"
 
 namespace pplvo::pipeline {
 namespace {
 
-PinholeCamera vgaCamera() {
-  PinholeCamera c;
-  c.width = 640;
-  c.height = 480;
-  c.fx = c.fy = 525.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  return c;
-}
+using fixtures::kinectVgaCamera;
 
 /// Landmarks on the walls of a 6 x 6 m room around the origin (camera near the centre),
 /// each with a random 256-bit descriptor.
@@ -59,7 +52,7 @@ class LandmarkWorld {
   /// multiple of `stride` (the same landmarks from every view, as a detector would find),
   /// pixel noise 0.5 px, depth noise 1.425e-3 z^2 m (Kinect).
   std::pair<FrameFeatures, FrameFeatures> observe(int64_t seq, const Pose3& T_w_c, int stride = 1) {
-    const PinholeCamera camera = vgaCamera();
+    const PinholeCamera camera = kinectVgaCamera();
     std::normal_distribution<double> n01(0.0, 1.0);
     std::vector<int> visible;
     const Pose3 T_c_w = T_w_c.inverse();

@@ -6,8 +6,8 @@
 
 #include <cmath>
 
+#include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
-#include "pplvo/synth/synthetic_sequence.h"
 
 namespace pplvo::pipeline {
 namespace {

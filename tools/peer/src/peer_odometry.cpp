@@ -8,59 +8,31 @@
 #include <opencv2/rgbd/depth.hpp>
 #include <utility>
 
+#include "pplvo/core/enum_names.h"
 #include "pplvo/core/stage_timer.h"
 
 namespace pplvo::peer {
 
-const char* methodName(PeerMethod method) {
-  switch (method) {
-    case PeerMethod::kRgbd:
-      return "rgbd";
-    case PeerMethod::kIcp:
-      return "icp";
-    case PeerMethod::kRgbdIcp:
-      return "rgbd_icp";
-  }
-  return "?";
-}
+namespace {
+constexpr EnumName<PeerMethod> kPeerMethodNames[] = {
+    {PeerMethod::kRgbd, "rgbd"}, {PeerMethod::kIcp, "icp"}, {PeerMethod::kRgbdIcp, "rgbd_icp"}};
+constexpr EnumName<PeerStatus> kPeerStatusNames[] = {
+    {PeerStatus::kFirst, "first"},        {PeerStatus::kOk, "ok"},
+    {PeerStatus::kNoDepth, "no_depth"},   {PeerStatus::kNotConverged, "not_converged"},
+    {PeerStatus::kBadInput, "bad_input"}, {PeerStatus::kOpenCvError, "opencv_error"}};
+constexpr EnumName<ReferenceMode> kReferenceModeNames[] = {
+    {ReferenceMode::kPreviousFrame, "previous_frame"}, {ReferenceMode::kKeyframe, "keyframe"}};
+}  // namespace
+
+const char* methodName(PeerMethod method) { return enumName(kPeerMethodNames, method); }
 
 bool parseMethod(const std::string& text, PeerMethod* method) {
-  for (PeerMethod m : {PeerMethod::kRgbd, PeerMethod::kIcp, PeerMethod::kRgbdIcp}) {
-    if (text == methodName(m)) {
-      *method = m;
-      return true;
-    }
-  }
-  return false;
+  return parseEnum(kPeerMethodNames, text, method);
 }
 
-const char* statusName(PeerStatus status) {
-  switch (status) {
-    case PeerStatus::kFirst:
-      return "first";
-    case PeerStatus::kOk:
-      return "ok";
-    case PeerStatus::kNoDepth:
-      return "no_depth";
-    case PeerStatus::kNotConverged:
-      return "not_converged";
-    case PeerStatus::kBadInput:
-      return "bad_input";
-    case PeerStatus::kOpenCvError:
-      return "opencv_error";
-  }
-  return "?";
-}
+const char* statusName(PeerStatus status) { return enumName(kPeerStatusNames, status); }
 
-const char* referenceModeName(ReferenceMode mode) {
-  switch (mode) {
-    case ReferenceMode::kPreviousFrame:
-      return "previous_frame";
-    case ReferenceMode::kKeyframe:
-      return "keyframe";
-  }
-  return "?";
-}
+const char* referenceModeName(ReferenceMode mode) { return enumName(kReferenceModeNames, mode); }
 
 PinholeCamera unmirroredCamera(const PinholeCamera& camera, int* flip_code) {
   PinholeCamera c = camera;

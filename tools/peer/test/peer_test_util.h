@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/peer/peer_odometry.h"
-#include "pplvo/synth/synthetic_sequence.h"
 
 namespace pplvo::peer::test {
 

@@ -13,8 +13,8 @@
 
 #include "pplvo/core/trajectory.h"
 #include "pplvo/dataset/dataset.h"
+#include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/peer/peer_odometry.h"
-#include "pplvo/synth/synthetic_sequence.h"
 
 #ifndef PPLVO_PEER_BINARY
 #error "PPLVO_PEER_BINARY must name the pplvo-peer-odometry program"

@@ -7,37 +7,26 @@
 #include <set>
 #include <sstream>
 
+#include "pplvo/core/enum_names.h"
+#include "pplvo/depth_filter_node/depth_filter_node.h"
 #include "pplvo/logging/event_log.h"
 #include "pplvo/msgs/channels.h"
-#include "pplvo/nodes/depth_filter_node.h"
-#include "pplvo/nodes/estimator_node.h"
-#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/odometry_nodes/estimator_node.h"
+#include "pplvo/odometry_nodes/frontend_node.h"
 
 namespace pplvo::replay {
 
+namespace {
+constexpr EnumName<Stage> kStageNames[] = {{Stage::kDepthFilter, "depth-filter"},
+                                           {Stage::kFrontend, "frontend"},
+                                           {Stage::kEstimator, "estimator"}};
+}  // namespace
+
 bool parseStage(const std::string& text, Stage* stage) {
-  if (text == "depth-filter")
-    *stage = Stage::kDepthFilter;
-  else if (text == "frontend")
-    *stage = Stage::kFrontend;
-  else if (text == "estimator")
-    *stage = Stage::kEstimator;
-  else
-    return false;
-  return true;
+  return parseEnum(kStageNames, text, stage);
 }
 
-const char* toString(Stage stage) {
-  switch (stage) {
-    case Stage::kDepthFilter:
-      return "depth-filter";
-    case Stage::kFrontend:
-      return "frontend";
-    case Stage::kEstimator:
-      return "estimator";
-  }
-  return "?";
-}
+const char* toString(Stage stage) { return enumName(kStageNames, stage); }
 
 bool ReplayResult::allIdentical() const {
   if (failed || outputs.empty()) return false;

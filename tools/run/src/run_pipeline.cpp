@@ -9,12 +9,12 @@
 #include <pplvo_msgs/pose_t.hpp>
 #include <sstream>
 
+#include "pplvo/depth_filter_node/depth_filter_node.h"
 #include "pplvo/logging/event_log.h"
 #include "pplvo/msgs/convert_pose.h"
 #include "pplvo/msgs/node_runtime.h"
-#include "pplvo/nodes/depth_filter_node.h"
-#include "pplvo/nodes/estimator_node.h"
-#include "pplvo/nodes/frontend_node.h"
+#include "pplvo/odometry_nodes/estimator_node.h"
+#include "pplvo/odometry_nodes/frontend_node.h"
 
 namespace pplvo::run {
 

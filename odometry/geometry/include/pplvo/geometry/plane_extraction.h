@@ -101,8 +101,41 @@ class PlaneExtractor {
     Eigen::Vector3d normal = Eigen::Vector3d::Zero(), mean = Eigen::Vector3d::Zero();
     double d = 0, mse = 0;
   };
+  struct Segment;         // a grown region: moments and plane
+  struct CellCandidates;  // the planes a cell's pixels may join
+  struct CellSums;        // per-cell label counts and point sums by candidate
+  struct LabelStats;      // per-plane label counts, point sums and bounding boxes
   static bool fitMoments(const Moments& m, CellPlane* out);
   double sigmaZ(double z) const { return options_.noise.sigma_z_coeff_per_m * z * z; }
+
+  // The steps of extract(), in order (docs/geometry.md): each reads the buffers the earlier
+  // ones filled.
+  /// 1) cell_moments_: per-cell moments of the backprojected points.
+  void accumulateCellMoments(const cv::Mat& depth_m);
+  /// Cell rows [*c0, *c1) of one of the fixed bands the per-pixel passes split the image into.
+  void bandCellRows(int band, int* c0, int* c1) const;
+  /// 2) planar_, cell_planes_, cell_bin_, bin_count_: planarity test per cell, normal histogram.
+  void classifyCells(const cv::Mat& depth_m, PlaneExtractionStats* stats);
+  /// No depth jump along the middle row and column of cell (cx, cy).
+  bool cellIsContinuous(const cv::Mat& depth_m, int cx, int cy) const;
+  /// 3) cell_segment_: regions grown from histogram seeds; the segments large enough to keep.
+  std::vector<Segment> growRegions(PlaneExtractionStats* stats);
+  /// Grows one region from `seed` into cell_segment_ (id `sid`), returning its cells.
+  void growRegion(int seed, int sid, std::vector<int>* region);
+  /// 4) Merges adjacent similar segments, drops curved ones; cell_segment_ then holds indices
+  /// into the returned planes.
+  std::vector<CellPlane> mergeSegments(std::vector<Segment>& segs, PlaneExtractionStats* stats);
+  /// 5) Pixel labels 1..np in `labels` and their per-plane statistics (planes below np only).
+  LabelStats labelPixels(const cv::Mat& depth_m, const std::vector<CellPlane>& planes, int np,
+                         cv::Mat& labels) const;
+  bool cellCandidates(int cx, int cy, int np, CellCandidates* out) const;
+  void labelCell(const cv::Mat& depth_m, int cx, int cy, const CellCandidates& cand,
+                 const std::vector<CellPlane>& planes, cv::Mat& labels, LabelStats* bs) const;
+  /// 6) WLS fit of each labelled segment; res->planes in size order, labels renumbered.
+  void fitSegments(const DepthWithVariance& depth, const LabelStats& ls, int np,
+                   PlaneExtractionResult* res) const;
+  PlaneFitResult fitSegment(const DepthWithVariance& depth, const cv::Mat& labels,
+                            const LabelStats& ls, int i) const;
 
   PinholeCamera camera_;
   PlaneExtractionOptions options_;

@@ -33,7 +33,7 @@
 namespace pplvo::nodes {
 
 struct FrontendNodeOptions {
-  std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::string lcm_url;                     ///< empty: $LCM_DEFAULT_URL
   std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string rgbd_channel = channels::kRgbd;
   std::string cgm_channel = channels::kDepthCgm;

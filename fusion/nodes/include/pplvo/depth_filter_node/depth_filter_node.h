@@ -32,7 +32,7 @@ using depth_filter::DepthModel;
 using depth_filter::parseDepthModel;
 
 struct DepthFilterNodeOptions {
-  std::string lcm_url;  ///< empty: $LCM_DEFAULT_URL
+  std::string lcm_url;                     ///< empty: $LCM_DEFAULT_URL
   std::vector<msgs::ChannelRoute> routes;  ///< --route: channels carried by other URLs
   std::string rgbd_channel = channels::kRgbd;
   std::string pose_channel = channels::kPose;

@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/logging/event_log.h"
 #include "pplvo/replay/replay_stage.h"
 #include "pplvo/run/run_pipeline.h"
-#include "pplvo/synth/synthetic_sequence.h"
 
 namespace fs = std::filesystem;
 

@@ -12,9 +12,9 @@
 #include "pplvo/eval/nees.h"
 #include "pplvo/eval/pose_records.h"
 #include "pplvo/eval/relative_pose_file.h"
+#include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
 #include "pplvo/run/run_pipeline.h"
-#include "pplvo/synth/synthetic_sequence.h"
 
 namespace fs = std::filesystem;
 
