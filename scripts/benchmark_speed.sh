@@ -80,11 +80,14 @@ for i in "${!names[@]}"; do
   [ "$fps" != 0 ] && fpsarg=(--fps "$fps")
   rw=(); rc=(); fa=(); fb=()
   for ((p = 1; p <= pairs; p++)); do
+    aw=""; bw=""
     base="$out/speed/$n.$p"
     read -r aw ac < <(timed "$base.pplvo.log" "$bin/pplvo-run" --dataset "$d" "${fpsarg[@]}" \
       --output "$base.pplvo.txt" --summary "$base.pplvo.yaml" --quiet --no-progress)
     read -r bw bc < <(timed "$base.peer.log" "$bin/pplvo-peer-odometry" --dataset "$d" \
       --output "$base.peer.txt")
+    # A failed run printed its error (timed) and no times.
+    [ -n "${aw:-}" ] && [ -n "${bw:-}" ] || exit 1
     na="$(awk '$1 == "frames_published:" { print $2; exit }' "$base.pplvo.yaml")"
     nb="$(awk '$1 == "frames:" { print $2; exit }' "$base.peer.log")"
     rw+=("$(awk -v a="$aw" -v b="$bw" 'BEGIN { print a / b }')")
