@@ -22,7 +22,7 @@ set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS
     "liblcm-dev (>= 1.3), libeigen3-dev, libopencv-dev, libopencv-contrib-dev, libceres-dev, \
-libyaml-cpp-dev, zlib1g-dev, libdeflate-dev")
+libyaml-cpp-dev, zlib1g-dev, libdeflate-dev, libturbojpeg0-dev")
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
     "liblcm-bin, liblcm-java, libjchart2d-java, default-jre, python3, pkg-config")
 include(CPack)

@@ -6,12 +6,14 @@
 # measured in the same run on the same frames (pplvo-peer-odometry, docs/peer_odometry.md).
 #
 #   scripts/benchmark.sh [--build DIR] [--out DIR] [--docs FILE] [--frames N] [--quick]
+#                        [--speed-pairs N]
 #
 # Sequences: every folder of ../shared/data (or $PPLVO_SHARED_DATA) with a groundtruth.txt, plus
 # a synthetic one generated here (pplvo-synth, room scene, 150 frames, seed 1).
 # --docs FILE writes the tables as Markdown (with the machine and the commit) to FILE and the
 # trajectory plots next to it (images/benchmark_<sequence>.png). --quick: two pplvo configurations
-# and three peers (Rgbd frame to frame, Rgbd and RgbdICP with keyframes).
+# and three peers (Rgbd frame to frame, Rgbd and RgbdICP with keyframes). --speed-pairs N: pairs
+# per sequence of the speed-to-peer measurement (scripts/benchmark_speed.sh; default 3, 0 skips).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 build="$here/build"
@@ -19,6 +21,7 @@ out=""
 docs=""
 synth_frames=150
 quick=0
+speed_pairs=3
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
@@ -26,7 +29,8 @@ while [ $# -gt 0 ]; do
     --docs) docs="$2"; shift 2 ;;
     --frames) synth_frames="$2"; shift 2 ;;
     --quick) quick=1; shift ;;
-    -h|--help) sed -n 2,14p "$0"; exit 0 ;;
+    --speed-pairs) speed_pairs="$2"; shift 2 ;;
+    -h|--help) sed -n 2,17p "$0"; exit 0 ;;
     *) echo "benchmark.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -185,9 +189,18 @@ for i in "${!names[@]}"; do
   fi
 done
 
+# Speed as a ratio to the peer, interleaved pairs of whole processes (issue 21).
+speed="$out/speed.md"
+rm -f "$speed"
+if [ "$speed_pairs" != 0 ]; then
+  "$here/scripts/benchmark_speed.sh" --build "$build" --out "$out" --pairs "$speed_pairs" \
+    --frames "$synth_frames" --markdown "$speed" > /dev/null
+fi
+
 cat "$table"
 echo
 cat "$stages"
+if [ -f "$speed" ]; then echo; cat "$speed"; fi
 if [ -n "$docs" ]; then
   commit="$(git -C "$here" rev-parse --short HEAD 2>/dev/null || echo unknown)"
   cpu="$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
@@ -232,6 +245,24 @@ TEXT
     echo
     cat "$stages"
     echo
+    if [ -f "$speed" ]; then
+      cat <<'TEXT'
+## Speed against the peer (whole process, interleaved)
+
+scripts/benchmark_speed.sh (issue 21): on each sequence, pairs of whole-process runs one after
+the other -- `pplvo-run` in its default configuration (all features, O-GM_10), then
+`pplvo-peer-odometry` in its default mode (OpenCV RgbdOdometry, frame to frame) on the same
+frames -- each timed from start to exit (start-up, reading and decoding the PNGs included):
+wall time, and CPU time (user + system) from the shell's `times`. The ratio is pplvo-run's
+time over the peer's in the same pair, so a slow period of this shared machine moves both;
+the table gives its median over the pairs with [min, max], and next to it the absolute frames/s
+of each (frames processed / wall time; median [min, max]). The issue's target is a wall ratio
+of at most 1.0 and at least 30 frames/s on every sequence.
+
+TEXT
+      cat "$speed"
+      echo
+    fi
     echo "## Trajectories"
     echo
     echo "'Rgbd' is OpenCV's RgbdOdometry frame to frame, 'RgbdICP kf' its RgbdICPOdometry against"

