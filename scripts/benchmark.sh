@@ -82,6 +82,17 @@ eval_line() {  # eval_line GT EST FPS -> "rpe_t rpe_r ate pairs trans_scale"
     /^ate.pairs /{p=$2} /^rpe.trans_scale /{s=$2}
     END{printf "%.4f %.3f %.4f %d %.2f\n", t, r, a, p, s}'
 }
+# nees_cell GT COV EXACT -> "mean6 (mean_t, mean_r); share inside the 95 % bound" of the relative
+# pose covariances (pplvo-eval --nees, issue 18); EXACT=1 takes the ground truth as exact
+# (synthetic, ICL-NUIM), else its noise is estimated from its samples (docs/evaluation.md).
+nees_cell() {
+  local exact=()
+  [ "$3" = 1 ] && exact=(--exact-gt)
+  "$bin/pplvo-eval" --nees "$1" "$2" "${fpsarg[@]}" "${exact[@]}" 2>/dev/null | awk '
+    /^nees.mean /{m=$2} /^nees.t_mean /{t=$2} /^nees.r_mean /{r=$2} /^nees.share_inside_95 /{s=$2}
+    END{ if (m == "") print "-"; else printf "%.3g (%.3g, %.3g); %.2f\n", m, t, r, s }'
+}
+
 yaml_value() { awk -v k="$2:" '$1==k{print $2; exit}' "$1"; }
 # median_range X...: "median (min-max)" of the numbers, one decimal (two for values under 10).
 median_range() {
@@ -93,8 +104,8 @@ median_range() {
 table="$out/table.md"
 stages="$out/stages.md"
 {
-  echo "| sequence | configuration | RPE (m/s) | RPE (deg/s) | ATE (m) | motion scale | tracked | frames/s |"
-  echo "|---|---|---|---|---|---|---|---|"
+  echo "| sequence | configuration | RPE (m/s) | RPE (deg/s) | ATE (m) | motion scale | tracked | frames/s | NEES 6 (t, r); inside 95 % |"
+  echo "|---|---|---|---|---|---|---|---|---|"
 } > "$table"
 {
   echo "| sequence | depth filter decode+cgm+ogm | points | lines | planes (C-GM + fused) | lift | matching | pose | node I/O | pipeline ms/frame | pplvo-run frames/s, median (range) of 3 | same, frames decoded beforehand | machine probe s |"
@@ -113,8 +124,11 @@ for i in "${!names[@]}"; do
     [ "$label" = "all" ] && probe="$(benchmark_probe)"
     # shellcheck disable=SC2086
     "$bin/pplvo-run" --dataset "$d" --output "$est" --summary "$out/$n.$tag.yaml" --quiet $args \
-      "${fpsarg[@]}" 2>"$out/$n.$tag.log"
+      --covariance "$out/$n.$tag.cov" "${fpsarg[@]}" 2>"$out/$n.$tag.log"
     read -r t r a p sc < <(eval_line "$d/groundtruth.txt" "$est" "$fps")
+    exact=0
+    { [ "$n" = synth_room ] || [ "$fps" != 0 ]; } && exact=1
+    nees="$(nees_cell "$d/groundtruth.txt" "$out/$n.$tag.cov" "$exact")"
     tracked="$(awk '/^status:/{gsub(/[{},]/," "); for(i=1;i<=NF;i++) if($i=="tracking:") print $(i+1)}' "$out/$n.$tag.yaml")"
     poses="$(yaml_value "$out/$n.$tag.yaml" poses)"
     f="$(yaml_value "$out/$n.$tag.yaml" frames_per_s)"
@@ -144,7 +158,7 @@ for i in "${!names[@]}"; do
       fp="$(median_range "${fps_pre[@]}")"
       probe="$(median_range "${probes[@]}")"
     fi
-    printf "| %s | %s | %s | %s | %s | %s | %s/%s | %s |\n" "$n" "$label" "$t" "$r" "$a" "$sc" "$tracked" "$poses" "$speed" >> "$table"
+    printf "| %s | %s | %s | %s | %s | %s | %s/%s | %s | %s |\n" "$n" "$label" "$t" "$r" "$a" "$sc" "$tracked" "$poses" "$speed" "$nees" >> "$table"
     echo "$n / $label: RPE $t m/s $r deg/s, ATE $a m, $speed frames/s" >&2
     if [ "$label" = "all" ]; then
       # Per-stage means from the summary (ms per call; planes run twice per frame).
@@ -177,7 +191,7 @@ for i in "${!names[@]}"; do
     tracked="$(awk '/^frames: /{ print $4 "/" $2 }' "$out/$n.$tag.log")"
     kfs="$(awk '/^keyframes: /{ print $2 }' "$out/$n.$tag.log")"
     if [ -n "$kfs" ]; then tracked="$tracked ($kfs keyframe$([ "$kfs" = 1 ] || echo s))"; fi
-    printf "| %s | %s | %s | %s | %s | %s | %s | %s (odometry only) |\n" "$n" "$label" "$t" "$r" "$a" "$sc" "${tracked:--}" "${pf:--}" >> "$table"
+    printf "| %s | %s | %s | %s | %s | %s | %s | %s (odometry only) | - |\n" "$n" "$label" "$t" "$r" "$a" "$sc" "${tracked:--}" "${pf:--}" >> "$table"
     echo "$n / $label: RPE $t m/s $r deg/s, ATE $a m${kfs:+, $kfs keyframes}" >&2
     if [ -n "$plot_label" ]; then ests+=("$peer"); labels+=("$plot_label"); fi
   done
@@ -224,7 +238,12 @@ in DVO and Fovis). "tracked" counts frames
 whose pose came from an accepted estimate (the first frame is the origin). "motion scale" is
 `rpe.trans_scale`: the least-squares scale of the estimated 1 s relative translations against
 the ground truth's (1 = unbiased; below 1 = motion under-estimated, see docs/pipeline.md on
-ICL-NUIM). frames/s is end to end: reading and decoding the PNGs (in the player's loader
+ICL-NUIM). "NEES" is the consistency of the published relative-pose covariance
+(`pplvo-eval --nees` on `pplvo-run --covariance`, docs/evaluation.md): the mean over frame
+pairs of the 6-dof NEES (ideal 6) with the translation and rotation blocks (ideal 3 each), and
+the share of pairs inside the chi-square 95 % bound (ideal 0.95); the ground truth is taken as
+exact on the synthetic room and ICL-NUIM, its noise estimated from its samples on TUM; the
+peers publish no covariance. frames/s is end to end: reading and decoding the PNGs (in the player's loader
 thread) included; for 'all', the median and range of three runs. The per-stage table's "frames decoded beforehand" is the same run with the
 frames decoded before the first is published (`pplvo-run --preload`, as from a camera, which
 delivers decoded frames; the peer's figure leaves the reading out too); its trajectory is the
