@@ -234,19 +234,38 @@ void addConfigOptions(ArgParser& parser, ConfigArgs* args,
 
 std::string configUsage(const std::string& config_doc, const std::string& set_example,
                         const std::vector<Shortcut>& shortcuts) {
+  const std::string indent(26, ' ');
   std::string s = "  --config FILE           " + config_doc + "\n" +
-                  "  --set KEY=VALUE         one configuration value by dotted key (repeatable), e.g.\n"
-                  "                          --set " + set_example + "\n";
+                  "  --set KEY=VALUE         one configuration value by dotted key (repeatable), e.g.\n" +
+                  indent + "--set " + set_example + "\n";
   for (const Shortcut& sc : shortcuts) {
-    std::string head = "  " + sc.flag + " ";
     const auto space = sc.usage.find("  ");
-    std::string arg = sc.usage.substr(0, space);
+    std::string head = "  " + sc.flag + " " + sc.usage.substr(0, space);
     std::string doc = space == std::string::npos ? "" : sc.usage.substr(space);
     while (!doc.empty() && doc[0] == ' ') doc.erase(0, 1);
-    head += arg;
-    if (head.size() < 26) head.resize(26, ' ');
-    else head += " ";
-    s += head + doc + " (= --set " + sc.key + ")\n";
+    if (head.size() < indent.size()) {
+      head.resize(indent.size(), ' ');
+    } else {
+      s += head + "\n";
+      head = indent;
+    }
+    // The documentation wrapped at 90 columns, then the key it sets (kept in one piece).
+    std::istringstream text(doc);
+    std::vector<std::string> words;
+    for (std::string word; text >> word;) words.push_back(word);
+    words.push_back("(= --set " + sc.key + ")");
+    std::string line = head;
+    bool empty = true;
+    for (const std::string& word : words) {
+      if (!empty && line.size() + 1 + word.size() > 90) {
+        s += line + "\n";
+        line = indent;
+        empty = true;
+      }
+      line += (empty ? "" : " ") + word;
+      empty = false;
+    }
+    s += line + "\n";
   }
   return s;
 }

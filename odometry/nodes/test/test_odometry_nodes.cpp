@@ -531,8 +531,10 @@ TEST(EstimatorArgs, GoodBadAndHelp) {
   // window set by --set, and a --depth-model without O-GM lifts it.
   const EstimatorArgs bad =
       parseEstimatorArgs({"--set", "depth_filter.ogm.max_window=12", "--max-waiting", "0"});
-  ASSERT_EQ(bad.errors.size(), 1u);  // the rules are not run before the arguments are valid
+  ASSERT_EQ(bad.errors.size(), 2u);  // reported together: the option and the broken rule
   EXPECT_EQ(bad.errors[0], "--max-waiting: expected an integer >= 1, got '0'");
+  EXPECT_NE(bad.errors[1].find("is shorter than depth_filter.ogm.max_window 12"),
+            std::string::npos);
   const EstimatorArgs rule = parseEstimatorArgs({"--set", "depth_filter.ogm.max_window=12"});
   ASSERT_EQ(rule.errors.size(), 1u);
   EXPECT_NE(rule.errors[0].find("window_length: 10 is shorter than depth_filter.ogm.max_window 12"),
