@@ -216,8 +216,7 @@ YAML::Node overridesToYaml(const std::vector<std::string>& assignments,
 
 // ---------------------------------------------------------------------------------------------
 
-void addConfigOptions(ArgParser& parser, ConfigArgs* args,
-                      const std::vector<Shortcut>& shortcuts) {
+void addConfigOptions(ArgParser& parser, ConfigArgs* args, const std::vector<Shortcut>& shortcuts) {
   parser.option("--config", &args->config)
       .option("--set", [args](const std::string& v) -> std::string {
         args->overrides.push_back(v);
@@ -235,9 +234,10 @@ void addConfigOptions(ArgParser& parser, ConfigArgs* args,
 std::string configUsage(const std::string& config_doc, const std::string& set_example,
                         const std::vector<Shortcut>& shortcuts) {
   const std::string indent(26, ' ');
-  std::string s = "  --config FILE           " + config_doc + "\n" +
-                  "  --set KEY=VALUE         one configuration value by dotted key (repeatable), e.g.\n" +
-                  indent + "--set " + set_example + "\n";
+  std::string s =
+      "  --config FILE           " + config_doc + "\n" +
+      "  --set KEY=VALUE         one configuration value by dotted key (repeatable), e.g.\n" +
+      indent + "--set " + set_example + "\n";
   for (const Shortcut& sc : shortcuts) {
     const auto space = sc.usage.find("  ");
     std::string head = "  " + sc.flag + " " + sc.usage.substr(0, space);

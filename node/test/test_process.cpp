@@ -39,10 +39,11 @@ TEST(NodeProcess, RunsANodeUntilShutdown) {
   NodeProcess p{"pplvo-test", "memq://", {}, 0};
   // An exception while building the node: exit code 1 with the process name.
   testing::internal::CaptureStderr();
-  EXPECT_EQ(runLcmNode<StoppingNode>(
-                p, [](msgs::Bus) -> std::unique_ptr<StoppingNode> { throw std::runtime_error("no"); },
-                [](const StoppingNode&) { return std::string(); }),
-            1);
+  EXPECT_EQ(
+      runLcmNode<StoppingNode>(
+          p, [](msgs::Bus) -> std::unique_ptr<StoppingNode> { throw std::runtime_error("no"); },
+          [](const StoppingNode&) { return std::string(); }),
+      1);
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "pplvo-test: no\n");
 
   const StoppingNode* seen = nullptr;

@@ -9,8 +9,8 @@ int main(int argc, char** argv) {
   using namespace pplvo;
   using nodes::DepthFilterNode;
   const nodes::DepthFilterArgs a = nodes::parseDepthFilterArgs(argsFromArgv(argc, argv));
-  const int code = node::argsExitCode(DepthFilterNode::kName, a.help, a.errors,
-                                      nodes::depthFilterUsage());
+  const int code =
+      node::argsExitCode(DepthFilterNode::kName, a.help, a.errors, nodes::depthFilterUsage());
   if (code != node::kRun) return code;
   const nodes::DepthFilterNodeOptions& o = a.options;
   return node::runLcmNode<DepthFilterNode>(

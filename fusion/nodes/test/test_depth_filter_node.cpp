@@ -14,8 +14,8 @@
 
 #include "analytic_scene.h"
 #include "pplvo/msgs/convert.h"
-#include "pplvo/node/process.h"
 #include "pplvo/msgs/convert_pose.h"
+#include "pplvo/node/process.h"
 #include "pplvo/nodes/depth_filter_args.h"
 #include "pplvo/nodes/depth_filter_convert.h"
 #include "pplvo/nodes/depth_filter_node.h"
@@ -474,12 +474,32 @@ TEST(DepthFilterNode, ReplayFromLogIsBitIdentical) {
 TEST(DepthFilterArgs, ConfigSetAndShortcutsOnTheDepthFilterSchema) {
   const std::string config = std::string(std::getenv("PPLVO_SOURCE_DIR")) + "/config/pplvo.yaml";
   // The same command line as a launch gives it: keys of other sections are the other processes'.
-  const DepthFilterArgs a = parseDepthFilterArgs(
-      {"--config", config, "--set", "depth_filter.ogm.k_consistency=2", "--set",
-       "frontend.points.max_points=500", "--window", "7", "--depth-model=cgm",
-       "--max-translation-variance", "2e-4", "--overload-backlog", "0", "--overload-step", "3",
-       "--features", "points,planes", "--lcm-url", "memq://", "--route",
-       "PPLVO_RGBD=memq://", "--max-pending", "9", "--compress", "--prefault-mb", "0"});
+  const DepthFilterArgs a = parseDepthFilterArgs({"--config",
+                                                  config,
+                                                  "--set",
+                                                  "depth_filter.ogm.k_consistency=2",
+                                                  "--set",
+                                                  "frontend.points.max_points=500",
+                                                  "--window",
+                                                  "7",
+                                                  "--depth-model=cgm",
+                                                  "--max-translation-variance",
+                                                  "2e-4",
+                                                  "--overload-backlog",
+                                                  "0",
+                                                  "--overload-step",
+                                                  "3",
+                                                  "--features",
+                                                  "points,planes",
+                                                  "--lcm-url",
+                                                  "memq://",
+                                                  "--route",
+                                                  "PPLVO_RGBD=memq://",
+                                                  "--max-pending",
+                                                  "9",
+                                                  "--compress",
+                                                  "--prefault-mb",
+                                                  "0"});
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
   EXPECT_FALSE(a.help);
   const depth_filter::DepthFilterOptions& f = a.options.filter;
@@ -503,9 +523,9 @@ TEST(DepthFilterArgs, ConfigSetAndShortcutsOnTheDepthFilterSchema) {
 }
 
 TEST(DepthFilterArgs, BadValuesAreExitCodeTwoWithTheKeysRange) {
-  const DepthFilterArgs a = parseDepthFilterArgs(
-      {"--window", "0", "--set", "depth_filter.ogm.gate_sigma=-1", "--overload-step", "x",
-       "--bogus", "--max-translation-variance", "0"});
+  const DepthFilterArgs a =
+      parseDepthFilterArgs({"--window", "0", "--set", "depth_filter.ogm.gate_sigma=-1",
+                            "--overload-step", "x", "--bogus", "--max-translation-variance", "0"});
   ASSERT_EQ(a.errors.size(), 5u);
   EXPECT_EQ(a.errors[0], "unknown option '--bogus'");
   EXPECT_NE(a.errors[1].find("overrides: configuration has 1 error(s):\n  "
@@ -513,7 +533,8 @@ TEST(DepthFilterArgs, BadValuesAreExitCodeTwoWithTheKeysRange) {
             std::string::npos)
       << a.errors[1];
   // --window has the range of depth_filter.ogm.max_window (one place: the schema).
-  EXPECT_EQ(a.errors[2], "--window 0: depth_filter.ogm.max_window: 0 is out of range (must be >= 1)");
+  EXPECT_EQ(a.errors[2],
+            "--window 0: depth_filter.ogm.max_window: 0 is out of range (must be >= 1)");
   EXPECT_EQ(a.errors[3],
             "--overload-step x: depth_filter.overload.window_step: cannot read 'x' as an integer");
   EXPECT_EQ(a.errors[4],

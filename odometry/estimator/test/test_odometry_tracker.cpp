@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include "pplvo/core/config_visitor.h"
-#include "pplvo/core/config_visitor.h"
 #include "pplvo/estimator/odometry_tracker.h"
 #include "pplvo/estimator/pose_parameterisation.h"
 #include "synthetic_scene.h"
@@ -199,8 +198,8 @@ TEST(OdometryTracker, OptionsRoundTripThroughYaml) {
   EXPECT_EQ(back.estimator.max_translation_variance_m2, 3e-4);
 
   OdometryTrackerOptions ignored;
-  EXPECT_EQ(config::readConfig(YAML::Load("tracker: {velocity_decay: x, no_such_key: 1}"),
-                               &ignored, tracker)
+  EXPECT_EQ(config::readConfig(YAML::Load("tracker: {velocity_decay: x, no_such_key: 1}"), &ignored,
+                               tracker)
                 .size(),
             2u);
 }

@@ -3,9 +3,8 @@
 
 #include <cstdio>
 #include <functional>
-#include <set>
-
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 #include "match_judge.h"
 #include "pplvo/features/line_extractor.h"

@@ -9,7 +9,8 @@ int main(int argc, char** argv) {
   using namespace pplvo;
   using nodes::FrontendNode;
   const nodes::FrontendArgs a = nodes::parseFrontendArgs(argsFromArgv(argc, argv));
-  const int code = node::argsExitCode(FrontendNode::kName, a.help, a.errors, nodes::frontendUsage());
+  const int code =
+      node::argsExitCode(FrontendNode::kName, a.help, a.errors, nodes::frontendUsage());
   if (code != node::kRun) return code;
   const nodes::FrontendNodeOptions& o = a.options;
   // poll() between messages (at most 50 ms apart): a stage 2D whose predecessor's fused depth

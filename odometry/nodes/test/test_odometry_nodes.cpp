@@ -540,9 +540,9 @@ TEST(EstimatorArgs, GoodBadAndHelp) {
   EXPECT_NE(rule.errors[0].find("window_length: 10 is shorter than depth_filter.ogm.max_window 12"),
             std::string::npos)
       << rule.errors[0];
-  EXPECT_TRUE(parseEstimatorArgs({"--set", "depth_filter.ogm.max_window=12", "--depth-model",
-                                  "cgm"})
-                  .errors.empty());
+  EXPECT_TRUE(
+      parseEstimatorArgs({"--set", "depth_filter.ogm.max_window=12", "--depth-model", "cgm"})
+          .errors.empty());
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
   EXPECT_EQ(node::argsExitCode(EstimatorNode::kName, rule.help, rule.errors, estimatorUsage()), 2);

@@ -13,9 +13,9 @@ void applyPipelineArgs(const PipelineArgs& args, PipelineOptions* options, ArgPa
 }
 
 const char* pipelineOptionsUsage() {
-  static const std::string usage = config::configUsage(
-      "pipeline YAML (config/pplvo.yaml; default: built-in defaults)",
-      "odometry.tracker.estimator.plane_scale_alpha=1", pipelineShortcuts());
+  static const std::string usage =
+      config::configUsage("pipeline YAML (config/pplvo.yaml; default: built-in defaults)",
+                          "odometry.tracker.estimator.plane_scale_alpha=1", pipelineShortcuts());
   return usage.c_str();
 }
 

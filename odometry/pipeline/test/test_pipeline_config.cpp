@@ -69,8 +69,7 @@ TEST(PipelineConfig, DefaultFileEqualsCodeDefaults) {
   leafKeys(YAML::LoadFile(path), "", &file_keys);
   const std::vector<std::string> code_keys = flattenedKeys(defaults);
 
-  if (!diff.empty() || file_keys != code_keys ||
-      [&] {
+  if (!diff.empty() || file_keys != code_keys || [&] {
         std::ifstream f(path);
         std::stringstream t;
         t << f.rdbuf();
@@ -411,26 +410,16 @@ std::vector<std::string> keysUnder(const std::string& prefix) {
 
 TEST(PipelineConfig, FieldListsMatchTheLibrariesOwnLists) {
   PipelineOptions o;
-  {
-    KeyCollector c{"frontend.points.", {}};
-    visit(c, o.frontend.points);
-    EXPECT_EQ(c.keys, keysUnder("frontend.points."));
-  }
-  {
-    KeyCollector c{"frontend.lines.", {}};
-    visit(c, o.frontend.lines);
-    EXPECT_EQ(c.keys, keysUnder("frontend.lines."));
-  }
-  {
-    KeyCollector c{"odometry.point_matching.", {}};
-    visit(c, o.odometry.point_matching);
-    EXPECT_EQ(c.keys, keysUnder("odometry.point_matching."));
-  }
-  {
-    KeyCollector c{"odometry.line_matching.", {}};
-    visit(c, o.odometry.line_matching);
-    EXPECT_EQ(c.keys, keysUnder("odometry.line_matching."));
-  }
+  const auto sameKeys = [](const std::string& prefix, auto& options) {
+    KeyCollector c{prefix, {}};
+    visit(c, options);
+    EXPECT_EQ(c.keys, keysUnder(prefix)) << prefix;
+  };
+  sameKeys("frontend.points.", o.frontend.points);
+  sameKeys("frontend.lines.", o.frontend.lines);
+  sameKeys("odometry.point_matching.", o.odometry.point_matching);
+  sameKeys("odometry.line_matching.", o.odometry.line_matching);
+  sameKeys("depth_filter.", o.depth_filter);
   {
     KeyCollector c{"odometry.tracker.", {}};
     visit(c, o.odometry.tracker);

@@ -138,9 +138,9 @@ TEST_F(ReplayTest, MissingLogIsAClearError) {
 }
 
 TEST(ReplayArgs, GoodBadAndHelp) {
-  const ReplayArgs a = parseReplayArgs(
-      {"--log", "run.lcm", "--stage", "depth-filter", "--depth-model", "cgm", "--set",
-       "depth_filter.ogm.k_consistency=2"});
+  const ReplayArgs a =
+      parseReplayArgs({"--log", "run.lcm", "--stage", "depth-filter", "--depth-model", "cgm",
+                       "--set", "depth_filter.ogm.k_consistency=2"});
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
   EXPECT_EQ(a.options.log, "run.lcm");
   EXPECT_EQ(a.options.stage, Stage::kDepthFilter);

@@ -185,7 +185,8 @@ RunResult runPipeline(const RunOptions& options) {
 
     nodes::DepthFilterNodeOptions df;
     df.filter = options.pipeline.depth_filter;
-    df.filter.overload.backlog = 0;  // every frame fused over the full window (in_flight is bounded)
+    df.filter.overload.backlog =
+        0;  // every frame fused over the full window (in_flight is bounded)
     nodes::DepthFilterNode depth_filter(df, lcm);
 
     nodes::FrontendNodeOptions fe;

@@ -12,8 +12,8 @@
 #include "pplvo/eval/nees.h"
 #include "pplvo/eval/pose_records.h"
 #include "pplvo/eval/relative_pose_file.h"
-#include "pplvo/pipeline/odometry_pipeline.h"
 #include "pplvo/node/process.h"
+#include "pplvo/pipeline/odometry_pipeline.h"
 #include "pplvo/run/run_args.h"
 #include "pplvo/run/run_pipeline.h"
 #include "pplvo/synth/synthetic_sequence.h"
@@ -295,10 +295,10 @@ TEST_F(RunPipelineTest, CovarianceFileHoldsThePublishedRelativePoses) {
 }
 
 TEST(RunArgs, GoodBadAndHelp) {
-  const RunArgs a = parseRunArgs({"--dataset", "d", "--output", "t.txt", "--max-frames", "5",
-                                  "--in-flight", "1", "--fps", "30", "--quiet", "--no-progress",
-                                  "--features", "points", "--set",
-                                  "odometry.tracker.estimator.plane_scale_alpha=1"});
+  const RunArgs a =
+      parseRunArgs({"--dataset", "d", "--output", "t.txt", "--max-frames", "5", "--in-flight", "1",
+                    "--fps", "30", "--quiet", "--no-progress", "--features", "points", "--set",
+                    "odometry.tracker.estimator.plane_scale_alpha=1"});
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
   EXPECT_EQ(a.options.dataset_dir, "d");
   EXPECT_EQ(a.options.output, "t.txt");

@@ -40,7 +40,9 @@ struct Range {
 
 inline Range anyValue() { return {}; }
 /// x >= lo
-inline Range atLeast(double lo) { return {lo, std::numeric_limits<double>::infinity(), false, false}; }
+inline Range atLeast(double lo) {
+  return {lo, std::numeric_limits<double>::infinity(), false, false};
+}
 /// x > lo
 inline Range greaterThan(double lo) {
   return {lo, std::numeric_limits<double>::infinity(), true, false};

@@ -5,8 +5,8 @@
 /// range checking, documented writing and flattening from that one list:
 ///
 ///   Options o;                                     // defaults from the struct
-///   auto all = [](auto& v, Options& x) { v.section("depth_filter", "doc", [&] { visit(v, x); }); };
-///   std::vector<std::string> errors = config::readConfig(config::parseYamlText(text), &o, all);
+///   auto all = [](auto& v, Options& x) { v.section("depth_filter", "doc", [&] { visit(v, x); });
+///   }; std::vector<std::string> errors = config::readConfig(config::parseYamlText(text), &o, all);
 ///   std::string yaml = config::dumpConfig(o, all, "# header\n");
 ///
 /// Loading collects every problem (unknown or duplicate keys, values of the wrong type,
@@ -14,6 +14,8 @@
 /// keep their values. Command lines use ConfigArgs: --config FILE, --set KEY=VALUE and
 /// shortcuts (e.g. --window N = --set depth_filter.ogm.max_window=N), applied in that order,
 /// then the caller's cross-module rules once on the result.
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -24,8 +26,6 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
-
-#include <yaml-cpp/yaml.h>
 
 #include "pplvo/core/args.h"
 #include "pplvo/core/config_schema.h"
@@ -77,11 +77,11 @@ std::string parseValue(const YAML::Node& node, T* value) {
       try {
         *value = node.as<T>();
       } catch (const YAML::Exception&) {
-        const char* type = std::is_same_v<T, bool>                ? "true or false"
-                           : std::is_floating_point_v<T>          ? "a number"
-                           : std::is_same_v<T, uint64_t>          ? "a non-negative integer"
-                           : std::is_same_v<T, std::string>       ? "a string"
-                                                                  : "an integer";
+        const char* type = std::is_same_v<T, bool>          ? "true or false"
+                           : std::is_floating_point_v<T>    ? "a number"
+                           : std::is_same_v<T, uint64_t>    ? "a non-negative integer"
+                           : std::is_same_v<T, std::string> ? "a string"
+                                                            : "an integer";
         return "cannot read '" + node.Scalar() + "' as " + type;
       }
       return "";

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "pplvo/core/config_schema.h"
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/core/geometry.h"
 #include "pplvo/core/primitives.h"
@@ -129,7 +129,8 @@ void visit(V& v, PoseEstimatorOptions& o) {
   v.field("use_lines", o.use_lines, "use line residuals");
   v.field("use_planes", o.use_planes, "use plane residuals");
   v.field("point_sigma_px", o.point_sigma_px,
-          "keypoint pixel std: sigma_p^2 = 1/12 px^2 (Sec. 4.2, uniform quantisation)", config::positive());
+          "keypoint pixel std: sigma_p^2 = 1/12 px^2 (Sec. 4.2, uniform quantisation)",
+          config::positive());
   v.field("octave_sigma_scale", o.octave_sigma_scale,
           "point sigma multiplied by scale^octave (1 = same at every octave)", config::positive());
   v.field("line_sigma_px", o.line_sigma_px,
@@ -142,10 +143,12 @@ void visit(V& v, PoseEstimatorOptions& o) {
   v.field("full_whitening", o.full_whitening,
           "false (paper): w = 1/diag(Sigma_r); true: full Sigma_r^(-1/2)");
   v.field("use_tukey", o.use_tukey, "Tukey M-estimator on point and line residuals (Sec. 4.6)");
-  v.field("tukey_c", o.tukey_c, "Tukey constant on the whitened residuals (4.685)", config::positive());
+  v.field("tukey_c", o.tukey_c, "Tukey constant on the whitened residuals (4.685)",
+          config::positive());
   v.field("tukey_mad_scale", o.tukey_mad_scale,
           "robust scale max(1, 1.4826 MAD) of the whitened residuals (false: 1)");
-  v.field("max_irls_iterations", o.max_irls_iterations, "IRLS re-weighting iterations", config::atLeast(1));
+  v.field("max_irls_iterations", o.max_irls_iterations, "IRLS re-weighting iterations",
+          config::atLeast(1));
   v.field("max_lm_iterations", o.max_lm_iterations, "Levenberg-Marquardt iterations per solve",
           config::atLeast(1));
   v.field("irls_tolerance_m", o.irls_tolerance_m, "IRLS stops below this translation step (m)",
@@ -164,7 +167,8 @@ void visit(V& v, PoseEstimatorOptions& o) {
           "4.6 Pose Uncertainty; no value in the paper: (1 cm)^2)",
           config::positive());
   v.field("max_rotation_variance", o.max_rotation_variance,
-          "reject if the largest eigenvalue of the q_xyz covariance exceeds this", config::positive());
+          "reject if the largest eigenvalue of the q_xyz covariance exceeds this",
+          config::positive());
 }
 
 enum class EstimateStatus : int8_t {

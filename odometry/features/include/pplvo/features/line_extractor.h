@@ -1,15 +1,14 @@
 #pragma once
 /// 2D line segments: LSD (von Gioi et al.) with binary LBD descriptors (Zhang & Koch), as in
 /// the paper Sec. "Extraction of Points, Lines and Planes".
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/line_descriptor.hpp>
+#include <string>
+#include <vector>
 
-#include "pplvo/core/config_schema.h"
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/features/lbd.h"
 #include "pplvo/features/lsd.h"
@@ -52,14 +51,17 @@ void visit(V& v, LineExtractorOptions& o) {
           config::openClosed(0, 1));
   v.field("describe_full_resolution", o.describe_full_resolution,
           "compute LBD on the full-resolution image");
-  v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)", config::atLeast(0));
+  v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)",
+          config::atLeast(0));
   v.field("max_lines", o.max_lines, "segments kept per frame, longest first", config::atLeast(1));
   v.field("lsd_refine", o.lsd_refine,
-          "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)", config::between(0, 2));
+          "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)",
+          config::between(0, 2));
   v.field("lbd_band_width", o.lbd_band_width, "LBD band width (rows per band, LBD's 7)",
           config::between(1, 64));
   v.field("lbd_octaves", o.lbd_octaves,
-          "LBD pyramid octaves (1 = one resolution, pplvo's LBD; more: OpenCV's)", config::atLeast(1));
+          "LBD pyramid octaves (1 = one resolution, pplvo's LBD; more: OpenCV's)",
+          config::atLeast(1));
   v.field("use_opencv", o.use_opencv, "LSD and LBD from OpenCV instead of pplvo's (slower)");
   v.field("min_image_side_px", o.min_image_side_px, "smaller images give no lines (px)",
           config::atLeast(1));

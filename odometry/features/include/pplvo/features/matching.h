@@ -9,11 +9,10 @@
 /// search runs over the gated candidates only. The strongest gated match is the same as in
 /// "k-NN over the whole image, then keep the strongest that satisfies the gate" with k large
 /// enough; the ratio test (optional) compares the best and second-best gated candidates.
-#include <utility>
-#include <vector>
-
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <utility>
+#include <vector>
 
 #include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"

@@ -2,14 +2,13 @@
 /// 2D keypoint detection and description (paper Sec. "Extraction of Points, Lines and Planes").
 /// The paper uses SURF, which is non-free and absent from Debian's OpenCV 4.6; the detector is
 /// chosen in PointExtractorOptions (ORB by default, see docs/features.md for the comparison).
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/features2d.hpp>
-
-#include "pplvo/core/config_schema.h"
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 
 namespace pplvo::features {
@@ -73,7 +72,8 @@ void visit(V& v, PointExtractorOptions& o) {
           "keypoint detector/descriptor: orb, akaze, sift or brisk (the paper's SURF is "
           "non-free and not in Debian's OpenCV; docs/features.md compares them)");
   v.field("max_points", o.max_points,
-          "points kept per frame (VGA); the paper gives no count (docs/features.md)", config::atLeast(1));
+          "points kept per frame (VGA); the paper gives no count (docs/features.md)",
+          config::atLeast(1));
   v.field("grid_bucketing", o.grid_bucketing,
           "spread the points over a grid_cols x grid_rows grid of cells");
   v.field("grid_cols", o.grid_cols, "bucketing grid columns", config::atLeast(1));
@@ -87,10 +87,12 @@ void visit(V& v, PointExtractorOptions& o) {
   v.field("orb_levels", o.orb_levels, "ORB pyramid levels (OpenCV default 8)", config::atLeast(1));
   v.field("orb_scale_factor", o.orb_scale_factor, "ORB pyramid scale factor",
           config::greaterThan(1.0));
-  v.field("orb_fast_threshold", o.orb_fast_threshold, "ORB FAST threshold (OpenCV 20)", config::atLeast(0));
+  v.field("orb_fast_threshold", o.orb_fast_threshold, "ORB FAST threshold (OpenCV 20)",
+          config::atLeast(0));
   v.field("orb_edge_threshold_px", o.orb_edge_threshold_px, "ORB border without features (px)",
           config::atLeast(0));
-  v.field("akaze_threshold", o.akaze_threshold, "AKAZE detector response threshold", config::positive());
+  v.field("akaze_threshold", o.akaze_threshold, "AKAZE detector response threshold",
+          config::positive());
   v.field("sift_contrast_threshold", o.sift_contrast_threshold, "SIFT contrast threshold",
           config::positive());
   v.field("brisk_threshold", o.brisk_threshold, "BRISK AGAST threshold", config::atLeast(0));

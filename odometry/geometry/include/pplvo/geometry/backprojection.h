@@ -5,8 +5,8 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 
-#include "pplvo/core/config_schema.h"
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/primitives.h"
 #include "pplvo/core/rgbd_frame.h"
 

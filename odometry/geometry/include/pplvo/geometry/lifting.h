@@ -53,7 +53,8 @@ void visit(V& v, LiftOptions& o) {
   v.section("noise", "fallback depth noise where the depth map has no variance (eq. 1)",
             [&] { visit(v, o.noise); });
   v.field("pixel_variance_px2", o.pixel_variance_px2,
-          "pixel quantisation variance sigma_p^2 of eq. 10 (Sec. 4.2: 1/12 px^2)", config::atLeast(0));
+          "pixel quantisation variance sigma_p^2 of eq. 10 (Sec. 4.2: 1/12 px^2)",
+          config::atLeast(0));
   v.field("point_search_radius_px", o.point_search_radius_px,
           "no depth at a keypoint: use the lowest-variance pixel within this radius (px)",
           config::atLeast(0));
@@ -70,17 +71,19 @@ void visit(V& v, LiftOptions& o) {
   v.field("line_max_depth_step", o.line_max_depth_step, "that depth step, as max/min - 1",
           config::atLeast(0));
   v.field("max_line_samples", o.max_line_samples,
-          "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)", config::atLeast(2));
+          "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)",
+          config::atLeast(2));
   v.field("line_ransac_threshold_m", o.line_ransac_threshold_m,
           "RANSAC on 3D point-to-line Euclidean distance (Sec. 4.4; no value in the paper, m)",
           config::positive());
-  v.field("line_ransac_iterations", o.line_ransac_iterations, "RANSAC iterations", config::atLeast(1));
+  v.field("line_ransac_iterations", o.line_ransac_iterations, "RANSAC iterations",
+          config::atLeast(1));
   v.field("min_line_samples", o.min_line_samples, "fewest valid depth samples of a 3D line",
           config::atLeast(3));
-  v.field("min_line_inliers", o.min_line_inliers, "fewest RANSAC inliers of a 3D line", config::atLeast(3));
+  v.field("min_line_inliers", o.min_line_inliers, "fewest RANSAC inliers of a 3D line",
+          config::atLeast(3));
   v.field("seed", o.seed, "RANSAC seed (line i uses seed + i)");
-  v.section("line_fit", "WLS line fitting (Sec. 4.4, eqs. 13-17)",
-            [&] { visit(v, o.line_fit); });
+  v.section("line_fit", "WLS line fitting (Sec. 4.4, eqs. 13-17)", [&] { visit(v, o.line_fit); });
 }
 
 struct LiftStats {

@@ -81,7 +81,8 @@ void visit(V& v, PlaneExtractionOptions& o) {
   v.field("pixel_variance_px2", o.pixel_variance_px2,
           "pixel quantisation variance sigma_p^2 (Sec. 4.2: 1/12 px^2)", config::atLeast(0));
   v.field("min_valid_fraction", o.min_valid_fraction,
-          "a planar cell has at least this fraction of valid depth pixels", config::openClosed(0, 1));
+          "a planar cell has at least this fraction of valid depth pixels",
+          config::openClosed(0, 1));
   v.field("planarity_sigma_factor", o.planarity_sigma_factor,
           "cell planar if MSE < (k sigma_z(z) + margin)^2: k", config::atLeast(0));
   v.field("planarity_margin_m", o.planarity_margin_m, "... margin (m)", config::atLeast(0));
@@ -92,11 +93,14 @@ void visit(V& v, PlaneExtractionOptions& o) {
   v.field("min_seed_bin_count", o.min_seed_bin_count,
           "smallest histogram bin count that may seed a region", config::atLeast(1));
   v.field("grow_max_angle_deg", o.grow_max_angle_deg,
-          "region growing: normal angle to the seed plane (deg; CAPE pi/12)", config::openClosed(0, 180));
+          "region growing: normal angle to the seed plane (deg; CAPE pi/12)",
+          config::openClosed(0, 180));
   v.field("grow_dist_sigma_factor", o.grow_dist_sigma_factor,
-          "region growing: cell centroid within k sigma_z(z) + margin of the plane: k", config::atLeast(0));
+          "region growing: cell centroid within k sigma_z(z) + margin of the plane: k",
+          config::atLeast(0));
   v.field("grow_dist_margin_m", o.grow_dist_margin_m, "... margin (m)", config::atLeast(0));
-  v.field("min_region_cells", o.min_region_cells, "smaller regions are not planes", config::atLeast(1));
+  v.field("min_region_cells", o.min_region_cells, "smaller regions are not planes",
+          config::atLeast(1));
   v.field("min_region_span_cells", o.min_region_span_cells,
           "a region spans at least this many cells in both image directions", config::atLeast(1));
   v.field("merge_max_angle_deg", o.merge_max_angle_deg,
@@ -113,10 +117,13 @@ void visit(V& v, PlaneExtractionOptions& o) {
   v.field("refine_sigma_factor", o.refine_sigma_factor,
           "a pixel joins a plane if |n.p + d| < k sigma_z(z) + margin: k", config::atLeast(0));
   v.field("refine_margin_m", o.refine_margin_m, "... margin (m)", config::atLeast(0));
-  v.field("min_plane_points", o.min_plane_points, "pixels of a plane after refinement", config::atLeast(3));
+  v.field("min_plane_points", o.min_plane_points, "pixels of a plane after refinement",
+          config::atLeast(3));
   v.field("max_fit_points", o.max_fit_points,
-          "the WLS fit uses a grid subsample of between this and 4x as many pixels", config::atLeast(3));
-  v.field("max_planes", o.max_planes, "planes per frame (labels are 8-bit)", config::between(1, 254));
+          "the WLS fit uses a grid subsample of between this and 4x as many pixels",
+          config::atLeast(3));
+  v.field("max_planes", o.max_planes, "planes per frame (labels are 8-bit)",
+          config::between(1, 254));
   v.field("threads", o.threads,
           "threads for the per-pixel passes and the fits (results do not depend on it)",
           config::atLeast(1));

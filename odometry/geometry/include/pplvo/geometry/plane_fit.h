@@ -33,7 +33,8 @@ void visit(V& v, PlaneFitOptions& o) {
           "d = 0 (Sec. 4.3)",
           config::atLeast(0));
   v.field("min_condition", o.min_condition,
-          "reject when the smallest/largest eigenvalue ratio of A is below this", config::atLeast(0));
+          "reject when the smallest/largest eigenvalue ratio of A is below this",
+          config::atLeast(0));
   v.field("resolve_with_corrected_weights", o.resolve_with_corrected_weights,
           "solve again with the corrected weights 1/Sigma_ri (false: keep the paper's first "
           "solution, correct only the covariance)");

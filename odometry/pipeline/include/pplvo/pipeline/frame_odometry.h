@@ -110,11 +110,9 @@ void visit(V& v, FrameOdometryOptions& o) {
             [&] { visit(v, o.keyframe); });
   v.section("tracker", "Frame-to-frame tracking, pose estimation and window uncertainty",
             [&] { visit(v, o.tracker); });
-  v.section("point_matching", "Point matching (Sec. 4.5)",
-            [&] { visit(v, o.point_matching); });
+  v.section("point_matching", "Point matching (Sec. 4.5)", [&] { visit(v, o.point_matching); });
   v.section("line_matching", "Line matching (Sec. 4.5)", [&] { visit(v, o.line_matching); });
-  v.section("plane_matching", "Plane matching (Sec. 4.5)",
-            [&] { visit(v, o.plane_matching); });
+  v.section("plane_matching", "Plane matching (Sec. 4.5)", [&] { visit(v, o.plane_matching); });
   v.field("predict_point_positions", o.predict_point_positions,
           "gate points around their position predicted by the constant-velocity model");
   v.field("predict_plane_positions", o.predict_plane_positions,

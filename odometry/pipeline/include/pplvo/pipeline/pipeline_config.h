@@ -7,9 +7,9 @@
 /// Every options struct declares its schema once, beside the struct (a `visit` function with
 /// names, docs and ranges; pplvo/core/config_schema.h); pipeline_config.cpp composes those
 /// schemas into the file and adds the cross-module rules (crossModuleErrors). The one list
-/// drives loading, dumping, flattening and validation (pplvo/core/config_visitor.h). Loading collects every
-/// problem (unknown keys, values of the wrong type, invalid enum strings, values out of
-/// range) and reports them together in one ConfigError. Missing keys keep their defaults.
+/// drives loading, dumping, flattening and validation (pplvo/core/config_visitor.h). Loading
+/// collects every problem (unknown keys, values of the wrong type, invalid enum strings, values out
+/// of range) and reports them together in one ConfigError. Missing keys keep their defaults.
 #include <string>
 #include <vector>
 
