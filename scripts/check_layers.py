@@ -31,6 +31,7 @@ import sys
 RANK = {
     "core": 0,
     "lcmtypes": 1,
+    "node": 1.5,
     "drivers": 2,
     "logs": 2,
     "fixtures": 2.5,

@@ -123,7 +123,7 @@ PipelineRun runPipeline(bool corrupt) {
   lcm::LCM lcm("memq://");
   EXPECT_TRUE(lcm.good());
   nodes::DepthFilterNodeOptions df;
-  df.overload_backlog = 0;
+  df.filter.overload.backlog = 0;
   nodes::DepthFilterNode depth_filter(df, lcm);
   nodes::FrontendNode frontend(nodes::FrontendNodeOptions{}, lcm);
   nodes::EstimatorNode estimator(nodes::EstimatorNodeOptions{}, lcm);

@@ -8,6 +8,8 @@
 
 #include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/logging/event_log.h"
+#include "pplvo/node/process.h"
+#include "pplvo/replay/replay_args.h"
 #include "pplvo/replay/replay_stage.h"
 #include "pplvo/run/run_pipeline.h"
 
@@ -133,6 +135,31 @@ TEST_F(ReplayTest, MissingLogIsAClearError) {
   const ReplayResult r = replayStage(o);
   EXPECT_TRUE(r.failed);
   EXPECT_NE(r.error.find("/nonexistent/run.lcmlog"), std::string::npos) << r.error;
+}
+
+TEST(ReplayArgs, GoodBadAndHelp) {
+  const ReplayArgs a =
+      parseReplayArgs({"--log", "run.lcm", "--stage", "depth-filter", "--depth-model", "cgm",
+                       "--set", "depth_filter.ogm.k_consistency=2"});
+  EXPECT_TRUE(a.errors.empty()) << a.errors.front();
+  EXPECT_EQ(a.options.log, "run.lcm");
+  EXPECT_EQ(a.options.stage, Stage::kDepthFilter);
+  EXPECT_EQ(a.options.pipeline.depth_filter.model, depth_filter::DepthModel::kCgm);
+  EXPECT_EQ(a.options.pipeline.depth_filter.ogm.k_consistency, 2);
+
+  const ReplayArgs bad = parseReplayArgs({"--stage", "player", "--set", "odometry.x=1"});
+  ASSERT_EQ(bad.errors.size(), 3u);
+  EXPECT_NE(bad.errors[0].find("odometry.x: unknown key"), std::string::npos) << bad.errors[0];
+  EXPECT_EQ(bad.errors[1], "--stage: depth-filter, frontend or estimator");
+  EXPECT_EQ(bad.errors[2], "--log is required");
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(node::argsExitCode("pplvo-replay", bad.help, bad.errors, replayUsage()), 2);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("pplvo-replay: --log is required\n"),
+            std::string::npos);
+  testing::internal::GetCapturedStdout();
+  EXPECT_TRUE(parseReplayArgs({"-h"}).help);
+  EXPECT_NE(replayUsage().find("Exit 0 if identical"), std::string::npos);
 }
 
 }  // namespace

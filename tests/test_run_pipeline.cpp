@@ -13,7 +13,9 @@
 #include "pplvo/eval/pose_records.h"
 #include "pplvo/eval/relative_pose_file.h"
 #include "pplvo/fixtures/synthetic_sequence.h"
+#include "pplvo/node/process.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
+#include "pplvo/run/run_args.h"
 #include "pplvo/run/run_pipeline.h"
 
 namespace fs = std::filesystem;
@@ -290,6 +292,42 @@ TEST_F(RunPipelineTest, CovarianceFileHoldsThePublishedRelativePoses) {
   ASSERT_TRUE(nees.ok) << nees.error;
   EXPECT_EQ(nees.pairs.size(), 9u);
   fs::remove_all(out);
+}
+
+TEST(RunArgs, GoodBadAndHelp) {
+  const RunArgs a =
+      parseRunArgs({"--dataset", "d", "--output", "t.txt", "--max-frames", "5", "--in-flight", "1",
+                    "--fps", "30", "--quiet", "--no-progress", "--features", "points", "--set",
+                    "odometry.tracker.estimator.plane_scale_alpha=1"});
+  EXPECT_TRUE(a.errors.empty()) << a.errors.front();
+  EXPECT_EQ(a.options.dataset_dir, "d");
+  EXPECT_EQ(a.options.output, "t.txt");
+  EXPECT_EQ(a.options.max_frames, 5);
+  EXPECT_EQ(a.options.in_flight, 1);
+  EXPECT_EQ(a.options.fps, 30.0);
+  EXPECT_TRUE(a.quiet);
+  ASSERT_TRUE(a.progress.has_value());
+  EXPECT_FALSE(*a.progress);
+  EXPECT_FALSE(a.options.pipeline.frontend.families.lines);
+  EXPECT_FALSE(a.options.pipeline.odometry.tracker.estimator.use_lines);
+  EXPECT_EQ(a.options.pipeline.odometry.tracker.estimator.plane_scale_alpha, 1.0);
+  EXPECT_FALSE(parseRunArgs({"--dataset", "d"}).progress.has_value());  // stderr decides
+
+  const RunArgs bad = parseRunArgs({"--in-flight", "0", "--features", "surf"});
+  ASSERT_EQ(bad.errors.size(), 3u);
+  EXPECT_EQ(bad.errors[0], "--in-flight: expected an integer in [1, 1000], got '0'");
+  EXPECT_NE(bad.errors[1].find("--features surf: features: invalid feature list 'surf'"),
+            std::string::npos)
+      << bad.errors[1];
+  EXPECT_EQ(bad.errors[2], "--dataset is required");
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(node::argsExitCode("pplvo-run", bad.help, bad.errors, runUsage()), 2);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("pplvo-run: --dataset is required\n"),
+            std::string::npos);
+  testing::internal::GetCapturedStdout();
+  EXPECT_TRUE(parseRunArgs({"--help"}).help);
+  EXPECT_NE(runUsage().find("--depth-model MODEL"), std::string::npos) << runUsage();
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "pplvo/depth_filter/ogm_fusion.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -11,9 +12,8 @@
 namespace pplvo::depth_filter {
 
 OgmFusion::OgmFusion(const Options& options) : options_(options) {
-  options_.max_window = std::max(1, options_.max_window);
-  options_.k_consistency = std::max(1, options_.k_consistency);
-  options_.threads = std::max(1, options_.threads);
+  // Ranges: visit(V&, OgmOptions&) (the configuration rejects other values).
+  assert(options_.max_window >= 1 && options_.k_consistency >= 1 && options_.threads >= 1);
 }
 
 void OgmFusion::warn(const std::string& what) {

@@ -14,9 +14,10 @@ namespace pplvo::nodes {
 DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, msgs::Bus bus)
     : options_(options),
       bus_(std::move(bus)),
-      sensor_(options.sensor),
-      cgm_(options.cgm, std::make_shared<depth_filter::QuadraticSensorModel>(options.sensor)),
-      ogm_(options.ogm) {
+      sensor_(options.filter.sensor),
+      cgm_(options.filter.cgm,
+           std::make_shared<depth_filter::QuadraticSensorModel>(options.filter.sensor)),
+      ogm_(options.filter.ogm) {
   if (options_.max_pending < 1) options_.max_pending = 1;
   subscriptions_.push_back(
       bus_.subscribe(options_.rgbd_channel, &DepthFilterNode::onFrame, this, counters_, kName));
@@ -64,7 +65,7 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   p.camera = frame.camera;
   // Depth in the undistorted pinhole model, as every later stage reads it.
   const cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
-  if (options_.model == DepthModel::kSensor) {
+  if (options_.filter.model == DepthModel::kSensor) {
     ScopedStageTimer t(timings_, "sensor");
     p.depth = depth_filter::applySensorModel(sensor_, depth_m);
     p.stage = pplvo_msgs::depth_map_t::STAGE_SENSOR;
@@ -96,12 +97,13 @@ std::optional<DepthFilterNode::Pending> DepthFilterNode::takePending(int64_t seq
 }
 
 int overloadWindow(int backlog, const DepthFilterNodeOptions& o) {
-  if (o.overload_backlog <= 0 || o.overload_step <= 0 || backlog <= o.overload_backlog) return 0;
+  const depth_filter::DepthFilterOverloadOptions& shed = o.filter.overload;
+  if (shed.backlog <= 0 || shed.window_step <= 0 || backlog <= shed.backlog) return 0;
   // Proportional to how far behind: a loop slower than the sensor must catch up before the
   // frontend's queue of frames waiting for fused depth overflows.
-  const int64_t behind = backlog - o.overload_backlog;
-  const int64_t window = std::max<int64_t>(2, o.ogm.max_window - behind * o.overload_step);
-  return window < o.ogm.max_window ? static_cast<int>(window) : 0;
+  const int64_t behind = backlog - shed.backlog;
+  const int64_t window = std::max<int64_t>(2, o.filter.ogm.max_window - behind * shed.window_step);
+  return window < o.filter.ogm.max_window ? static_cast<int>(window) : 0;
 }
 
 void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
@@ -124,7 +126,7 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     return;
   }
   Pending& p = *taken;
-  if (options_.model != DepthModel::kOgm) {
+  if (options_.filter.model != DepthModel::kOgm) {
     publishDepth(options_.fused_channel, p, p.depth, p.stage);
     ++counters_.frames_out;
     return;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
@@ -16,6 +17,8 @@
 #include "pplvo/fixtures/analytic_scene.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/msgs/convert_pose.h"
+#include "pplvo/node/process.h"
+#include "pplvo/depth_filter_node/depth_filter_args.h"
 
 namespace pplvo::nodes {
 namespace {
@@ -127,7 +130,7 @@ TEST(DepthFilterNode, MemqFramesAndPosesGiveCgmAndFusedMaps) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   DepthFilterNodeOptions o;
-  o.ogm.max_window = 5;
+  o.filter.ogm.max_window = 5;
   DepthFilterNode node(o, lcm);
   Collector c;
   lcm.subscribe(channels::kDepthCgm, &Collector::onDepth, &c);
@@ -161,19 +164,19 @@ TEST(DepthFilterNode, MemqFramesAndPosesGiveCgmAndFusedMaps) {
 
 TEST(DepthFilterNode, OverloadWindowRule) {
   DepthFilterNodeOptions o;  // window 10; more than 3 newer frames waiting: 2 shorter per frame
-  ASSERT_EQ(o.ogm.max_window, 10);
+  ASSERT_EQ(o.filter.ogm.max_window, 10);
   EXPECT_EQ(overloadWindow(0, o), 0);
   EXPECT_EQ(overloadWindow(3, o), 0);
   EXPECT_EQ(overloadWindow(4, o), 8);
   EXPECT_EQ(overloadWindow(5, o), 6);
   EXPECT_EQ(overloadWindow(7, o), 2);
   EXPECT_EQ(overloadWindow(1000000, o), 2);  // never below the frame and one past frame
-  o.overload_step = 5;
+  o.filter.overload.window_step = 5;
   EXPECT_EQ(overloadWindow(4, o), 5);
-  o.ogm.max_window = 2;  // nothing to shorten
+  o.filter.ogm.max_window = 2;  // nothing to shorten
   EXPECT_EQ(overloadWindow(1000, o), 0);
-  o.ogm.max_window = 10;
-  o.overload_backlog = 0;  // never
+  o.filter.ogm.max_window = 10;
+  o.filter.overload.backlog = 0;  // never
   EXPECT_EQ(overloadWindow(1000, o), 0);
 }
 
@@ -182,9 +185,9 @@ TEST(DepthFilterNode, OverloadWindowRule) {
 TEST(DepthFilterNode, BacklogOfFramesShortensTheWindowUntilCaughtUp) {
   AnalyticScene scene(smallScene());
   DepthFilterNodeOptions o;
-  o.ogm.max_window = 10;
-  o.overload_backlog = 2;
-  o.overload_step = 4;
+  o.filter.ogm.max_window = 10;
+  o.filter.overload.backlog = 2;
+  o.filter.overload.window_step = 4;
   // Frames 0-5 each with its pose at once, then frames 6-10 before the pose of frame 6.
   auto run = [&](const DepthFilterNodeOptions& options, int64_t* shortened) {
     lcm::LCM lcm("memq://");
@@ -222,7 +225,7 @@ TEST(DepthFilterNode, BacklogOfFramesShortensTheWindowUntilCaughtUp) {
   // caught up: frames 0-8, 0-9, 1-10.
   EXPECT_EQ(run(o, &shortened), (std::vector<int>{1, 2, 3, 4, 5, 6, 2, 6, 9, 10, 10}));
   EXPECT_EQ(shortened, 2);
-  o.overload_backlog = 0;  // off: the same backlog fuses the whole window
+  o.filter.overload.backlog = 0;  // off: the same backlog fuses the whole window
   EXPECT_EQ(run(o, &shortened), (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 10}));
   EXPECT_EQ(shortened, 0);
 }
@@ -231,7 +234,7 @@ TEST(DepthFilterNode, CgmModelPublishesCgmAsFused) {
   AnalyticScene scene(smallScene());
   lcm::LCM lcm("memq://");
   DepthFilterNodeOptions o;
-  ASSERT_TRUE(parseDepthModel("cgm", &o.model));
+  ASSERT_TRUE(parseDepthModel("cgm", &o.filter.model));
   DepthFilterNode node(o, lcm);
   Collector c;
   lcm.subscribe(channels::kDepthCgm, &Collector::onDepth, &c);
@@ -466,6 +469,102 @@ TEST(DepthFilterNode, ReplayFromLogIsBitIdentical) {
   ASSERT_EQ(last.decode(a.back().data(), 0, static_cast<int>(a.back().size())),
             static_cast<int>(a.back().size()));
   EXPECT_EQ(last.window_length, 7);
+}
+
+TEST(DepthFilterArgs, ConfigSetAndShortcutsOnTheDepthFilterSchema) {
+  const std::string config = std::string(std::getenv("PPLVO_SOURCE_DIR")) + "/config/pplvo.yaml";
+  // The same command line as a launch gives it: keys of other sections are the other processes'.
+  const DepthFilterArgs a = parseDepthFilterArgs({"--config",
+                                                  config,
+                                                  "--set",
+                                                  "depth_filter.ogm.k_consistency=2",
+                                                  "--set",
+                                                  "frontend.points.max_points=500",
+                                                  "--window",
+                                                  "7",
+                                                  "--depth-model=cgm",
+                                                  "--max-translation-variance",
+                                                  "2e-4",
+                                                  "--overload-backlog",
+                                                  "0",
+                                                  "--overload-step",
+                                                  "3",
+                                                  "--features",
+                                                  "points,planes",
+                                                  "--lcm-url",
+                                                  "memq://",
+                                                  "--route",
+                                                  "PPLVO_RGBD=memq://",
+                                                  "--max-pending",
+                                                  "9",
+                                                  "--compress",
+                                                  "--prefault-mb",
+                                                  "0"});
+  EXPECT_TRUE(a.errors.empty()) << a.errors.front();
+  EXPECT_FALSE(a.help);
+  const depth_filter::DepthFilterOptions& f = a.options.filter;
+  EXPECT_EQ(f.ogm.k_consistency, 2);
+  EXPECT_EQ(f.ogm.max_window, 7);
+  EXPECT_EQ(f.model, depth_filter::DepthModel::kCgm);
+  EXPECT_EQ(f.ogm.max_translation_variance_m2, 2e-4);
+  EXPECT_EQ(f.overload.backlog, 0);
+  EXPECT_EQ(f.overload.window_step, 3);
+  EXPECT_EQ(a.options.lcm_url, "memq://");
+  EXPECT_EQ(a.options.routes.size(), 1u);
+  EXPECT_EQ(a.options.max_pending, 9);
+  EXPECT_TRUE(a.options.compress);
+  EXPECT_EQ(a.prefault_mb, 0);
+  // Defaults: the depth filter schema's.
+  const DepthFilterArgs d = parseDepthFilterArgs({});
+  EXPECT_TRUE(d.errors.empty());
+  EXPECT_EQ(d.options.filter.ogm.max_window, 10);
+  EXPECT_EQ(d.options.filter.overload.backlog, 3);
+  EXPECT_EQ(d.prefault_mb, 64);
+}
+
+TEST(DepthFilterArgs, BadValuesAreExitCodeTwoWithTheKeysRange) {
+  const DepthFilterArgs a =
+      parseDepthFilterArgs({"--window", "0", "--set", "depth_filter.ogm.gate_sigma=-1",
+                            "--overload-step", "x", "--bogus", "--max-translation-variance", "0"});
+  ASSERT_EQ(a.errors.size(), 5u);
+  EXPECT_EQ(a.errors[0], "unknown option '--bogus'");
+  EXPECT_NE(a.errors[1].find("overrides: configuration has 1 error(s):\n  "
+                             "depth_filter.ogm.gate_sigma: -1.0 is out of range (must be > 0.0)"),
+            std::string::npos)
+      << a.errors[1];
+  // --window has the range of depth_filter.ogm.max_window (one place: the schema).
+  EXPECT_EQ(a.errors[2],
+            "--window 0: depth_filter.ogm.max_window: 0 is out of range (must be >= 1)");
+  EXPECT_EQ(a.errors[3],
+            "--overload-step x: depth_filter.overload.window_step: cannot read 'x' as an integer");
+  EXPECT_EQ(a.errors[4],
+            "--max-translation-variance 0: depth_filter.ogm.max_translation_variance_m2: 0.0 is "
+            "out of range (must be > 0.0)");
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(node::argsExitCode(DepthFilterNode::kName, a.help, a.errors, depthFilterUsage()), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  testing::internal::GetCapturedStdout();
+  EXPECT_NE(err.find("pplvo-depth-filter: --window 0: depth_filter.ogm.max_window: 0 is out of "
+                     "range (must be >= 1)\n"),
+            std::string::npos)
+      << err;
+  // Keys of the depth filter's own section are still checked strictly.
+  const DepthFilterArgs typo = parseDepthFilterArgs({"--set", "depth_filter.ogm.max_windw=3"});
+  ASSERT_EQ(typo.errors.size(), 1u);
+  EXPECT_NE(typo.errors[0].find("depth_filter.ogm.max_windw: unknown key"), std::string::npos);
+}
+
+TEST(DepthFilterArgs, Help) {
+  const DepthFilterArgs a = parseDepthFilterArgs({"--window", "3", "--help"});
+  EXPECT_TRUE(a.help);
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(node::argsExitCode(DepthFilterNode::kName, a.help, a.errors, depthFilterUsage()), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  for (const char* flag : {"--window N", "--depth-model MODEL", "--config FILE", "--set KEY=VALUE",
+                           "--overload-backlog N", "--route CHANNEL=URL", "--compress"})
+    EXPECT_NE(out.find(flag), std::string::npos) << flag << " in\n" << out;
+  EXPECT_NE(out.find("(= --set depth_filter.ogm.max_window)"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -2,9 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <set>
-
+#include <functional>
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 #include "match_judge.h"
 #include "pplvo/features/line_extractor.h"
@@ -426,28 +426,47 @@ TEST(PointMatching, GridBucketingEqualsBruteForce) {
   }
 }
 
+/// Counts the fields of a schema and can set one int field by name.
+struct FieldCounter {
+  int n = 0;
+  std::string set_key;
+  int set_value = 0;
+  template <typename T>
+  void field(const std::string& key, T& value, const std::string& doc,
+             const config::Range& = config::anyValue()) {
+    ++n;
+    EXPECT_FALSE(doc.empty()) << key;
+    if constexpr (std::is_same_v<T, int>) {
+      if (key == set_key) value = set_value;
+    }
+  }
+  void section(const std::string&, const std::string&, const std::function<void()>& body) {
+    body();
+  }
+  void forbid(const std::string&, const std::string&) {}
+};
+
 TEST(Options, VisitListsEveryField) {
   // Counts fields and checks a visitor can modify them (the config loader's use).
   PointExtractorOptions po;
-  int n = 0;
-  po.visit([&](const char*, auto&) { ++n; });
-  EXPECT_EQ(n, 17);
-  po.visit([](const char* name, auto& f) {
-    if constexpr (std::is_same_v<std::decay_t<decltype(f)>, int>) {
-      if (std::string(name) == "max_points") f = 123;
-    }
-  });
+  FieldCounter c;
+  visit(c, po);
+  EXPECT_EQ(c.n, 17);
+  FieldCounter set{0, "max_points", 123};
+  visit(set, po);
   EXPECT_EQ(po.max_points, 123);
-  const LineExtractorOptions lo;
-  n = 0;
-  lo.visit([&](const char*, const auto&) { ++n; });
-  EXPECT_EQ(n, 9);
-  n = 0;
-  PointMatchOptions{}.visit([&](const char*, auto&) { ++n; });
-  EXPECT_EQ(n, 7);
-  n = 0;
-  LineMatchOptions{}.visit([&](const char*, auto&) { ++n; });
-  EXPECT_EQ(n, 6);
+  LineExtractorOptions lo;
+  c = FieldCounter();
+  visit(c, lo);
+  EXPECT_EQ(c.n, 9);
+  c = FieldCounter();
+  PointMatchOptions pm;
+  visit(c, pm);
+  EXPECT_EQ(c.n, 7);
+  c = FieldCounter();
+  LineMatchOptions lm;
+  visit(c, lm);
+  EXPECT_EQ(c.n, 6);
   PointDetector d;
   EXPECT_TRUE(parsePointDetector("AKAZE", &d));
   EXPECT_EQ(d, PointDetector::kAkaze);

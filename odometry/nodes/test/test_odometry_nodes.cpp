@@ -17,8 +17,10 @@
 #include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/convert_pose.h"
+#include "pplvo/node/process.h"
 #include "pplvo/odometry_nodes/estimator_node.h"
 #include "pplvo/odometry_nodes/frontend_node.h"
+#include "pplvo/odometry_nodes/odometry_args.h"
 #include "pplvo/pipeline/pipeline_args.h"
 
 namespace pplvo::nodes {
@@ -480,6 +482,75 @@ TEST(PipelineArgs, ReportsEveryProblem) {
   // The defaults are untouched.
   EXPECT_TRUE(o.frontend.families.lines);
   EXPECT_EQ(o.depth_filter.model, depth_filter::DepthModel::kOgm);
+}
+
+TEST(FrontendArgs, GoodBadAndHelp) {
+  const FrontendArgs a = parseFrontendArgs(
+      {"--lcm-url", "memq://", "--max-unlifted", "2", "--no-extract-ahead", "--features",
+       "points,planes", "--set", "frontend.points.max_points=321", "--prefault-mb", "8"});
+  EXPECT_TRUE(a.errors.empty()) << a.errors.front();
+  EXPECT_EQ(a.options.lcm_url, "memq://");
+  EXPECT_EQ(a.options.max_unlifted, 2);
+  EXPECT_FALSE(a.options.extract_ahead);
+  EXPECT_FALSE(a.options.frontend.families.lines);
+  EXPECT_EQ(a.options.frontend.points.max_points, 321);
+  EXPECT_EQ(a.prefault_mb, 8);
+  EXPECT_EQ(parseFrontendArgs({}).prefault_mb, 64);
+
+  const FrontendArgs bad = parseFrontendArgs({"--max-unlifted", "-1", "--depth-model", "gm"});
+  ASSERT_EQ(bad.errors.size(), 2u);
+  EXPECT_EQ(bad.errors[0], "--max-unlifted: expected an integer in [0, 1000], got '-1'");
+  EXPECT_EQ(bad.errors[1],
+            "--depth-model gm: depth_filter.model: invalid value 'gm' (choose one of: sensor, "
+            "cgm, ogm)");
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(node::argsExitCode(FrontendNode::kName, bad.help, bad.errors, frontendUsage()), 2);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("pplvo-frontend: --max-unlifted: expected"),
+            std::string::npos);
+  testing::internal::GetCapturedStdout();
+
+  const FrontendArgs help = parseFrontendArgs({"-h", "--bogus"});
+  EXPECT_TRUE(help.help);
+  EXPECT_NE(frontendUsage().find("--max-unlifted-wait-ms MS"), std::string::npos);
+  EXPECT_NE(frontendUsage().find("--set KEY=VALUE"), std::string::npos);
+}
+
+TEST(EstimatorArgs, GoodBadAndHelp) {
+  const EstimatorArgs a =
+      parseEstimatorArgs({"--max-waiting", "3", "--set", "odometry.tracker.window_length=12",
+                          "--pose-channel", "P", "--route", "PPLVO_FEATURES=memq://"});
+  EXPECT_TRUE(a.errors.empty()) << a.errors.front();
+  EXPECT_EQ(a.options.max_waiting, 3);
+  EXPECT_EQ(a.options.odometry.tracker.window_length, 12);
+  EXPECT_EQ(a.options.pose_channel, "P");
+  EXPECT_EQ(a.options.routes.size(), 1u);
+  EXPECT_EQ(a.prefault_mb, 16);
+
+  // The cross-module rule runs after every override: the tracker window must cover the fusion
+  // window set by --set, and a --depth-model without O-GM lifts it.
+  const EstimatorArgs bad =
+      parseEstimatorArgs({"--set", "depth_filter.ogm.max_window=12", "--max-waiting", "0"});
+  ASSERT_EQ(bad.errors.size(), 2u);  // reported together: the option and the broken rule
+  EXPECT_EQ(bad.errors[0], "--max-waiting: expected an integer >= 1, got '0'");
+  EXPECT_NE(bad.errors[1].find("is shorter than depth_filter.ogm.max_window 12"),
+            std::string::npos);
+  const EstimatorArgs rule = parseEstimatorArgs({"--set", "depth_filter.ogm.max_window=12"});
+  ASSERT_EQ(rule.errors.size(), 1u);
+  EXPECT_NE(rule.errors[0].find("window_length: 10 is shorter than depth_filter.ogm.max_window 12"),
+            std::string::npos)
+      << rule.errors[0];
+  EXPECT_TRUE(
+      parseEstimatorArgs({"--set", "depth_filter.ogm.max_window=12", "--depth-model", "cgm"})
+          .errors.empty());
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(node::argsExitCode(EstimatorNode::kName, rule.help, rule.errors, estimatorUsage()), 2);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("pplvo-estimator: odometry.tracker"),
+            std::string::npos);
+  testing::internal::GetCapturedStdout();
+  EXPECT_TRUE(parseEstimatorArgs({"--help"}).help);
+  EXPECT_NE(estimatorUsage().find("--max-reference-wait-ms MS"), std::string::npos);
 }
 
 }  // namespace

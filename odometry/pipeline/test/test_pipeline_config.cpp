@@ -10,7 +10,6 @@
 #include <string>
 #include <vector>
 
-#include "pplvo/estimator/estimator_config.h"
 #include "pplvo/pipeline/pipeline_config.h"
 
 namespace pplvo::pipeline {
@@ -70,7 +69,12 @@ TEST(PipelineConfig, DefaultFileEqualsCodeDefaults) {
   leafKeys(YAML::LoadFile(path), "", &file_keys);
   const std::vector<std::string> code_keys = flattenedKeys(defaults);
 
-  if (!diff.empty() || file_keys != code_keys) {
+  if (!diff.empty() || file_keys != code_keys || [&] {
+        std::ifstream f(path);
+        std::stringstream t;
+        t << f.rdbuf();
+        return t.str() != dumpPipelineConfig(defaults);
+      }()) {
     const char* bin = std::getenv("PPLVO_BINARY_DIR");
     const std::string out = std::string(bin ? bin : "/tmp") + "/pplvo.default.yaml";
     std::ofstream(out) << dumpPipelineConfig(defaults);
@@ -80,6 +84,12 @@ TEST(PipelineConfig, DefaultFileEqualsCodeDefaults) {
                   << join(diff);
   }
   EXPECT_EQ(file_keys, code_keys);
+  // Generated, comments included: regenerate with the file written above.
+  std::ifstream file(path);
+  std::stringstream file_text;
+  file_text << file.rdbuf();
+  EXPECT_TRUE(file_text.str() == dumpPipelineConfig(defaults))
+      << "config/pplvo.yaml is not the dump of the defaults (comments or order differ)";
   // A few of the paper's values, as read from the file.
   EXPECT_EQ(loaded.depth_filter.model, depth_filter::DepthModel::kOgm);
   EXPECT_EQ(loaded.depth_filter.ogm.max_window, 10);
@@ -371,20 +381,18 @@ TEST(PipelineConfig, CommandLineOverrides) {
   EXPECT_TRUE(contains(msg, "'x.y=2': invalid or conflicting key")) << msg;
 }
 
-/// Collects dotted keys from the libraries' own field lists (member visit(v) and the
-/// estimator's visit(V&, Options&)), to check that the configuration lists the same fields.
+/// Collects dotted keys from the libraries' own schemas (visit(V&, Options&) beside each
+/// options struct), to check that the configuration composes exactly those fields.
 struct KeyCollector {
   std::string prefix;
   std::vector<std::string> keys;
   template <typename T>
-  void operator()(const char* key, T&) {
+  void field(const std::string& key, T&, const std::string& = "",
+             const config::Range& = config::anyValue()) {
     keys.push_back(prefix + key);
   }
-  template <typename T>
-  void field(const std::string& key, T&, const std::string& = "") {
-    keys.push_back(prefix + key);
-  }
-  void section(const std::string& key, const std::function<void()>& body) {
+  void forbid(const std::string&, const std::string&) {}
+  void section(const std::string& key, const std::string&, const std::function<void()>& body) {
     const std::string saved = prefix;
     prefix += key + ".";
     body();
@@ -402,29 +410,19 @@ std::vector<std::string> keysUnder(const std::string& prefix) {
 
 TEST(PipelineConfig, FieldListsMatchTheLibrariesOwnLists) {
   PipelineOptions o;
-  {
-    KeyCollector c{"frontend.points.", {}};
-    o.frontend.points.visit(c);
-    EXPECT_EQ(c.keys, keysUnder("frontend.points."));
-  }
-  {
-    KeyCollector c{"frontend.lines.", {}};
-    o.frontend.lines.visit(c);
-    EXPECT_EQ(c.keys, keysUnder("frontend.lines."));
-  }
-  {
-    KeyCollector c{"odometry.point_matching.", {}};
-    o.odometry.point_matching.visit(c);
-    EXPECT_EQ(c.keys, keysUnder("odometry.point_matching."));
-  }
-  {
-    KeyCollector c{"odometry.line_matching.", {}};
-    o.odometry.line_matching.visit(c);
-    EXPECT_EQ(c.keys, keysUnder("odometry.line_matching."));
-  }
+  const auto sameKeys = [](const std::string& prefix, auto& options) {
+    KeyCollector c{prefix, {}};
+    visit(c, options);
+    EXPECT_EQ(c.keys, keysUnder(prefix)) << prefix;
+  };
+  sameKeys("frontend.points.", o.frontend.points);
+  sameKeys("frontend.lines.", o.frontend.lines);
+  sameKeys("odometry.point_matching.", o.odometry.point_matching);
+  sameKeys("odometry.line_matching.", o.odometry.line_matching);
+  sameKeys("depth_filter.", o.depth_filter);
   {
     KeyCollector c{"odometry.tracker.", {}};
-    pplvo::visit(c, o.odometry.tracker);
+    visit(c, o.odometry.tracker);
     std::set<std::string> expected(c.keys.begin(), c.keys.end());
     for (const char* k : {"use_points", "use_lines", "use_planes"})
       EXPECT_EQ(expected.erase(std::string("odometry.tracker.estimator.") + k), 1u);

@@ -97,7 +97,11 @@ class BusMonitor {
 /// --features, --depth-model): every error, so that a bad key is refused here with its own
 /// message (exit 2) instead of ending a node at start-up.
 std::vector<std::string> pipelineArgErrors(const LaunchOptions& o) {
-  const pplvo::pipeline::PipelineArgs args{o.config, o.set, o.features, o.depth_model};
+  pplvo::pipeline::PipelineArgs args;
+  args.config = o.config;
+  args.overrides = o.set;
+  if (!o.features.empty()) args.shortcuts.emplace_back("--features", o.features);
+  if (!o.depth_model.empty()) args.shortcuts.emplace_back("--depth-model", o.depth_model);
   pplvo::pipeline::PipelineOptions options;
   pplvo::ArgParser parser;
   pplvo::pipeline::applyPipelineArgs(args, &options, &parser);

@@ -85,10 +85,7 @@ StageUnderTest makeStage(Stage stage, const pipeline::PipelineOptions& p, lcm::L
   switch (stage) {
     case Stage::kDepthFilter: {
       nodes::DepthFilterNodeOptions o;
-      o.model = p.depth_filter.model;
-      o.sensor = p.depth_filter.sensor;
-      o.cgm = p.depth_filter.cgm;
-      o.ogm = p.depth_filter.ogm;
+      o.filter = p.depth_filter;
       s.inputs = {o.rgbd_channel, o.pose_channel};
       s.outputs = {o.cgm_channel, o.fused_channel};
       s.depth_filter = std::make_unique<nodes::DepthFilterNode>(o, lcm);

@@ -184,11 +184,9 @@ RunResult runPipeline(const RunOptions& options) {
     if (!lcm.good()) throw std::runtime_error("cannot open memq:// LCM");
 
     nodes::DepthFilterNodeOptions df;
-    df.model = options.pipeline.depth_filter.model;
-    df.sensor = options.pipeline.depth_filter.sensor;
-    df.cgm = options.pipeline.depth_filter.cgm;
-    df.ogm = options.pipeline.depth_filter.ogm;
-    df.overload_backlog = 0;  // every frame fused over the full window (in_flight is bounded)
+    df.filter = options.pipeline.depth_filter;
+    df.filter.overload.backlog =
+        0;  // every frame fused over the full window (in_flight is bounded)
     nodes::DepthFilterNode depth_filter(df, lcm);
 
     nodes::FrontendNodeOptions fe;

@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/depth_filter/sensor_model.h"
 
@@ -28,6 +29,16 @@ struct CgmOptions {
   /// output does not depend on this number.
   int threads = 2;
 };
+
+/// Schema of CgmOptions (pplvo/core/config_schema.h).
+template <class V>
+void visit(V& v, CgmOptions& o) {
+  v.field("missing_centre_stays_missing", o.missing_centre_stays_missing,
+          "a pixel without depth stays missing instead of taking the mixture of its 3x3 "
+          "neighbours (eqs. 2-6); holes are left to O-GM");
+  v.field("threads", o.threads, "threads over bands of rows (the output does not depend on it)",
+          config::atLeast(1));
+}
 
 /// C-GM filter. For pixel p with neighbours i (3x3, weights W = [1 2 1; 2 4 2; 1 2 1], eq. 3),
 /// y_i = 1 where depth is present, S = sum w_i y_i (eq. 5),

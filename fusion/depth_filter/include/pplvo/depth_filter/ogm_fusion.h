@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/geometry.h"
 #include "pplvo/core/rgbd_frame.h"
 
@@ -60,6 +61,33 @@ struct OgmOptions {
   /// 1 = serial. The results (depth, variance, stats) do not depend on it, bit for bit.
   int threads = 2;
 };
+
+/// Schema of OgmOptions (pplvo/core/config_schema.h): the one place of their names, docs and
+/// ranges (OgmFusion asserts them in debug builds).
+template <class V>
+void visit(V& v, OgmOptions& o) {
+  v.field("max_window", o.max_window,
+          "frames in the fusion sliding window, current included (paper Sec. 5: 10, O-GM_10)",
+          config::atLeast(1));
+  v.field("k_consistency", o.k_consistency,
+          "points a pixel accepts before the consistency gate applies (Sec. 3.4: k = 5)",
+          config::atLeast(1));
+  v.field("gate_sigma", o.gate_sigma,
+          "consistency gate half-width r_bar +- gate_sigma * sigma_r (Sec. 3.4: 3)",
+          config::positive());
+  v.field("max_translation_variance_m2", o.max_translation_variance_m2,
+          "a window frame whose transform to the current frame has a larger translation "
+          "variance (largest eigenvalue, m^2) leaves the window (Sec. 3.4; no value in the "
+          "paper: (1 cm)^2)",
+          config::positive());
+  v.field("min_depth_m", o.min_depth_m,
+          "projected points closer than this to the current camera are ignored (m)",
+          config::atLeast(0));
+  v.field("threads", o.threads,
+          "threads of the fusion (OpenCV's pool; bands of the image): 1 = serial. The results "
+          "do not depend on it, bit for bit",
+          config::atLeast(1));
+}
 
 /// O-GM fusion. Each window frame is stored as its C-GM depth and range variance
 /// sigma_r^2 = sigma_z^2 / cos^2(alpha) (eq. 6, cosines precomputed from the intrinsics).

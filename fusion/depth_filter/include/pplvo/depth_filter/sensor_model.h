@@ -4,6 +4,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/rgbd_frame.h"
 
 namespace pplvo::depth_filter {
@@ -36,6 +37,15 @@ class QuadraticSensorModel final : public SensorModel {
  private:
   Options options_;
 };
+
+/// Schema of QuadraticSensorModel::Options (pplvo/core/config_schema.h).
+template <class V>
+void visit(V& v, QuadraticSensorModel::Options& o) {
+  v.field("sigma_z_coeff_per_m", o.sigma_z_coeff_per_m,
+          "sigma_z = coeff * z^2 (z, sigma in m). Paper eq. 1 (Khoshelham & Elberink, "
+          "sigma_d = 0.5 px): 1.425e-6 in mm = 1.425e-3 per m",
+          config::positive());
+}
 
 /// Stage 1 alone: depth unchanged (non-finite or <= 0 become 0 = missing) and the model's
 /// variance per pixel. `depth_m` must be CV_32FC1 (throws std::invalid_argument otherwise).

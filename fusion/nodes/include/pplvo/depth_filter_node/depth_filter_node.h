@@ -19,6 +19,7 @@
 
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/depth_filter/cgm_filter.h"
+#include "pplvo/depth_filter/depth_filter_options.h"
 #include "pplvo/depth_filter/depth_rectification.h"
 #include "pplvo/depth_filter/depth_model.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
@@ -39,29 +40,19 @@ struct DepthFilterNodeOptions {
   std::string cgm_channel = channels::kDepthCgm;
   std::string fused_channel = channels::kDepthFused;
   std::string status_channel = channels::kStatus;
-  /// sensor: stage 1 only; cgm: stages 1-2; ogm: all three (paper's full filter). With sensor
-  /// or cgm the PPLVO_DEPTH_FUSED output is the stage-1/2 map, unchanged.
-  DepthModel model = DepthModel::kOgm;
   /// Frames waiting for their pose (1 s at 30 Hz); older ones are dropped and counted.
   int max_pending = 30;
-  /// Load shedding of a live pipeline that falls behind: when a pose comes while more than
-  /// `overload_backlog` newer frames wait for theirs, that frame is fused over a window
-  /// `overload_step` frames shorter per frame of backlog beyond it (its own frame and the
-  /// newest past ones; at least 2), instead of frames being dropped further down. The pose ->
-  /// O-GM -> lifting loop runs once per frame and O-GM is its largest part, so a shorter window
-  /// lets the loop catch up; the window keeps every frame for later fusions. 0 = never
-  /// (pplvo-run and lockstep launches: every frame fused over the full window).
-  int overload_backlog = 3;
-  int overload_step = 2;
   bool compress = false;  ///< ZLIB_F32 instead of RAW_F32 on the outputs
-  depth_filter::QuadraticSensorModel::Options sensor;  ///< sigma_z = coeff z^2 (paper eq. 1)
-  depth_filter::CgmOptions cgm;
-  depth_filter::OgmOptions ogm;  ///< ogm.max_window = --window
+  /// The algorithm's options: the `depth_filter` section of the configuration (model, sensor,
+  /// cgm, ogm, overload; pplvo/depth_filter/depth_filter_options.h). With model sensor or cgm
+  /// the PPLVO_DEPTH_FUSED output is the stage-1/2 map, unchanged. pplvo-run and lockstep
+  /// launches set filter.overload.backlog = 0 (every frame fused over the full window).
+  depth_filter::DepthFilterOptions filter;
 };
 
 /// O-GM window limit of a fusion with `backlog` newer frames waiting for their poses (the
-/// load shedding of DepthFilterNodeOptions::overload_backlog); 0 = the full window
-/// (options.ogm.max_window).
+/// load shedding of depth_filter::DepthFilterOverloadOptions); 0 = the full window
+/// (options.filter.ogm.max_window).
 int overloadWindow(int backlog, const DepthFilterNodeOptions& options);
 
 /// Thin LCM shell: convert, call the library, convert, publish, count; every handler inside
@@ -83,7 +74,7 @@ class DepthFilterNode {
   const StageTimings& timings() const { return timings_; }
   int64_t unknownPoses() const { return unknown_poses_; }
   int pending() const { return static_cast<int>(pending_.size()); }
-  /// Fusions the load shedding (overload_backlog) shortened: past frames were left out.
+  /// Fusions the load shedding (filter.overload) shortened: past frames were left out.
   int64_t overloadFusions() const { return ogm_.stats().frames_fused_limited; }
 
   void onFrame(const lcm::ReceiveBuffer* rbuf, const std::string& channel,

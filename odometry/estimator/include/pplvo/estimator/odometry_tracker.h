@@ -7,6 +7,7 @@
 #include <deque>
 #include <vector>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/frame_pose.h"
 #include "pplvo/core/geometry.h"
 #include "pplvo/estimator/pose_estimator.h"
@@ -32,6 +33,30 @@ struct OdometryTrackerOptions {
   double velocity_model_sigma_t_m = 0.02;
   double velocity_model_sigma_q = 0.01;
 };
+
+/// Schema of OdometryTrackerOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, OdometryTrackerOptions& o) {
+  v.section("estimator", "Pose estimation and its uncertainty (Sec. 4.6, eqs. 19-25)",
+            [&] { visit(v, o.estimator); });
+  v.field("velocity_decay", o.velocity_decay,
+          "constant-velocity motion scaled by decay^k on the k-th rejected frame",
+          config::between(0, 1));
+  v.field("max_velocity_model_frames", o.max_velocity_model_frames,
+          "consecutive rejected frames bridged by the velocity model, then LOST",
+          config::atLeast(0));
+  v.field("predict_from_velocity", o.predict_from_velocity,
+          "start each estimate from the constant-velocity prediction (false: identity)");
+  v.field("window_length", o.window_length,
+          "frames whose transform uncertainty to the current one is propagated (eq. 24), "
+          "current included (paper: 10, the depth fusion window)",
+          config::atLeast(1));
+  v.field("velocity_model_sigma_t_m", o.velocity_model_sigma_t_m,
+          "process noise std of the translation of a velocity-model step (m)", config::atLeast(0));
+  v.field("velocity_model_sigma_q", o.velocity_model_sigma_q,
+          "process noise std of q_xyz of a velocity-model step (~half-angle, rad)",
+          config::atLeast(0));
+}
 
 /// One frame of the window: the transform from that frame to the current one.
 struct WindowEntry {

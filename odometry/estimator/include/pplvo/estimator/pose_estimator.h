@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/core/geometry.h"
 #include "pplvo/core/primitives.h"
@@ -120,6 +121,55 @@ struct PoseEstimatorOptions {
   /// 2.5e-5 = (0.005)^2, i.e. ~0.57 deg std of the rotation angle.
   double max_rotation_variance = 2.5e-5;
 };
+
+/// Schema of PoseEstimatorOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, PoseEstimatorOptions& o) {
+  v.field("use_points", o.use_points, "use point residuals (the paper's ablations)");
+  v.field("use_lines", o.use_lines, "use line residuals");
+  v.field("use_planes", o.use_planes, "use plane residuals");
+  v.field("point_sigma_px", o.point_sigma_px,
+          "keypoint pixel std: sigma_p^2 = 1/12 px^2 (Sec. 4.2, uniform quantisation)",
+          config::positive());
+  v.field("octave_sigma_scale", o.octave_sigma_scale,
+          "point sigma multiplied by scale^octave (1 = same at every octave)", config::positive());
+  v.field("line_sigma_px", o.line_sigma_px,
+          "std of the 2D line distance at a projected endpoint (px)", config::positive());
+  v.field("plane_scale_alpha", o.plane_scale_alpha,
+          "alpha, scale of the plane terms in the joint cost E (eq. 22: 0.02, coarse tuning)",
+          config::atLeast(0));
+  v.field("covariance_sandwich", o.covariance_sandwich,
+          "pose covariance H^-1 M H^-1 (true) or the paper's eq. 23 (J^T W J)^-1 (false)");
+  v.field("full_whitening", o.full_whitening,
+          "false (paper): w = 1/diag(Sigma_r); true: full Sigma_r^(-1/2)");
+  v.field("use_tukey", o.use_tukey, "Tukey M-estimator on point and line residuals (Sec. 4.6)");
+  v.field("tukey_c", o.tukey_c, "Tukey constant on the whitened residuals (4.685)",
+          config::positive());
+  v.field("tukey_mad_scale", o.tukey_mad_scale,
+          "robust scale max(1, 1.4826 MAD) of the whitened residuals (false: 1)");
+  v.field("max_irls_iterations", o.max_irls_iterations, "IRLS re-weighting iterations",
+          config::atLeast(1));
+  v.field("max_lm_iterations", o.max_lm_iterations, "Levenberg-Marquardt iterations per solve",
+          config::atLeast(1));
+  v.field("irls_tolerance_m", o.irls_tolerance_m, "IRLS stops below this translation step (m)",
+          config::atLeast(0));
+  v.field("irls_tolerance_rad", o.irls_tolerance_rad, "IRLS stops below this rotation step (rad)",
+          config::atLeast(0));
+  v.field("min_depth_m", o.min_depth_m,
+          "points closer than this to the current image plane are dropped (m)", config::atLeast(0));
+  v.field("min_residuals", o.min_residuals,
+          "reject with fewer inlier residual rows (points, lines 2; planes 3)", config::atLeast(6));
+  v.field("min_relative_eigenvalue", o.min_relative_eigenvalue,
+          "degenerate if the smallest/largest eigenvalue of the scaled J^T W J is below this",
+          config::atLeast(0));
+  v.field("max_translation_variance_m2", o.max_translation_variance_m2,
+          "reject if the largest eigenvalue of the translation covariance exceeds this (Sec. "
+          "4.6 Pose Uncertainty; no value in the paper: (1 cm)^2)",
+          config::positive());
+  v.field("max_rotation_variance", o.max_rotation_variance,
+          "reject if the largest eigenvalue of the q_xyz covariance exceeds this",
+          config::positive());
+}
 
 enum class EstimateStatus : int8_t {
   kOk = 0,

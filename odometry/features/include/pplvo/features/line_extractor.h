@@ -1,14 +1,14 @@
 #pragma once
 /// 2D line segments: LSD (von Gioi et al.) with binary LBD descriptors (Zhang & Koch), as in
 /// the paper Sec. "Extraction of Points, Lines and Planes".
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/line_descriptor.hpp>
+#include <string>
+#include <vector>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/features/lbd.h"
 #include "pplvo/features/lsd.h"
@@ -40,24 +40,32 @@ struct LineExtractorOptions {
   bool use_opencv = false;
   /// Images smaller than this on either side give no lines.
   int min_image_side_px = 32;
-
-  /// Calls v(name, field) for every field (config load/dump/compare).
-  template <typename V> void visit(V&& v) { visitFields(*this, v); }
-  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
-
- private:
-  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
-    v("detection_scale", s.detection_scale);
-    v("describe_full_resolution", s.describe_full_resolution);
-    v("min_length_px", s.min_length_px);
-    v("max_lines", s.max_lines);
-    v("lsd_refine", s.lsd_refine);
-    v("lbd_band_width", s.lbd_band_width);
-    v("lbd_octaves", s.lbd_octaves);
-    v("use_opencv", s.use_opencv);
-    v("min_image_side_px", s.min_image_side_px);
-  }
 };
+
+/// Schema of LineExtractorOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, LineExtractorOptions& o) {
+  v.field("detection_scale", o.detection_scale,
+          "LSD and LBD run on the image resized by this factor (Sec. 5.3 suggests QVGA = 0.5 "
+          "for real time; 0.4 keeps the accuracy, docs/features.md)",
+          config::openClosed(0, 1));
+  v.field("describe_full_resolution", o.describe_full_resolution,
+          "compute LBD on the full-resolution image");
+  v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)",
+          config::atLeast(0));
+  v.field("max_lines", o.max_lines, "segments kept per frame, longest first", config::atLeast(1));
+  v.field("lsd_refine", o.lsd_refine,
+          "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)",
+          config::between(0, 2));
+  v.field("lbd_band_width", o.lbd_band_width, "LBD band width (rows per band, LBD's 7)",
+          config::between(1, 64));
+  v.field("lbd_octaves", o.lbd_octaves,
+          "LBD pyramid octaves (1 = one resolution, pplvo's LBD; more: OpenCV's)",
+          config::atLeast(1));
+  v.field("use_opencv", o.use_opencv, "LSD and LBD from OpenCV instead of pplvo's (slower)");
+  v.field("min_image_side_px", o.min_image_side_px, "smaller images give no lines (px)",
+          config::atLeast(1));
+}
 
 struct LineExtractionStats {
   int detected = 0;  ///< segments from LSD

@@ -9,12 +9,12 @@
 /// search runs over the gated candidates only. The strongest gated match is the same as in
 /// "k-NN over the whole image, then keep the strongest that satisfies the gate" with k large
 /// enough; the ratio test (optional) compares the best and second-best gated candidates.
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
 #include <utility>
 #include <vector>
 
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
-
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 
 namespace pplvo::features {
@@ -34,22 +34,23 @@ struct PointMatchOptions {
   double max_l2 = 250.0;
   /// One-to-one: keep (i, j) only if i is also the best gated candidate of j.
   bool cross_check = true;
-
-  /// Calls v(name, field) for every field (config load/dump/compare).
-  template <typename V> void visit(V&& v) { visitFields(*this, v); }
-  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
-
- private:
-  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
-    v("max_px_distance", s.max_px_distance);
-    v("predicted_max_px_distance", s.predicted_max_px_distance);
-    v("ratio_test", s.ratio_test);
-    v("ratio", s.ratio);
-    v("max_hamming_bits", s.max_hamming_bits);
-    v("max_l2", s.max_l2);
-    v("cross_check", s.cross_check);
-  }
 };
+
+/// Schema of PointMatchOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, PointMatchOptions& o) {
+  v.field("max_px_distance", o.max_px_distance,
+          "gate: pixel distance to the previous position (Sec. 4.5; no value in the paper)",
+          config::positive());
+  v.field("predicted_max_px_distance", o.predicted_max_px_distance,
+          "gate around a predicted position instead, when there is one (px)", config::positive());
+  v.field("ratio_test", o.ratio_test, "Lowe ratio test on the two best gated candidates");
+  v.field("ratio", o.ratio, "reject if best >= ratio * second best", config::openClosed(0, 1));
+  v.field("max_hamming_bits", o.max_hamming_bits,
+          "largest binary descriptor distance (bits of 256 for ORB); negative disables");
+  v.field("max_l2", o.max_l2, "largest float descriptor distance (SIFT); negative disables");
+  v.field("cross_check", o.cross_check, "one-to-one matches (mutual best)");
+}
 
 struct LineMatchOptions {
   /// Gate on the Hessian normal form (theta, rho) of the line a u + b v + c = 0 with the origin
@@ -61,21 +62,22 @@ struct LineMatchOptions {
   /// LBD is 256 bits.
   double max_hamming_bits = 80.0;
   bool cross_check = true;
-
-  /// Calls v(name, field) for every field (config load/dump/compare).
-  template <typename V> void visit(V&& v) { visitFields(*this, v); }
-  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
-
- private:
-  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
-    v("max_angle_deg", s.max_angle_deg);
-    v("max_rho_px", s.max_rho_px);
-    v("ratio_test", s.ratio_test);
-    v("ratio", s.ratio);
-    v("max_hamming_bits", s.max_hamming_bits);
-    v("cross_check", s.cross_check);
-  }
 };
+
+/// Schema of LineMatchOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, LineMatchOptions& o) {
+  v.field("max_angle_deg", o.max_angle_deg,
+          "gate: slope angle difference of the Hessian forms (deg; Sec. 4.5, no value given)",
+          config::openClosed(0, 180));
+  v.field("max_rho_px", o.max_rho_px, "gate: difference of the distances to the origin (px)",
+          config::positive());
+  v.field("ratio_test", o.ratio_test, "ratio test on the two best gated candidates");
+  v.field("ratio", o.ratio, "reject if best >= ratio * second best", config::openClosed(0, 1));
+  v.field("max_hamming_bits", o.max_hamming_bits,
+          "largest LBD distance (bits of 256); negative disables");
+  v.field("cross_check", o.cross_check, "one-to-one matches (mutual best)");
+}
 
 struct MatchStats {
   int queries = 0;            ///< previous features with a descriptor

@@ -2,13 +2,13 @@
 /// 2D keypoint detection and description (paper Sec. "Extraction of Points, Lines and Planes").
 /// The paper uses SURF, which is non-free and absent from Debian's OpenCV 4.6; the detector is
 /// chosen in PointExtractorOptions (ORB by default, see docs/features.md for the comparison).
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/features2d.hpp>
-
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 
 namespace pplvo::features {
@@ -63,33 +63,44 @@ struct PointExtractorOptions {
   /// Half-width of the structure-tensor window: 5 (11x11) averages the image noise of real
   /// sensors; 2 (5x5) is better on noiseless renders only.
   int subpixel_window_px = 5;
-
-  /// Calls v(name, field) for every field (config load/dump/compare; `detector` is passed as
-  /// PointDetector&: use parsePointDetector / pointDetectorName for text).
-  template <typename V> void visit(V&& v) { visitFields(*this, v); }
-  template <typename V> void visit(V&& v) const { visitFields(*this, v); }
-
- private:
-  template <typename Self, typename V> static void visitFields(Self& s, V& v) {
-    v("detector", s.detector);
-    v("max_points", s.max_points);
-    v("grid_bucketing", s.grid_bucketing);
-    v("grid_cols", s.grid_cols);
-    v("grid_rows", s.grid_rows);
-    v("min_separation_px", s.min_separation_px);
-    v("oversample", s.oversample);
-    v("min_image_side_px", s.min_image_side_px);
-    v("orb_levels", s.orb_levels);
-    v("orb_scale_factor", s.orb_scale_factor);
-    v("orb_fast_threshold", s.orb_fast_threshold);
-    v("orb_edge_threshold_px", s.orb_edge_threshold_px);
-    v("akaze_threshold", s.akaze_threshold);
-    v("sift_contrast_threshold", s.sift_contrast_threshold);
-    v("brisk_threshold", s.brisk_threshold);
-    v("subpixel_refinement", s.subpixel_refinement);
-    v("subpixel_window_px", s.subpixel_window_px);
-  }
 };
+
+/// Schema of PointExtractorOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, PointExtractorOptions& o) {
+  v.field("detector", o.detector,
+          "keypoint detector/descriptor: orb, akaze, sift or brisk (the paper's SURF is "
+          "non-free and not in Debian's OpenCV; docs/features.md compares them)");
+  v.field("max_points", o.max_points,
+          "points kept per frame (VGA); the paper gives no count (docs/features.md)",
+          config::atLeast(1));
+  v.field("grid_bucketing", o.grid_bucketing,
+          "spread the points over a grid_cols x grid_rows grid of cells");
+  v.field("grid_cols", o.grid_cols, "bucketing grid columns", config::atLeast(1));
+  v.field("grid_rows", o.grid_rows, "bucketing grid rows", config::atLeast(1));
+  v.field("min_separation_px", o.min_separation_px,
+          "kept points are at least this far apart (px); 0 disables", config::atLeast(0));
+  v.field("oversample", o.oversample,
+          "candidates detected before bucketing, as a multiple of max_points", config::atLeast(1));
+  v.field("min_image_side_px", o.min_image_side_px, "smaller images give no points (px)",
+          config::atLeast(1));
+  v.field("orb_levels", o.orb_levels, "ORB pyramid levels (OpenCV default 8)", config::atLeast(1));
+  v.field("orb_scale_factor", o.orb_scale_factor, "ORB pyramid scale factor",
+          config::greaterThan(1.0));
+  v.field("orb_fast_threshold", o.orb_fast_threshold, "ORB FAST threshold (OpenCV 20)",
+          config::atLeast(0));
+  v.field("orb_edge_threshold_px", o.orb_edge_threshold_px, "ORB border without features (px)",
+          config::atLeast(0));
+  v.field("akaze_threshold", o.akaze_threshold, "AKAZE detector response threshold",
+          config::positive());
+  v.field("sift_contrast_threshold", o.sift_contrast_threshold, "SIFT contrast threshold",
+          config::positive());
+  v.field("brisk_threshold", o.brisk_threshold, "BRISK AGAST threshold", config::atLeast(0));
+  v.field("subpixel_refinement", o.subpixel_refinement,
+          "sub-pixel keypoints: quadratic peak of the Shi-Tomasi response near the detection");
+  v.field("subpixel_window_px", o.subpixel_window_px, "half-width of the structure-tensor window",
+          config::atLeast(1));
+}
 
 struct PointExtractionStats {
   int candidates = 0;   ///< keypoints found by the detector
@@ -134,3 +145,14 @@ std::vector<int> selectSpread(const std::vector<cv::KeyPoint>& keypoints, int wi
                               double min_separation_px = 0.0);
 
 }  // namespace pplvo::features
+
+namespace pplvo::config {
+template <>
+struct EnumText<features::PointDetector> {
+  static bool parse(const std::string& s, features::PointDetector* out) {
+    return features::parsePointDetector(s, out);
+  }
+  static std::string name(features::PointDetector d) { return features::pointDetectorName(d); }
+  static const char* choices() { return "orb, akaze, sift, brisk"; }
+};
+}  // namespace pplvo::config

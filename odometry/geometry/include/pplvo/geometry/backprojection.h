@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/primitives.h"
 #include "pplvo/core/rgbd_frame.h"
 
@@ -29,6 +30,17 @@ struct DepthNoiseModel {
     return s * s;
   }
 };
+
+/// Schema of DepthNoiseModel (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, DepthNoiseModel& o) {
+  v.field("sigma_z_coeff_per_m", o.sigma_z_coeff_per_m,
+          "fallback depth std sigma_z = coeff * z^2 where the depth map has no variance "
+          "(paper eq. 1: 1.425e-3 per m; keep equal to depth_filter.sensor)",
+          config::positive());
+  v.field("sigma_z_floor_m", o.sigma_z_floor_m, "smallest depth std used (m), keeps weights finite",
+          config::positive());
+}
 
 /// Jacobian of eq. 8, P = Z [(u-cx)/fx, (v-cy)/fy, 1], with respect to (u, v, Z).
 /// Uses the signed focal lengths (fy < 0 for ICL-NUIM).

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <string>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/geometry/backprojection.h"
@@ -45,6 +46,45 @@ struct LiftOptions {
   uint64_t seed = 42;  ///< RANSAC seed; line i uses seed + i, so results do not depend on order
   LineFitOptions line_fit;
 };
+
+/// Schema of LiftOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, LiftOptions& o) {
+  v.section("noise", "fallback depth noise where the depth map has no variance (eq. 1)",
+            [&] { visit(v, o.noise); });
+  v.field("pixel_variance_px2", o.pixel_variance_px2,
+          "pixel quantisation variance sigma_p^2 of eq. 10 (Sec. 4.2: 1/12 px^2)",
+          config::atLeast(0));
+  v.field("point_search_radius_px", o.point_search_radius_px,
+          "no depth at a keypoint: use the lowest-variance pixel within this radius (px)",
+          config::atLeast(0));
+  v.field("point_max_depth_spread", o.point_max_depth_spread,
+          "a keypoint on a depth discontinuity is not lifted: valid depths within the radius "
+          "below span more than this fraction (max/min - 1); 0 disables",
+          config::atLeast(0));
+  v.field("point_discontinuity_radius_px", o.point_discontinuity_radius_px,
+          "radius of that depth-discontinuity test (px)", config::atLeast(0));
+  v.field("line_side_offset_px", o.line_side_offset_px,
+          "a line sample on a depth step (depths this far to either side of the segment differ "
+          "by more than line_max_depth_step) takes the nearer side's depth (px; 0 disables)",
+          config::atLeast(0));
+  v.field("line_max_depth_step", o.line_max_depth_step, "that depth step, as max/min - 1",
+          config::atLeast(0));
+  v.field("max_line_samples", o.max_line_samples,
+          "depth pixels sampled uniformly along a 2D segment (Sec. 4.4: at most 100)",
+          config::atLeast(2));
+  v.field("line_ransac_threshold_m", o.line_ransac_threshold_m,
+          "RANSAC on 3D point-to-line Euclidean distance (Sec. 4.4; no value in the paper, m)",
+          config::positive());
+  v.field("line_ransac_iterations", o.line_ransac_iterations, "RANSAC iterations",
+          config::atLeast(1));
+  v.field("min_line_samples", o.min_line_samples, "fewest valid depth samples of a 3D line",
+          config::atLeast(3));
+  v.field("min_line_inliers", o.min_line_inliers, "fewest RANSAC inliers of a 3D line",
+          config::atLeast(3));
+  v.field("seed", o.seed, "RANSAC seed (line i uses seed + i)");
+  v.section("line_fit", "WLS line fitting (Sec. 4.4, eqs. 13-17)", [&] { visit(v, o.line_fit); });
+}
 
 struct LiftStats {
   std::string error;  ///< non-empty when the input was rejected (nothing lifted)

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/primitives.h"
 #include "pplvo/geometry/plane_fit.h"  // FitStatus
 
@@ -28,6 +29,21 @@ struct LineFitOptions {
   /// Size of the perturbation added to P'_i when r_i = 0 (J_ri undefined), metres.
   double zero_residual_perturbation_m = 1e-6;
 };
+
+/// Schema of LineFitOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, LineFitOptions& o) {
+  v.field("resolve_with_corrected_weights", o.resolve_with_corrected_weights,
+          "solve theta_m again with the corrected weights (false: the paper's literal "
+          "wording, covariance corrected only)");
+  v.field("min_extent_m", o.min_extent_m, "smallest spread of the samples along the line (m)",
+          config::atLeast(0));
+  v.field("weighting", o.weighting,
+          "weights of the second solve: paper_scalar (w_i = 1/Sigma_ri, the paper) or "
+          "residual_covariance (matrix weight, consistent covariance; docs/geometry.md)");
+  v.field("zero_residual_perturbation_m", o.zero_residual_perturbation_m,
+          "perturbation of P'_i where r_i = 0 (m)", config::positive());
+}
 
 struct LineFitResult {
   FitStatus status = FitStatus::kTooFewPoints;
@@ -56,3 +72,23 @@ Point3WithCov interpolateLineEndpoint(const Eigen::Vector3d& O, const Eigen::Mat
                                       const Eigen::Vector3d& P_end);
 
 }  // namespace pplvo::geometry
+
+namespace pplvo::config {
+template <>
+struct EnumText<geometry::LineFitOptions::Weighting> {
+  using Weighting = geometry::LineFitOptions::Weighting;
+  static bool parse(const std::string& s, Weighting* out) {
+    if (s == "residual_covariance")
+      *out = Weighting::kResidualCovariance;
+    else if (s == "paper_scalar")
+      *out = Weighting::kPaperScalar;
+    else
+      return false;
+    return true;
+  }
+  static std::string name(Weighting w) {
+    return w == Weighting::kPaperScalar ? "paper_scalar" : "residual_covariance";
+  }
+  static const char* choices() { return "residual_covariance, paper_scalar"; }
+};
+}  // namespace pplvo::config

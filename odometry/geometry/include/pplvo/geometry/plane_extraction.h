@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/geometry/backprojection.h"
@@ -70,6 +71,64 @@ struct PlaneExtractionOptions {
   int threads = 2;
   PlaneFitOptions fit;
 };
+
+/// Schema of PlaneExtractionOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, PlaneExtractionOptions& o) {
+  v.field("cell_size_px", o.cell_size_px, "CAPE cells of N x N px (VGA: 20)", config::atLeast(2));
+  v.section("noise", "depth noise used by the planarity tests (paper eq. 1)",
+            [&] { visit(v, o.noise); });
+  v.field("pixel_variance_px2", o.pixel_variance_px2,
+          "pixel quantisation variance sigma_p^2 (Sec. 4.2: 1/12 px^2)", config::atLeast(0));
+  v.field("min_valid_fraction", o.min_valid_fraction,
+          "a planar cell has at least this fraction of valid depth pixels",
+          config::openClosed(0, 1));
+  v.field("planarity_sigma_factor", o.planarity_sigma_factor,
+          "cell planar if MSE < (k sigma_z(z) + margin)^2: k", config::atLeast(0));
+  v.field("planarity_margin_m", o.planarity_margin_m, "... margin (m)", config::atLeast(0));
+  v.field("jump_sigma_factor", o.jump_sigma_factor,
+          "no depth jump inside a cell larger than k sigma_z(z) + margin: k", config::atLeast(0));
+  v.field("jump_margin_m", o.jump_margin_m, "... margin (m)", config::atLeast(0));
+  v.field("histogram_bins", o.histogram_bins, "normal histogram bins per axis", config::atLeast(1));
+  v.field("min_seed_bin_count", o.min_seed_bin_count,
+          "smallest histogram bin count that may seed a region", config::atLeast(1));
+  v.field("grow_max_angle_deg", o.grow_max_angle_deg,
+          "region growing: normal angle to the seed plane (deg; CAPE pi/12)",
+          config::openClosed(0, 180));
+  v.field("grow_dist_sigma_factor", o.grow_dist_sigma_factor,
+          "region growing: cell centroid within k sigma_z(z) + margin of the plane: k",
+          config::atLeast(0));
+  v.field("grow_dist_margin_m", o.grow_dist_margin_m, "... margin (m)", config::atLeast(0));
+  v.field("min_region_cells", o.min_region_cells, "smaller regions are not planes",
+          config::atLeast(1));
+  v.field("min_region_span_cells", o.min_region_span_cells,
+          "a region spans at least this many cells in both image directions", config::atLeast(1));
+  v.field("merge_max_angle_deg", o.merge_max_angle_deg,
+          "merging adjacent segments: normal angle (deg)", config::openClosed(0, 180));
+  v.field("merge_max_dist_m", o.merge_max_dist_m,
+          "merging: centroid-to-other-plane distance (m; CAPE 50 mm)", config::atLeast(0));
+  v.field("segment_sigma_factor", o.segment_sigma_factor,
+          "segment kept if MSE < (k sigma_z(z) + margin)^2: k", config::atLeast(0));
+  v.field("segment_margin_m", o.segment_margin_m, "... margin (m)", config::atLeast(0));
+  v.field("refine_boundaries", o.refine_boundaries,
+          "per-pixel refinement of the plane boundaries (false: CAPE without refinement)");
+  v.field("refine_neighbourhood_cells", o.refine_neighbourhood_cells,
+          "refinement candidates within R cells (1: 3x3, 2: 5x5)", config::between(1, 2));
+  v.field("refine_sigma_factor", o.refine_sigma_factor,
+          "a pixel joins a plane if |n.p + d| < k sigma_z(z) + margin: k", config::atLeast(0));
+  v.field("refine_margin_m", o.refine_margin_m, "... margin (m)", config::atLeast(0));
+  v.field("min_plane_points", o.min_plane_points, "pixels of a plane after refinement",
+          config::atLeast(3));
+  v.field("max_fit_points", o.max_fit_points,
+          "the WLS fit uses a grid subsample of between this and 4x as many pixels",
+          config::atLeast(3));
+  v.field("max_planes", o.max_planes, "planes per frame (labels are 8-bit)",
+          config::between(1, 254));
+  v.field("threads", o.threads,
+          "threads for the per-pixel passes and the fits (results do not depend on it)",
+          config::atLeast(1));
+  v.section("fit", "WLS plane fitting (Sec. 4.3, eqs. 11-12)", [&] { visit(v, o.fit); });
+}
 
 struct PlaneExtractionStats {
   std::string error;  ///< non-empty when the input was rejected

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/primitives.h"
 
 namespace pplvo::geometry {
@@ -23,6 +24,25 @@ struct PlaneFitOptions {
   /// solve are dropped and the fit repeated (segment pixels from a neighbouring surface); 0 = off.
   double outlier_sigma = 3.0;
 };
+
+/// Schema of PlaneFitOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, PlaneFitOptions& o) {
+  v.field("min_plane_distance_m", o.min_plane_distance_m,
+          "reject planes closer than this to the camera centre: theta_m = N/d is singular at "
+          "d = 0 (Sec. 4.3)",
+          config::atLeast(0));
+  v.field("min_condition", o.min_condition,
+          "reject when the smallest/largest eigenvalue ratio of A is below this",
+          config::atLeast(0));
+  v.field("resolve_with_corrected_weights", o.resolve_with_corrected_weights,
+          "solve again with the corrected weights 1/Sigma_ri (false: keep the paper's first "
+          "solution, correct only the covariance)");
+  v.field("min_points", o.min_points, "fewest points of a fit", config::atLeast(3));
+  v.field("outlier_sigma", o.outlier_sigma,
+          "one trimmed refit drops points with |theta_m P_i + 1| > k sqrt(Sigma_ri); 0 = off",
+          config::atLeast(0));
+}
 
 enum class FitStatus { kOk, kTooFewPoints, kThroughCameraCentre, kDegenerate, kNonFinite };
 const char* toString(FitStatus s);

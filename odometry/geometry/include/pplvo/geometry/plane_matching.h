@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/core/geometry.h"
 
@@ -19,6 +20,19 @@ struct PlaneMatchOptions {
   /// Overlap counted on every grid_step-th pixel in u and v (1 = every pixel).
   int grid_step_px = 2;
 };
+
+/// Schema of PlaneMatchOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, PlaneMatchOptions& o) {
+  v.field("min_overlap_fraction", o.min_overlap_fraction,
+          "projection overlap >= this fraction of the smaller plane's pixels (Sec. 4.5: 50%)",
+          config::between(0, 1));
+  v.field("max_normal_angle_deg", o.max_normal_angle_deg,
+          "angle between the normals (Sec. 4.5: 10 deg)", config::openClosed(0, 180));
+  v.field("max_d_diff_m", o.max_d_diff_m, "|d - d'| (Sec. 4.5: 10 cm)", config::positive());
+  v.field("grid_step_px", o.grid_step_px, "overlap counted on every n-th pixel in u and v",
+          config::atLeast(1));
+}
 
 struct PlaneMatchStats {
   std::string error;

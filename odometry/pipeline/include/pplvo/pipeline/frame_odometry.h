@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/estimator/odometry_tracker.h"
@@ -56,6 +57,33 @@ struct KeyframeOptions {
   int local_map_keyframes = 0;
 };
 
+/// Schema of KeyframeOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, KeyframeOptions& o) {
+  v.field("min_inlier_fraction", o.min_inlier_fraction,
+          "new keyframe when the inlier rows against it fall below this fraction of the first "
+          "frame's (feature overlap)",
+          config::between(0, 1));
+  v.field("max_variance_growth", o.max_variance_growth,
+          "new keyframe when the pose variance relative to it grows beyond this factor of the "
+          "first frame's (largest eigenvalue, translation or rotation block)",
+          config::atLeast(1));
+  v.field("max_translation_m", o.max_translation_m, "new keyframe beyond this translation (m)",
+          config::positive());
+  v.field("max_rotation_deg", o.max_rotation_deg, "new keyframe beyond this rotation (deg)",
+          config::openClosed(0, 180));
+  v.field("fuse_landmarks", o.fuse_landmarks,
+          "refine the keyframe's 3D points with every frame tracked against it (information "
+          "weighting, chi-square gate)");
+  v.field("local_map_keyframes", o.local_map_keyframes,
+          "earlier keyframes whose 3D points and lines are matched with the active one's "
+          "(0: the active keyframe alone)",
+          config::between(0, 10));
+  v.field("fusion_gate_chi2", o.fusion_gate_chi2,
+          "gate on the squared Mahalanobis distance of an observation (3 dof; 7.81 = 95 %)",
+          config::positive());
+}
+
 struct FrameOdometryOptions {
   TrackingReference reference = TrackingReference::kKeyframe;
   KeyframeOptions keyframe;
@@ -71,6 +99,27 @@ struct FrameOdometryOptions {
   /// (reference lines without 3D keep their own 2D equation).
   bool predict_line_positions = true;
 };
+
+/// Schema of FrameOdometryOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, FrameOdometryOptions& o) {
+  v.field("reference", o.reference,
+          "what a frame is tracked against: frame (the previous one, as in the paper) or "
+          "keyframe (the active keyframe, the previous frame as fallback; docs/estimator.md)");
+  v.section("keyframe", "When a new keyframe is taken (reference: keyframe)",
+            [&] { visit(v, o.keyframe); });
+  v.section("tracker", "Frame-to-frame tracking, pose estimation and window uncertainty",
+            [&] { visit(v, o.tracker); });
+  v.section("point_matching", "Point matching (Sec. 4.5)", [&] { visit(v, o.point_matching); });
+  v.section("line_matching", "Line matching (Sec. 4.5)", [&] { visit(v, o.line_matching); });
+  v.section("plane_matching", "Plane matching (Sec. 4.5)", [&] { visit(v, o.plane_matching); });
+  v.field("predict_point_positions", o.predict_point_positions,
+          "gate points around their position predicted by the constant-velocity model");
+  v.field("predict_plane_positions", o.predict_plane_positions,
+          "move the previous planes by the predicted motion before the plane gate");
+  v.field("predict_line_positions", o.predict_line_positions,
+          "gate lines around the projection of their 3D segment under the predicted motion");
+}
 
 /// Why a frame was chosen as the next keyframe.
 enum class KeyframeReason : int8_t {
@@ -188,3 +237,14 @@ class FrameOdometry {
 };
 
 }  // namespace pplvo::pipeline
+
+namespace pplvo::config {
+template <>
+struct EnumText<pipeline::TrackingReference> {
+  static bool parse(const std::string& s, pipeline::TrackingReference* out) {
+    return pipeline::parseTrackingReference(s, out);
+  }
+  static std::string name(pipeline::TrackingReference r) { return pipeline::toString(r); }
+  static const char* choices() { return "frame, keyframe"; }
+};
+}  // namespace pplvo::config

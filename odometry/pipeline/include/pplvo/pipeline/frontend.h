@@ -8,6 +8,7 @@
 #include <mutex>
 #include <string>
 
+#include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/core/stage_timer.h"
@@ -42,6 +43,25 @@ struct FrontendOptions {
   /// lifting (stage 3D). The results are the same either way.
   bool parallel = true;
 };
+
+/// Schema of FrontendOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, FrontendOptions& o) {
+  v.section("points", "2D points (Sec. 4.1)", [&] { visit(v, o.points); });
+  v.section("lines", "2D line segments: LSD + LBD (Sec. 4.1)", [&] { visit(v, o.lines); });
+  v.section("planes",
+            "Planes: CAPE-like cell segmentation of the organised point cloud (Sec. 4.1) and "
+            "WLS fit",
+            [&] { visit(v, o.planes); });
+  v.section("lift", "3D lifting of points and lines (Sec. 4.2 point backprojection, 4.4 lines)",
+            [&] { visit(v, o.lift); });
+  v.field("planes_from_fused_depth", o.planes_from_fused_depth,
+          "extract the planes again on the fused depth once the pose is known (Sec. 5.3: "
+          "\"plane extraction must be called once more after the depth fusion\")");
+  v.field("parallel", o.parallel,
+          "lines on a second thread during points and planes, fused-depth planes during "
+          "lifting (same results)");
+}
 
 /// What the frontend did with one frame (for counters and the run summary).
 struct FrontendStats {

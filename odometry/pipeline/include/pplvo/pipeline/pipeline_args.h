@@ -3,32 +3,29 @@
 /// pplvo::ArgParser (pplvo/core/args.h):
 ///   --config FILE        a pipeline YAML (config/pplvo.yaml), loaded first
 ///   --set KEY=VALUE      one value of that YAML by dotted key (repeatable), applied next
-///   --features LIST      points,lines,planes (any subset)
-///   --depth-model MODEL  sensor | cgm | ogm
+///   --features LIST      = --set features=LIST
+///   --depth-model MODEL  = --set depth_filter.model=MODEL
+/// then the cross-module rules once (crossModuleErrors in pipeline_config.h).
 ///
 ///   PipelineArgs pa;
 ///   addPipelineOptions(parser, &pa);
 ///   parser.parse(args);
 ///   applyPipelineArgs(pa, &options, &parser);   // errors go to the parser
 #include <string>
-#include <vector>
 
 #include "pplvo/core/args.h"
+#include "pplvo/core/config_visitor.h"
 #include "pplvo/pipeline/pipeline_options.h"
 
 namespace pplvo::pipeline {
 
-struct PipelineArgs {
-  std::string config;
-  std::vector<std::string> overrides;  ///< --set, in order
-  std::string features;
-  std::string depth_model;
-};
+using PipelineArgs = config::ConfigArgs;
 
 void addPipelineOptions(ArgParser& parser, PipelineArgs* args);
 
 /// Applies the parsed options to `options` (config file, then --set, then --features and
-/// --depth-model). Every problem (unreadable file, unknown key, bad value) is added to `parser`.
+/// --depth-model, then the cross-module rules). Every problem (unreadable file, unknown key, bad
+/// value, rule broken) is added to `parser`.
 void applyPipelineArgs(const PipelineArgs& args, PipelineOptions* options, ArgParser* parser);
 
 /// Usage lines of these options, for the programs' --help.

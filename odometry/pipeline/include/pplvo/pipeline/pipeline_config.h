@@ -4,10 +4,12 @@
 /// plus a top-level `features` list that selects the primitive families once (applied with
 /// PipelineOptions::setFamilies, so the frontend and the estimator always agree).
 ///
-/// Every options struct lists its fields once (a visit function in pipeline_config.cpp);
-/// that list drives loading, dumping, flattening and validation. Loading collects every
-/// problem (unknown keys, values of the wrong type, invalid enum strings, values out of
-/// range) and reports them together in one ConfigError. Missing keys keep their defaults.
+/// Every options struct declares its schema once, beside the struct (a `visit` function with
+/// names, docs and ranges; pplvo/core/config_schema.h); pipeline_config.cpp composes those
+/// schemas into the file and adds the cross-module rules (crossModuleErrors). The one list
+/// drives loading, dumping, flattening and validation (pplvo/core/config_visitor.h). Loading
+/// collects every problem (unknown keys, values of the wrong type, invalid enum strings, values out
+/// of range) and reports them together in one ConfigError. Missing keys keep their defaults.
 #include <string>
 #include <vector>
 
@@ -40,18 +42,29 @@ PipelineOptions applyPipelineOverrides(const std::vector<std::string>& assignmen
 /// odometry.tracker.estimator.use_* (set them with PipelineOptions::setFamilies).
 std::string dumpPipelineConfig(const PipelineOptions& options);
 
-/// Range and consistency problems of `options` (empty = valid), one "key.path: problem" per
+/// Range and cross-module problems of `options` (empty = valid), one "key.path: problem" per
 /// entry. loadPipelineConfig / parsePipelineConfig already include these in their ConfigError;
 /// call this for options built in code.
 std::vector<std::string> validatePipelineOptions(const PipelineOptions& options);
 
+/// Rules between modules, checked once on the final options (after the file, every --set
+/// and every shortcut such as --depth-model): at least one feature family, the frontend's and
+/// the estimator's families agree, and with O-GM the tracker's window
+/// (odometry.tracker.window_length) covers the fusion window (depth_filter.ogm.max_window).
+std::vector<std::string> crossModuleErrors(const PipelineOptions& options);
+
+/// Command-line shortcuts of pipeline keys: --features (features), --depth-model
+/// (depth_filter.model).
+std::vector<config::Shortcut> pipelineShortcuts();
+
+/// Applies --config, --set and the pipelineShortcuts() in that order, then crossModuleErrors()
+/// once. Returns every problem (empty: `*options` holds the result).
+std::vector<std::string> applyPipelineConfigArgs(const config::ConfigArgs& args,
+                                                 PipelineOptions* options);
+
 /// One parameter: its dotted key (e.g. "depth_filter.ogm.max_window"), its value as written
 /// in the YAML, and its documentation.
-struct ConfigEntry {
-  std::string key;
-  std::string value;
-  std::string doc;
-};
+using ConfigEntry = config::ConfigEntry;
 
 /// Every parameter in file order (the same order and texts as dumpPipelineConfig).
 std::vector<ConfigEntry> flattenPipelineConfig(const PipelineOptions& options);

@@ -1,0 +1,71 @@
+#include "pplvo/run/run_args.h"
+
+#include "pplvo/core/args.h"
+#include "pplvo/pipeline/pipeline_args.h"
+
+namespace pplvo::run {
+
+RunArgs parseRunArgs(const std::vector<std::string>& args) {
+  RunArgs a;
+  RunOptions& o = a.options;
+  pipeline::PipelineArgs pa;
+  bool progress = false;
+  ArgParser p;
+  pipeline::addPipelineOptions(p, &pa);
+  p.option("--dataset", &o.dataset_dir)
+      .option("--output", &o.output)
+      .option("--summary", &o.summary)
+      .option("--log", &o.log)
+      .option("--covariance", &o.covariance)
+      .option("--max-frames", &o.max_frames, int64_t{0})
+      .option("--in-flight", &o.in_flight, 1, 1000)
+      .option("--start", &o.start, int64_t{0})
+      .option("--fps", &o.fps, 0.0)
+      .flag("--skip-bad", &o.skip_bad)
+      .flag("--progress", &progress)
+      .flag("--no-progress", &progress, false)
+      .flag("--preload", &o.preload)
+      .flag("--quiet", &a.quiet);
+  p.parse(args);
+  a.help = p.help();
+  if (a.help) return a;
+  pipeline::applyPipelineArgs(pa, &o.pipeline, &p);
+  if (o.dataset_dir.empty()) p.addError("--dataset is required");
+  if (p.given("--progress") || p.given("--no-progress")) a.progress = progress;
+  a.errors = p.errors();
+  return a;
+}
+
+std::string runUsage() {
+  return std::string(
+             "usage: pplvo-run --dataset DIR [--output TRAJ] [options]\n"
+             "Runs player, depth filter, frontend and estimator in one process over memq://,\n"
+             "every frame processed in order; writes the TUM trajectory and prints per-stage "
+             "timing.\n"
+             "  --dataset DIR           TUM-layout folder (rgb.txt/depth.txt or associations.txt)\n"
+             "  --output TRAJ           TUM trajectory (stamp tx ty tz qx qy qz qw), stamps "
+             "verbatim\n"
+             "  --max-frames N          stop after N frames (0 = all)\n"
+             "  --start N               first associated frame (0)\n"
+             "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
+             "  --skip-bad              skip (and count) corrupt frames instead of stopping\n"
+             "  --progress/--no-progress  progress line (frames, frames/s, ETA) on stderr "
+             "(default:\n"
+             "                          when stderr is a terminal and not --quiet)\n"
+             "  --in-flight N           frames published before the previous one's pose (2: the "
+             "next\n"
+             "                          frame's features are extracted while this one is fused;\n"
+             "                          1: one frame at a time; same trajectory either way)\n"
+             "  --preload               decode every frame before the first is published (as from "
+             "a\n"
+             "                          camera); the throughput then leaves the decoding out\n"
+             "  --summary FILE          write the run summary as YAML\n"
+             "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
+             "  --covariance FILE       relative pose T_prev_curr and its 6x6 covariance per "
+             "frame\n"
+             "                          (docs/evaluation.md; pplvo-eval --nees)\n"
+             "  --quiet                 no summary on stdout\n") +
+         pipeline::pipelineOptionsUsage();
+}
+
+}  // namespace pplvo::run
