@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 
 #include "pplvo/dataset/jpeg_decode.h"
@@ -18,11 +19,13 @@ namespace {
 // largest dataset frame we read and still decodes in milliseconds.
 constexpr uint64_t kMaxFuzzPixels = 1ull << 24;
 
+/// A fresh handle per input: libjpeg-turbo 2.1 leaves a handle that failed on a header unable
+/// to read the next valid one (a reused handle let a 487-Mpixel header through this check).
 bool announcesHugeImage(const uint8_t* data, size_t size) {
-  static tjhandle h = tjInitDecompress();
+  const std::unique_ptr<void, int (*)(tjhandle)> h(tjInitDecompress(), tjDestroy);
   int width = 0, height = 0, subsamp = 0, colorspace = 0;
-  if (tjDecompressHeader3(h, data, static_cast<unsigned long>(size), &width, &height, &subsamp,
-                          &colorspace) != 0) {
+  if (!h || tjDecompressHeader3(h.get(), data, static_cast<unsigned long>(size), &width, &height,
+                                &subsamp, &colorspace) != 0) {
     return false;  // decodeJpeg must refuse it itself
   }
   return uint64_t(width) * uint64_t(height) > kMaxFuzzPixels;
