@@ -97,6 +97,7 @@ TEST(LaunchArgs, LockstepDefaultsToFullSpeedAndValuesParse) {
 // Every option of each group (run, pipeline, transport, supervision, test faults) in one
 // command line, inline and separate values mixed, and the errors in argument order.
 TEST(LaunchArgs, EveryOptionGroupParses) {
+  // clang-format off: one option and its value per pair
   const ParsedArgs p = parseLaunchArgs(
       {"--dataset=D", "--output", "T", "--rate", "0.5", "--lockstep-timeout", "3",
        "--lockstep-in-flight", "4", "--max-frames", "7", "--log", "L", "--summary=S", "--quiet",
@@ -104,6 +105,7 @@ TEST(LaunchArgs, EveryOptionGroupParses) {
        "--isolated", "--single-url", "--bin-dir", "B", "--node-logs", "N", "--compress",
        "--timeout", "60", "--startup-timeout", "5", "--drain-idle", "0.5", "--stop-grace", "1",
        "--restart", "3", "--restart-backoff", "0.25", "--test-pause", "pplvo-frontend:10:1.5"});
+  // clang-format on
   ASSERT_TRUE(p.errors.empty()) << p.errors.front();
   const LaunchOptions& o = p.options;
   EXPECT_EQ(o.dataset_dir, "D");

@@ -17,8 +17,8 @@ namespace {
 using Bytes = std::vector<uint8_t>;
 
 void write(const std::string& path, const Bytes& b) {
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(b.data()),
-                                              std::streamsize(b.size()));
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
 }
 
 Bytes encode(const cv::Mat& m, std::vector<int> params) {
@@ -56,7 +56,8 @@ int main(int argc, char** argv) {
   if (images.empty()) {
     cv::Mat m(120, 160, CV_8UC3);
     for (int r = 0; r < m.rows; ++r)
-      for (int c = 0; c < m.cols; ++c) m.at<cv::Vec3b>(r, c) = cv::Vec3b(uint8_t(r * 2), uint8_t(c), uint8_t(r + c));
+      for (int c = 0; c < m.cols; ++c)
+        m.at<cv::Vec3b>(r, c) = cv::Vec3b(uint8_t(r * 2), uint8_t(c), uint8_t(r + c));
     images.push_back(m);
   }
   for (size_t k = 0; k < images.size(); ++k) {
@@ -64,19 +65,21 @@ int main(int argc, char** argv) {
     cv::Mat grey;
     cv::cvtColor(images[k], grey, cv::COLOR_BGR2GRAY);
     write(p + "baseline", encode(images[k], {cv::IMWRITE_JPEG_QUALITY, 90}));
-    write(p + "progressive", encode(images[k], {cv::IMWRITE_JPEG_QUALITY, 75,
-                                                cv::IMWRITE_JPEG_PROGRESSIVE, 1}));
-    write(p + "restart", encode(images[k], {cv::IMWRITE_JPEG_QUALITY, 60,
-                                            cv::IMWRITE_JPEG_RST_INTERVAL, 2}));
+    write(p + "progressive",
+          encode(images[k], {cv::IMWRITE_JPEG_QUALITY, 75, cv::IMWRITE_JPEG_PROGRESSIVE, 1}));
+    write(p + "restart",
+          encode(images[k], {cv::IMWRITE_JPEG_QUALITY, 60, cv::IMWRITE_JPEG_RST_INTERVAL, 2}));
     write(p + "grey", encode(grey, {cv::IMWRITE_JPEG_QUALITY, 90}));
   }
   const Bytes small = encode(images[0], {cv::IMWRITE_JPEG_QUALITY, 50});
   // IFD0 at offset 8 with one entry: orientation (0x0112, SHORT, count 1) = 6.
-  write(out + "/jpeg_exif_be", withExif(small, {'M', 'M', 0, 42, 0, 0, 0, 8, 0, 1, 0x01, 0x12,
-                                                0, 3, 0, 0, 0, 1, 0, 6, 0, 0, 0, 0, 0, 0, 0, 0}));
+  write(out + "/jpeg_exif_be",
+        withExif(small, {'M', 'M', 0, 42, 0, 0, 0, 8, 0, 1, 0x01, 0x12, 0, 3,
+                         0,   0,   0, 1,  0, 6, 0, 0, 0, 0, 0,    0,    0, 0}));
   // Two entries: image width (0x0100, LONG) then orientation = 3.
-  write(out + "/jpeg_exif_le", withExif(small, {'I', 'I', 42, 0, 8, 0, 0, 0, 2, 0, 0x00, 0x01,
-                                                4, 0, 1, 0, 0, 0, 160, 0, 0, 0, 0x12, 0x01, 3, 0,
-                                                1, 0, 0, 0, 3, 0, 0, 0, 0, 0, 0, 0}));
+  write(
+      out + "/jpeg_exif_le",
+      withExif(small, {'I', 'I', 42, 0,    8,    0, 0, 0, 2, 0, 0x00, 0x01, 4, 0, 1, 0, 0, 0, 160,
+                       0,   0,   0,  0x12, 0x01, 3, 0, 1, 0, 0, 0,    3,    0, 0, 0, 0, 0, 0, 0}));
   return 0;
 }

@@ -232,8 +232,8 @@ std::string columnOrderText(int n_rgb_first, int n_depth_first, int n_assumed) {
 
 /// associations.txt: one colour-depth pair a line, in either column order (the paths tell
 /// which); pairs whose files are absent are counted and dropped.
-void readAssociations(const std::string& dir, const std::string& assoc_path,
-                      DatasetIndex& index, IndexListing& listing) {
+void readAssociations(const std::string& dir, const std::string& assoc_path, DatasetIndex& index,
+                      IndexListing& listing) {
   IndexSummary& sum = index.summary;
   sum.source = "associations.txt";
   std::ifstream in(assoc_path);

@@ -7,15 +7,14 @@
 //                        [--max-points 800] [--max-frames N] [--no-lines] [--no-points]
 #include <algorithm>
 #include <cstdio>
-#include <ctime>
-#include <optional>
 #include <cstdlib>
+#include <ctime>
+#include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
-#include <opencv2/core/utility.hpp>
 
 #include "match_judge.h"
 #include "pplvo/core/allocator.h"
@@ -106,20 +105,34 @@ bool parseArgs(int argc, char** argv, BenchArgs* b) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
-    if (a == "--detectors") b->detectors = split(next());
-    else if (a == "--lines") b->line_cfgs = split(next());
-    else if (a == "--oversample") b->oversample = std::atof(next().c_str());
-    else if (a == "--ratio") b->ratio = std::atof(next().c_str());
-    else if (a == "--gate") b->gate = std::atof(next().c_str());
-    else if (a == "--min-sep") b->min_sep = std::atof(next().c_str());
-    else if (a == "--max-lines") b->max_lines = std::atoi(next().c_str());
-    else if (a == "--min-line-px") b->min_line_px = std::atof(next().c_str());
-    else if (a == "--orb-levels") b->orb_levels = std::atoi(next().c_str());
-    else if (a == "--orb-fast") b->orb_fast = std::atoi(next().c_str());
-    else if (a == "--max-points") b->max_points = std::atoi(next().c_str());
-    else if (a == "--max-frames") b->max_frames = std::atoi(next().c_str());
-    else if (a == "--no-lines") b->do_lines = false;
-    else if (a == "--no-points") b->do_points = false;
+    if (a == "--detectors")
+      b->detectors = split(next());
+    else if (a == "--lines")
+      b->line_cfgs = split(next());
+    else if (a == "--oversample")
+      b->oversample = std::atof(next().c_str());
+    else if (a == "--ratio")
+      b->ratio = std::atof(next().c_str());
+    else if (a == "--gate")
+      b->gate = std::atof(next().c_str());
+    else if (a == "--min-sep")
+      b->min_sep = std::atof(next().c_str());
+    else if (a == "--max-lines")
+      b->max_lines = std::atoi(next().c_str());
+    else if (a == "--min-line-px")
+      b->min_line_px = std::atof(next().c_str());
+    else if (a == "--orb-levels")
+      b->orb_levels = std::atoi(next().c_str());
+    else if (a == "--orb-fast")
+      b->orb_fast = std::atoi(next().c_str());
+    else if (a == "--max-points")
+      b->max_points = std::atoi(next().c_str());
+    else if (a == "--max-frames")
+      b->max_frames = std::atoi(next().c_str());
+    else if (a == "--no-lines")
+      b->do_lines = false;
+    else if (a == "--no-points")
+      b->do_points = false;
     else {
       std::fprintf(stderr, "unknown argument %s\n", a.c_str());
       return false;
@@ -146,8 +159,8 @@ DecodedFrames decodeFrames(const SharedSequence& seq, int n) {
 /// a frame's extraction, `count(extraction)` its features, `match(prev, cur)` a MatchResult
 /// and `judge(prev, cur, i, j, depth, T_c2_c1)` a Verdict.
 template <class Extract, class Count, class Match, class Judge>
-Accum benchSequence(const SharedSequence& seq, const DecodedFrames& f, Extract extract,
-                    Count count, Match match, Judge judge) {
+Accum benchSequence(const SharedSequence& seq, const DecodedFrames& f, Extract extract, Count count,
+                    Match match, Judge judge) {
   Accum acc;
   decltype(extract(f.gray[0])) prev;
   for (size_t k = 0; k < f.gray.size(); ++k) {
@@ -228,19 +241,20 @@ Accum benchLines(const BenchArgs& b, const std::string& lc, const SharedSequence
       [&](const LineExtraction& prev, const LineExtraction& cur) {
         return matchLines(prev.lines, prev.descriptors, cur.lines, cur.descriptors, mo);
       },
-      [&](const LineExtraction& prev, const LineExtraction& cur, int i, int j,
-          const cv::Mat& depth, const Pose3& T_c2_c1) {
+      [&](const LineExtraction& prev, const LineExtraction& cur, int i, int j, const cv::Mat& depth,
+          const Pose3& T_c2_c1) {
         return judgeLineMatch(prev.lines[i].px1, prev.lines[i].px2, cur.lines[j].eq, depth,
                               seq.camera, T_c2_c1, kTolPx);
       });
 }
 
 void printHeader() {
-  std::printf("Columns: features/frame, matches/pair, %% of matches judged (depth present), "
-              "precision of judged matches (GT pose + depth, %.0f px), detect+describe "
-              "ms/frame (thread CPU median, CPU mean, wall median), matching ms/pair (CPU median, wall "
-              "median). One thread.\n\n",
-              kTolPx);
+  std::printf(
+      "Columns: features/frame, matches/pair, %% of matches judged (depth present), "
+      "precision of judged matches (GT pose + depth, %.0f px), detect+describe "
+      "ms/frame (thread CPU median, CPU mean, wall median), matching ms/pair (CPU median, wall "
+      "median). One thread.\n\n",
+      kTolPx);
   std::printf("| kind  | config       | sequence                     | feat/fr | match/p | "
               "judged  | prec   | det cpu | det cpu mean | det wall | match cpu | match wall |\n"
               "|---|---|---|---|---|---|---|---|---|---|---|---|\n");

@@ -252,8 +252,8 @@ class SupervisedRun {
       const std::string& name = c.spec.name;
       if (mayRestart(name) && restarts_of_[name] < o_.restart_limit) {
         const double backoff = o_.restart_backoff_s * (1 << std::min(restarts_of_[name], 16));
-        say_(name + " ended (" + c.exit->text() + "); restarting it in " +
-             std::to_string(backoff) + " s");
+        say_(name + " ended (" + c.exit->text() + "); restarting it in " + std::to_string(backoff) +
+             " s");
         restart_at_[name] = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                                std::chrono::duration<double>(backoff));
         restarted_.insert(i);
@@ -299,8 +299,8 @@ class SupervisedRun {
     if (test_killed_ || faults_.kill_after_poses < 0 || bus_.poses() < faults_.kill_after_poses)
       return;
     if (auto i = sup_.find(faults_.kill_node); i && sup_.child(*i).running()) {
-      say_("--test-kill: SIGKILL " + faults_.kill_node + " after " +
-           std::to_string(bus_.poses()) + " poses");
+      say_("--test-kill: SIGKILL " + faults_.kill_node + " after " + std::to_string(bus_.poses()) +
+           " poses");
       sup_.signal(*i, SIGKILL);
       test_killed_ = true;
     }

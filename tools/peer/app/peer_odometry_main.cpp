@@ -133,8 +133,8 @@ std::optional<int> parseArgs(int argc, char** argv, PeerArgs* args) {
     } else if (a == "--output") {
       if (!value(&args->output)) return 2;
     } else if (a == "--method" || a == "--max-frames" || a == "--failure" ||
-               a == "--max-points-part" || a == "--max-depth" ||
-               a == "--keyframe-translation" || a == "--keyframe-rotation") {
+               a == "--max-points-part" || a == "--max-depth" || a == "--keyframe-translation" ||
+               a == "--keyframe-rotation") {
       if (!value(&v) || !readTuningValue(a, v, args, &keyframe_threshold_given)) return 2;
     } else if (a == "--keyframes") {
       args->options.reference_mode = peer::ReferenceMode::kKeyframe;
@@ -146,8 +146,7 @@ std::optional<int> parseArgs(int argc, char** argv, PeerArgs* args) {
       return 2;
     }
   }
-  if (keyframe_threshold_given &&
-      args->options.reference_mode != peer::ReferenceMode::kKeyframe) {
+  if (keyframe_threshold_given && args->options.reference_mode != peer::ReferenceMode::kKeyframe) {
     std::cerr << "pplvo-peer-odometry: --keyframe-translation and --keyframe-rotation need "
                  "--keyframes\n";
     return 2;
@@ -166,9 +165,8 @@ void printSetup(const std::string& dataset_dir, const pplvo::dataset::Dataset& d
   namespace peer = pplvo::peer;
   std::cout << "dataset: " << dataset_dir << "\n  " << data.index().summary.text() << "\n";
   const auto& cam = data.camera().camera;
-  std::cout << "camera: " << cam.width << "x" << cam.height << " fx " << cam.fx << " fy "
-            << cam.fy << " cx " << cam.cx << " cy " << cam.cy << " (" << data.camera().source
-            << ")\n";
+  std::cout << "camera: " << cam.width << "x" << cam.height << " fx " << cam.fx << " fy " << cam.fy
+            << " cx " << cam.cx << " cy " << cam.cy << " (" << data.camera().source << ")\n";
   if (cam.hasDistortion()) {
     std::cout << "warning: the camera has distortion coefficients; OpenCV's odometry "
                  "ignores them\n";
@@ -240,8 +238,8 @@ void printStats(const pplvo::peer::PeerStats& s, const PeerRun& run, bool keyfra
     std::printf("first unreadable frame: %s\n", run.first_load_error.c_str());
   }
   const double mean_ms = s.meanMs();
-  std::printf("time per frame: mean %.2f ms, max %.2f ms; %.1f frames/s (odometry only)\n",
-              mean_ms, s.max_ms, mean_ms > 0 ? 1000.0 / mean_ms : 0.0);
+  std::printf("time per frame: mean %.2f ms, max %.2f ms; %.1f frames/s (odometry only)\n", mean_ms,
+              s.max_ms, mean_ms > 0 ? 1000.0 / mean_ms : 0.0);
   std::printf("trajectory: %zu poses written to %s\n", run.trajectory.size(), output.c_str());
 }
 
