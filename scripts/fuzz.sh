@@ -8,7 +8,8 @@
 # Seeds: the shared sequences' PNG images, index files and calib_params.xml when
 # ../shared/data is there (copied into BUILD_DIR/corpus, never into the repository), the
 # camera YAML example of docs/player.md, config/pplvo.yaml, and small image_t planes (zlib
-# label, depth and float planes, raw planes) made here; the LCM harness starts from nothing
+# label, depth and float planes, raw planes) made here, and JPEGs written from a few colour
+# frames by make_jpeg_seeds (two with an Exif block); the LCM harness starts from nothing
 # (libFuzzer's comparison tracing finds the type hashes). Each harness's corpus is
 # kept in BUILD_DIR/corpus/NAME between runs. A crash leaves BUILD_DIR/crash-* and makes the
 # script exit 1; turn each into a regression test with its input. Prints per harness the
@@ -24,8 +25,11 @@ if [ -n "${PPLVO_FUZZ_HARNESSES:-}" ]; then
   read -r -a harnesses <<<"$PPLVO_FUZZ_HARNESSES"
 else
   harnesses=(fuzz_lcm_decode fuzz_png_decode fuzz_index_file fuzz_image_decode fuzz_camera_file
-    fuzz_pipeline_config)
+    fuzz_pipeline_config fuzz_jpeg_decode)
 fi
+targets=("${harnesses[@]}")
+# The JPEG harness's seeds are written by make_jpeg_seeds (OpenCV's encoder, from the build).
+case " ${harnesses[*]} " in *" fuzz_jpeg_decode "*) targets+=(make_jpeg_seeds) ;; esac
 
 export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
 launcher=()
@@ -41,16 +45,20 @@ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DPPLVO_BUILD_FUZZERS=ON -DPPLVO_BUILD_BENCHMARKS=OFF >"$build/fuzz-cmake.log" 2>&1 ||
   { cat "$build/fuzz-cmake.log"; exit 1; }
 start=$(date +%s)
-cmake --build "$build" -j"$(nproc)" --target "${harnesses[@]}" >"$build/fuzz-build.log" 2>&1 ||
+cmake --build "$build" -j"$(nproc)" --target "${targets[@]}" >"$build/fuzz-build.log" 2>&1 ||
   { tail -40 "$build/fuzz-build.log"; exit 1; }
 echo "fuzz harnesses built in $(($(date +%s) - start)) s ($build)"
 
 data=$root/../shared/data
 mkdir -p "$build/corpus"
-for h in "${harnesses[@]}"; do mkdir -p "$build/corpus/$h"; done
+# Every seeded corpus folder, also for a subset of harnesses (the seeding below fills them all).
+for h in "${harnesses[@]}" fuzz_png_decode fuzz_index_file fuzz_camera_file fuzz_image_decode \
+  fuzz_pipeline_config fuzz_jpeg_decode; do
+  mkdir -p "$build/corpus/$h"
+done
 if [ -d "$data" ]; then
   # A few images of each kind (colour and 16-bit depth) and every index file.
-  find "$data" -name '*.png' -size -400k | sort | awk 'NR % 40 == 1' | head -8 |
+  find "$data" -name '*.png' -size -400k | sort | awk 'NR % 40 == 1 && n++ < 8' |
     while read -r f; do cp -n "$f" "$build/corpus/fuzz_png_decode/$(echo "$f" | md5sum | cut -c1-16)"; done
   find "$data" -name '*.txt' | while read -r f; do
     head -c 4000 "$f" >"$build/corpus/fuzz_index_file/$(echo "$f" | md5sum | cut -c1-16)"
@@ -58,6 +66,9 @@ if [ -d "$data" ]; then
   find "$data" -name 'calib_params.xml' | while read -r f; do
     cp -n "$f" "$build/corpus/fuzz_camera_file/$(echo "$f" | md5sum | cut -c1-16)"
   done
+  # A few colour frames for the JPEG seeds (below).
+  find "$data" -path '*rgb*' -name '*.png' -size -400k | sort | awk 'NR % 60 == 1 && n++ < 3' \
+    >"$build/corpus/jpeg-sources.txt"
   # One colour PNG as an image_t plane (header: width, height, encoding 4 = png).
   f=$(find "$data" -path '*rgb*' -name '*.png' -size -400k | sort | head -1)
   if [ -n "$f" ]; then
@@ -72,6 +83,13 @@ fi
 printf 'fx: 535.4\nfy: 539.2\ncx: 320.1\ncy: 247.6\ndistortion: [0, 0, 0, 0, 0]\ndepth_scale: 5000\nwidth: 640\nheight: 480\n' \
   >"$build/corpus/fuzz_camera_file/camera.yaml"
 cp "$root/config/pplvo.yaml" "$build/corpus/fuzz_pipeline_config/pplvo.yaml"
+# JPEGs: colour frames (a synthetic gradient without ../shared/data) scaled to 160x120 as
+# baseline, progressive, restart-interval and grey files, and two with an Exif block.
+if [ -x "$build/bin/make_jpeg_seeds" ]; then
+  touch "$build/corpus/jpeg-sources.txt"
+  # shellcheck disable=SC2046
+  "$build/bin/make_jpeg_seeds" "$build/corpus/fuzz_jpeg_decode" $(cat "$build/corpus/jpeg-sources.txt")
+fi
 # image_t planes: zlib u8 labels, u16 depth, f32, and the raw encodings, 8x6 pixels each.
 python3 - "$build/corpus/fuzz_image_decode" <<'PY'
 import os, struct, sys, zlib

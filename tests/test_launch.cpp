@@ -94,6 +94,88 @@ TEST(LaunchArgs, LockstepDefaultsToFullSpeedAndValuesParse) {
   EXPECT_EQ(p.options.set, (std::vector<std::string>{"a.b=1", "c=2"}));
 }
 
+// Every option of each group (run, pipeline, transport, supervision, test faults) in one
+// command line, inline and separate values mixed, and the errors in argument order.
+TEST(LaunchArgs, EveryOptionGroupParses) {
+  // clang-format off: one option and its value per pair
+  const ParsedArgs p = parseLaunchArgs(
+      {"--dataset=D", "--output", "T", "--rate", "0.5", "--lockstep-timeout", "3",
+       "--lockstep-in-flight", "4", "--max-frames", "7", "--log", "L", "--summary=S", "--quiet",
+       "--config", "C", "--features", "points", "--depth-model", "cgm", "--lcm-url", "memq://",
+       "--isolated", "--single-url", "--bin-dir", "B", "--node-logs", "N", "--compress",
+       "--timeout", "60", "--startup-timeout", "5", "--drain-idle", "0.5", "--stop-grace", "1",
+       "--restart", "3", "--restart-backoff", "0.25", "--test-pause", "pplvo-frontend:10:1.5"});
+  // clang-format on
+  ASSERT_TRUE(p.errors.empty()) << p.errors.front();
+  const LaunchOptions& o = p.options;
+  EXPECT_EQ(o.dataset_dir, "D");
+  EXPECT_EQ(o.rate, 0.5);
+  EXPECT_EQ(o.lockstep_timeout_s, 3.0);
+  EXPECT_EQ(o.lockstep_in_flight, 4);
+  EXPECT_EQ(o.max_frames, 7);
+  EXPECT_EQ(o.log, "L");
+  EXPECT_EQ(o.summary, "S");
+  EXPECT_TRUE(o.quiet);
+  EXPECT_EQ(o.config, "C");
+  EXPECT_EQ(o.features, "points");
+  EXPECT_EQ(o.depth_model, "cgm");
+  EXPECT_EQ(o.lcm_url, "memq://");
+  EXPECT_TRUE(o.isolated && o.single_url && o.compress);
+  EXPECT_EQ(o.bin_dir, "B");
+  EXPECT_EQ(o.node_log_dir, "N");
+  EXPECT_EQ(o.timeout_s, 60.0);
+  EXPECT_EQ(o.startup_timeout_s, 5.0);
+  EXPECT_EQ(o.drain_idle_s, 0.5);
+  EXPECT_EQ(o.stop_grace_s, 1.0);
+  EXPECT_EQ(o.restart_limit, 3);
+  EXPECT_EQ(o.restart_backoff_s, 0.25);
+  EXPECT_EQ(o.test_pause, "pplvo-frontend:10:1.5");
+
+  const ParsedArgs bad = parseLaunchArgs({"--dataset", "D", "--output", "T", "--restart", "1001",
+                                          "--lockstep-in-flight=0", "--stop-grace", "0.01",
+                                          "--isolated=yes", "--test-pause", "pplvo-player:1",
+                                          "--timeout"});
+  EXPECT_EQ(bad.errors, (std::vector<std::string>{
+                            "--restart: expected an integer in [0, 1000], not '1001'",
+                            "--lockstep-in-flight: expected an integer in [1, 1000], not '0'",
+                            "--stop-grace: must be >= 0.1", "--isolated takes no value",
+                            "--test-pause: NODE:POSES:SECONDS with NODE one of the programs",
+                            "--timeout needs a value"}));
+  EXPECT_TRUE(parseLaunchArgs({"--bogus", "-h"}).help);
+}
+
+TEST(LaunchArgs, TestFaultPlan) {
+  LaunchOptions o;
+  TestFaultPlan plan = planTestFaults(o);
+  EXPECT_EQ(plan.kill_after_poses, -1);
+  EXPECT_EQ(plan.pause_after_poses, -1);
+  o.test_kill = "pplvo-estimator:25";
+  o.test_pause = "pplvo-depth-filter:40:2.5";
+  plan = planTestFaults(o);
+  EXPECT_EQ(plan.kill_node, kEstimator);
+  EXPECT_EQ(plan.kill_after_poses, 25);
+  EXPECT_EQ(plan.pause_node, kDepthFilter);
+  EXPECT_EQ(plan.pause_after_poses, 40);
+  EXPECT_EQ(plan.pause_s, 2.5);
+}
+
+TEST(LaunchArgs, MissingProgramsAreNamed) {
+  const fs::path dir = tempDir("programs");
+  for (const std::string& name : allPrograms()) {
+    if (name == kLogger) continue;  // missing
+    const fs::path p = dir / name;
+    std::ofstream(p) << "#!/bin/sh\n";
+    fs::permissions(p, fs::perms::owner_all);
+  }
+  std::ofstream(dir / kPlayer) << "";  // not executable any more
+  fs::permissions(dir / kPlayer, fs::perms::owner_read | fs::perms::owner_write);
+  const std::vector<std::string> missing = missingPrograms(dir.string());
+  ASSERT_EQ(missing.size(), 2u);
+  EXPECT_EQ(missing[0].rfind((dir / kLogger).string() + ": ", 0), 0u) << missing[0];
+  EXPECT_EQ(missing[1].rfind((dir / kPlayer).string() + ": ", 0), 0u) << missing[1];
+  fs::remove_all(dir);
+}
+
 TEST(LaunchUrl, Parse) {
   LcmUrl u = parseLcmUrl("udpm://239.255.76.67:7667?ttl=1&recv_buf_size=1000");
   ASSERT_TRUE(u.valid) << u.error;
@@ -370,6 +452,25 @@ TEST(LaunchReport, TextAndTrajectoryCount) {
   EXPECT_NE(r.text().find("launch.result: FAILED"), std::string::npos);
   EXPECT_NE(r.text().find("launch.failure: pplvo-estimator"), std::string::npos);
   fs::remove_all(dir);
+}
+
+TEST(LaunchReport, PlayerCountsAndLockstepTimeouts) {
+  LaunchReport r;
+  LaunchReport::Process player;
+  player.name = kPlayer;
+  player.counts.known = true;
+  player.counts.frames_out = 40;
+  player.counts.errors = 2;
+  r.processes.push_back(player);
+  r.takePlayerCounts();
+  EXPECT_EQ(r.frames_published, 40);  // no END event: the player's count
+  EXPECT_TRUE(r.ok());                // free-running: a timeout is not a lockstep failure
+  r.frames_published = 38;            // from the END event: kept
+  r.lockstep = true;
+  r.takePlayerCounts();
+  EXPECT_EQ(r.frames_published, 38);
+  ASSERT_EQ(r.failures.size(), 1u);
+  EXPECT_EQ(r.failures[0].rfind("2 lockstep timeout(s): poses lost", 0), 0u) << r.failures[0];
 }
 
 // ---------------------------------------------------------------- supervisor

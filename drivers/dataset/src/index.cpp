@@ -82,15 +82,23 @@ void sortAndDeduplicate(std::vector<DatasetEntry>* entries, IndexSummary* sum) {
   *entries = std::move(kept);
 }
 
+/// The next line that holds data: CR stripped, blank and '#' comment lines skipped.
+bool nextDataLine(std::istream& in, std::string& line) {
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const auto first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 IndexFile parseIndexFile(std::istream& in) {
   IndexFile out;
   std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    const auto first = line.find_first_not_of(" \t");
-    if (first == std::string::npos || line[first] == '#') continue;
+  while (nextDataLine(in, line)) {
     std::istringstream ss(line);
     IndexEntry e;
     if (!(ss >> e.stamp_text >> e.path) || !parseDouble(e.stamp_text, e.stamp)) {
@@ -196,156 +204,162 @@ std::string IndexSummary::text() const {
   return s.str();
 }
 
-DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options) {
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) {
-    throw DatasetError("dataset folder does not exist or is not a folder: " + dir);
-  }
-  if (!(options.max_association_dt_s > 0)) {
-    throw DatasetError("max_association_dt_s must be positive");
-  }
-  if (options.index_frame_rate_hz < 0) {
-    throw DatasetError("index_frame_rate_hz must be >= 0");
-  }
-  DatasetIndex index;
-  IndexSummary& sum = index.summary;
-  std::set<std::string> mentioned;  // normalised paths of listed colour files
-  auto noteMissing = [&](const std::string& path) {
-    if (sum.first_missing.empty()) sum.first_missing = path;
-  };
+namespace {
+
+/// What the index lines said beyond the entries: the colour files they mention (normalised
+/// paths) and every listed colour stamp, in file order.
+struct IndexListing {
+  std::set<std::string> mentioned;
   std::vector<double> listed_stamps;
+};
 
-  const std::string assoc_path = joinPath(dir, "associations.txt");
-  const std::string rgb_path = joinPath(dir, "rgb.txt");
-  const std::string depth_path = joinPath(dir, "depth.txt");
-  if (fileExists(assoc_path)) {
-    sum.source = "associations.txt";
-    std::ifstream in(assoc_path);
-    if (!in) throw DatasetError("cannot read " + assoc_path);
-    int n_rgb_first = 0, n_depth_first = 0, n_assumed = 0;
-    std::string line;
-    while (std::getline(in, line)) {
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      const auto first = line.find_first_not_of(" \t");
-      if (first == std::string::npos || line[first] == '#') continue;
-      std::istringstream ss(line);
-      std::string t1, p1, t2, p2;
-      double s1 = 0, s2 = 0;
-      if (!(ss >> t1 >> p1 >> t2 >> p2) || !parseDouble(t1, s1) || !parseDouble(t2, s2)) {
-        ++sum.malformed_lines;
-        continue;
-      }
-      ++sum.listed;
-      const bool depth_first = (underDir(p1, "depth") && !underDir(p2, "depth")) ||
-                               (underDir(p2, "rgb") && !underDir(p1, "rgb"));
-      const bool rgb_first = (underDir(p1, "rgb") && !underDir(p1, "depth")) ||
-                             (underDir(p2, "depth") && !underDir(p2, "rgb"));
-      if (depth_first && !rgb_first) {
-        ++n_depth_first;
-        std::swap(t1, t2);
-        std::swap(p1, p2);
-        std::swap(s1, s2);
-      } else if (rgb_first) {
-        ++n_rgb_first;
-      } else {
-        ++n_assumed;  // neither path says which it is: TUM's order (rgb first)
-      }
-      DatasetEntry e;
-      e.stamp_text = t1;
-      e.stamp = s1;
-      e.depth_stamp_text = t2;
-      e.rgb_path = joinPath(dir, p1);
-      e.depth_path = joinPath(dir, p2);
-      listed_stamps.push_back(s1);
-      mentioned.insert(e.rgb_path);
-      const bool rgb_ok = fileExists(e.rgb_path);
-      const bool depth_ok = fileExists(e.depth_path);
-      if (!rgb_ok) {
-        ++sum.missing_rgb_files;
-        noteMissing(e.rgb_path);
-      }
-      if (!depth_ok) {
-        ++sum.missing_depth_files;
-        noteMissing(e.depth_path);
-      }
-      if (rgb_ok && depth_ok) index.entries.push_back(std::move(e));
-    }
-    const int kinds = (n_rgb_first > 0) + (n_depth_first > 0) + (n_assumed > 0);
-    if (kinds > 1) {
-      sum.column_order = "mixed (" + std::to_string(n_rgb_first) + " rgb-first, " +
-                         std::to_string(n_depth_first) + " depth-first, " +
-                         std::to_string(n_assumed) + " assumed rgb-first)";
-    } else if (n_depth_first > 0) {
-      sum.column_order = "depth-first";
-    } else if (n_assumed > 0) {
-      sum.column_order = "rgb-first (assumed)";
-    } else {
-      sum.column_order = "rgb-first";
-    }
-  } else if (fileExists(rgb_path) && fileExists(depth_path)) {
-    sum.source = "rgb.txt+depth.txt";
-    std::ifstream rin(rgb_path), din(depth_path);
-    if (!rin) throw DatasetError("cannot read " + rgb_path);
-    if (!din) throw DatasetError("cannot read " + depth_path);
-    const IndexFile rgb = parseIndexFile(rin);
-    const IndexFile depth = parseIndexFile(din);
-    sum.listed = static_cast<int>(rgb.entries.size());
-    sum.listed_depth = static_cast<int>(depth.entries.size());
-    sum.malformed_lines = rgb.malformed_lines + depth.malformed_lines;
-    // Drop entries whose files are absent before associating (TUM's depth.txt lists more
-    // depth maps than an excerpt holds; a missing one must not take a colour image's pair).
-    std::vector<IndexEntry> rgb_ok, depth_ok;
-    for (const auto& e : rgb.entries) {
-      listed_stamps.push_back(e.stamp);
-      const std::string p = joinPath(dir, e.path);
-      mentioned.insert(p);
-      if (fileExists(p)) {
-        rgb_ok.push_back(e);
-      } else {
-        ++sum.missing_rgb_files;
-        noteMissing(p);
-      }
-    }
-    for (const auto& e : depth.entries) {
-      const std::string p = joinPath(dir, e.path);
-      if (fileExists(p)) {
-        depth_ok.push_back(e);
-      } else {
-        ++sum.missing_depth_files;
-        noteMissing(p);
-      }
-    }
-    std::vector<double> ta, tb;
-    for (const auto& e : rgb_ok) ta.push_back(e.stamp);
-    for (const auto& e : depth_ok) tb.push_back(e.stamp);
-    const auto pairs = associateStamps(ta, tb, options.max_association_dt_s);
-    sum.unassociated_rgb = static_cast<int>(rgb_ok.size() - pairs.size());
-    for (const auto& [i, j] : pairs) {
-      DatasetEntry e;
-      e.stamp_text = rgb_ok[i].stamp_text;
-      e.stamp = rgb_ok[i].stamp;
-      e.depth_stamp_text = depth_ok[j].stamp_text;
-      e.rgb_path = joinPath(dir, rgb_ok[i].path);
-      e.depth_path = joinPath(dir, depth_ok[j].path);
-      index.entries.push_back(std::move(e));
-    }
-  } else {
-    throw DatasetError("no associations.txt and no rgb.txt + depth.txt in dataset folder " + dir);
+void noteMissing(IndexSummary& sum, const std::string& path) {
+  if (sum.first_missing.empty()) sum.first_missing = path;
+}
+
+/// How the associations file ordered its columns, for the summary.
+std::string columnOrderText(int n_rgb_first, int n_depth_first, int n_assumed) {
+  const int kinds = (n_rgb_first > 0) + (n_depth_first > 0) + (n_assumed > 0);
+  if (kinds > 1) {
+    return "mixed (" + std::to_string(n_rgb_first) + " rgb-first, " +
+           std::to_string(n_depth_first) + " depth-first, " + std::to_string(n_assumed) +
+           " assumed rgb-first)";
   }
+  if (n_depth_first > 0) return "depth-first";
+  if (n_assumed > 0) return "rgb-first (assumed)";
+  return "rgb-first";
+}
 
-  sum.out_of_order = countOutOfOrder(listed_stamps);
-  sortAndDeduplicate(&index.entries, &sum);
+/// associations.txt: one colour-depth pair a line, in either column order (the paths tell
+/// which); pairs whose files are absent are counted and dropped.
+void readAssociations(const std::string& dir, const std::string& assoc_path, DatasetIndex& index,
+                      IndexListing& listing) {
+  IndexSummary& sum = index.summary;
+  sum.source = "associations.txt";
+  std::ifstream in(assoc_path);
+  if (!in) throw DatasetError("cannot read " + assoc_path);
+  int n_rgb_first = 0, n_depth_first = 0, n_assumed = 0;
+  std::string line;
+  while (nextDataLine(in, line)) {
+    std::istringstream ss(line);
+    std::string t1, p1, t2, p2;
+    double s1 = 0, s2 = 0;
+    if (!(ss >> t1 >> p1 >> t2 >> p2) || !parseDouble(t1, s1) || !parseDouble(t2, s2)) {
+      ++sum.malformed_lines;
+      continue;
+    }
+    ++sum.listed;
+    const bool depth_first = (underDir(p1, "depth") && !underDir(p2, "depth")) ||
+                             (underDir(p2, "rgb") && !underDir(p1, "rgb"));
+    const bool rgb_first = (underDir(p1, "rgb") && !underDir(p1, "depth")) ||
+                           (underDir(p2, "depth") && !underDir(p2, "rgb"));
+    if (depth_first && !rgb_first) {
+      ++n_depth_first;
+      std::swap(t1, t2);
+      std::swap(p1, p2);
+      std::swap(s1, s2);
+    } else if (rgb_first) {
+      ++n_rgb_first;
+    } else {
+      ++n_assumed;  // neither path says which it is: TUM's order (rgb first)
+    }
+    DatasetEntry e;
+    e.stamp_text = t1;
+    e.stamp = s1;
+    e.depth_stamp_text = t2;
+    e.rgb_path = joinPath(dir, p1);
+    e.depth_path = joinPath(dir, p2);
+    listing.listed_stamps.push_back(s1);
+    listing.mentioned.insert(e.rgb_path);
+    const bool rgb_ok = fileExists(e.rgb_path);
+    const bool depth_ok = fileExists(e.depth_path);
+    if (!rgb_ok) {
+      ++sum.missing_rgb_files;
+      noteMissing(sum, e.rgb_path);
+    }
+    if (!depth_ok) {
+      ++sum.missing_depth_files;
+      noteMissing(sum, e.depth_path);
+    }
+    if (rgb_ok && depth_ok) index.entries.push_back(std::move(e));
+  }
+  sum.column_order = columnOrderText(n_rgb_first, n_depth_first, n_assumed);
+}
 
-  // Colour files that no index line mentions (e.g. the last image of the TUM excerpt).
+/// rgb.txt + depth.txt: each list read on its own, then colour and depth stamps associated
+/// within options.max_association_dt_s.
+void readRgbAndDepthLists(const std::string& dir, const std::string& rgb_path,
+                          const std::string& depth_path, const DatasetOptions& options,
+                          DatasetIndex& index, IndexListing& listing) {
+  IndexSummary& sum = index.summary;
+  sum.source = "rgb.txt+depth.txt";
+  std::ifstream rin(rgb_path), din(depth_path);
+  if (!rin) throw DatasetError("cannot read " + rgb_path);
+  if (!din) throw DatasetError("cannot read " + depth_path);
+  const IndexFile rgb = parseIndexFile(rin);
+  const IndexFile depth = parseIndexFile(din);
+  sum.listed = static_cast<int>(rgb.entries.size());
+  sum.listed_depth = static_cast<int>(depth.entries.size());
+  sum.malformed_lines = rgb.malformed_lines + depth.malformed_lines;
+  // Drop entries whose files are absent before associating (TUM's depth.txt lists more
+  // depth maps than an excerpt holds; a missing one must not take a colour image's pair).
+  std::vector<IndexEntry> rgb_ok, depth_ok;
+  for (const auto& e : rgb.entries) {
+    listing.listed_stamps.push_back(e.stamp);
+    const std::string p = joinPath(dir, e.path);
+    listing.mentioned.insert(p);
+    if (fileExists(p)) {
+      rgb_ok.push_back(e);
+    } else {
+      ++sum.missing_rgb_files;
+      noteMissing(sum, p);
+    }
+  }
+  for (const auto& e : depth.entries) {
+    const std::string p = joinPath(dir, e.path);
+    if (fileExists(p)) {
+      depth_ok.push_back(e);
+    } else {
+      ++sum.missing_depth_files;
+      noteMissing(sum, p);
+    }
+  }
+  std::vector<double> ta, tb;
+  for (const auto& e : rgb_ok) ta.push_back(e.stamp);
+  for (const auto& e : depth_ok) tb.push_back(e.stamp);
+  const auto pairs = associateStamps(ta, tb, options.max_association_dt_s);
+  sum.unassociated_rgb = static_cast<int>(rgb_ok.size() - pairs.size());
+  for (const auto& [i, j] : pairs) {
+    DatasetEntry e;
+    e.stamp_text = rgb_ok[i].stamp_text;
+    e.stamp = rgb_ok[i].stamp;
+    e.depth_stamp_text = depth_ok[j].stamp_text;
+    e.rgb_path = joinPath(dir, rgb_ok[i].path);
+    e.depth_path = joinPath(dir, depth_ok[j].path);
+    index.entries.push_back(std::move(e));
+  }
+}
+
+/// Colour files that no index line mentions (e.g. the last image of the TUM excerpt).
+int countUnlistedRgbFiles(const std::string& dir, const std::set<std::string>& mentioned) {
+  int unlisted = 0;
+  std::error_code ec;
   const fs::path rgb_dir = fs::path(dir) / "rgb";
   if (fs::is_directory(rgb_dir, ec)) {
     for (const auto& f : fs::directory_iterator(rgb_dir, ec)) {
       if (f.is_regular_file(ec) && !mentioned.count(f.path().lexically_normal().string())) {
-        ++sum.unlisted_rgb_files;
+        ++unlisted;
       }
     }
   }
+  return unlisted;
+}
 
+/// Each entry's utime: from its stamp text (exact microseconds), or from frame-index stamps
+/// (ICL-NUIM) at the index frame rate.
+void assignUtimes(const std::vector<double>& listed_stamps, const DatasetOptions& options,
+                  DatasetIndex& index) {
+  IndexSummary& sum = index.summary;
   sum.index_stamps = looksLikeFrameIndices(listed_stamps);
   sum.index_frame_rate_hz =
       sum.index_stamps ? (options.index_frame_rate_hz > 0 ? options.index_frame_rate_hz : 30.0)
@@ -358,6 +372,37 @@ DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options) {
       e.utime = us ? *us : static_cast<int64_t>(std::llround(e.stamp * 1e6));
     }
   }
+}
+
+}  // namespace
+
+DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw DatasetError("dataset folder does not exist or is not a folder: " + dir);
+  }
+  if (!(options.max_association_dt_s > 0)) {
+    throw DatasetError("max_association_dt_s must be positive");
+  }
+  if (options.index_frame_rate_hz < 0) {
+    throw DatasetError("index_frame_rate_hz must be >= 0");
+  }
+  DatasetIndex index;
+  IndexListing listing;
+  const std::string assoc_path = joinPath(dir, "associations.txt");
+  const std::string rgb_path = joinPath(dir, "rgb.txt");
+  const std::string depth_path = joinPath(dir, "depth.txt");
+  if (fileExists(assoc_path)) {
+    readAssociations(dir, assoc_path, index, listing);
+  } else if (fileExists(rgb_path) && fileExists(depth_path)) {
+    readRgbAndDepthLists(dir, rgb_path, depth_path, options, index, listing);
+  } else {
+    throw DatasetError("no associations.txt and no rgb.txt + depth.txt in dataset folder " + dir);
+  }
+  index.summary.out_of_order = countOutOfOrder(listing.listed_stamps);
+  sortAndDeduplicate(&index.entries, &index.summary);
+  index.summary.unlisted_rgb_files = countUnlistedRgbFiles(dir, listing.mentioned);
+  assignUtimes(listing.listed_stamps, options, index);
   return index;
 }
 

@@ -25,6 +25,132 @@ dataset::DatasetOptions datasetOptions(const PlayerOptions& o) {
   return d;
 }
 
+/// A frame read ahead: the item (none at the end of the sequence), the reader's counts after
+/// it, a load error to rethrow when its turn comes, and the time it took to decode.
+struct Fetched {
+  std::optional<dataset::DatasetReader::Item> item;
+  dataset::ReadStats stats;
+  std::exception_ptr error;
+  double load_ms = 0.0;
+};
+
+/// The frames in play order. The next frame is decoded on a worker thread while the current
+/// one waits for its slot and is published (PNG decoding is the slowest step). Only one task
+/// touches the reader at a time: seek() and the next fetch happen after get().
+class FrameFeed {
+ public:
+  FrameFeed(dataset::DatasetReader& reader, size_t start) : reader_(reader), resume_index_(start) {}
+
+  /// --preload: frames decoded now, up to `limit_bytes` (or `max_frames` > 0), then served
+  /// from memory; the rest (if any) is decoded while playing, from `resume_index_` on. When
+  /// everything fitted, the end marker or a load error is the last entry, so that it surfaces
+  /// at the same point of the stream as without --preload.
+  void preload(int64_t limit_bytes, int64_t max_frames, const std::string& node_name) {
+    int64_t bytes = 0, frames = 0;
+    while (!msgs::shutdownRequested()) {
+      Fetched f = fetch();
+      const bool last = !f.item || f.error;
+      if (f.item) {
+        const dataset::RawFrame& raw = f.item->frame;
+        bytes += static_cast<int64_t>(raw.bgr.total() * raw.bgr.elemSize() +
+                                      raw.depth_units.total() * raw.depth_units.elemSize());
+        ++frames;
+        resume_index_ = f.item->index + 1;
+      }
+      preloaded_.push_back(std::move(f));
+      if (last) {
+        preloaded_all_ = true;
+        break;
+      }
+      // Enough for --max-frames (unless one fails to encode: then the rest streams).
+      if (max_frames > 0 && frames >= max_frames) break;
+      if (bytes >= limit_bytes) {
+        std::fprintf(stderr,
+                     "[%s] preloaded %lld frames (%lld MiB, --preload-max-mb); the rest is "
+                     "decoded while playing\n",
+                     node_name.c_str(), static_cast<long long>(frames),
+                     static_cast<long long>(bytes >> 20));
+        break;
+      }
+    }
+  }
+  /// Starts decoding the next frame, unless it is in memory or there is nothing beyond them.
+  void fetchNext() {
+    if (next_preloaded_ < preloaded_.size() || preloaded_all_) return;
+    pending_ = std::async(std::launch::async, [this] { return fetch(); });
+  }
+  /// The next frame (waiting for its decoding).
+  Fetched take() {
+    if (next_preloaded_ < preloaded_.size()) return preloaded_[next_preloaded_++];
+    if (!pending_.valid()) return Fetched{};  // interrupted while preloading: the end
+    return pending_.get();
+  }
+  /// --loop: back to the first frame; without --preload from the start, with it after the
+  /// frames held in memory.
+  void rewind() {
+    next_preloaded_ = 0;
+    reader_.seek(resume_index_);
+    fetchNext();
+  }
+
+ private:
+  Fetched fetch() {
+    Fetched f;
+    Stopwatch watch;
+    try {
+      f.item = reader_.next();  // throws FrameLoadError without --skip-bad
+    } catch (...) {
+      f.error = std::current_exception();
+    }
+    f.stats = reader_.stats();
+    f.load_ms = watch.elapsedMs();
+    return f;
+  }
+
+  dataset::DatasetReader& reader_;
+  std::vector<Fetched> preloaded_;
+  size_t next_preloaded_ = 0;
+  bool preloaded_all_ = false;
+  size_t resume_index_;
+  std::future<Fetched> pending_;
+};
+
+/// Duration of one pass from `start` plus one frame period: keeps utime increasing across
+/// --loop passes.
+int64_t passDurationUs(const std::vector<dataset::DatasetEntry>& entries, size_t start) {
+  return (entries.back().utime - entries[start].utime) +
+         (entries.size() - start > 1 ? (entries.back().utime - entries[start].utime) /
+                                           static_cast<int64_t>(entries.size() - start - 1)
+                                     : 33333);
+}
+
+/// Real-time pacing (--rate > 0): the wall time and stream time (or frame count for --fps) of
+/// a reference frame, from which each frame's publish time follows.
+struct PacingClock {
+  bool anchored = false;
+  double anchor_wall_s = 0.0;
+  int64_t anchor_utime = 0;
+  int64_t anchor_count = 0;
+
+  /// When to publish the frame stamped `utime`, the `published`-th; restarts the clock on the
+  /// first frame, when the player fell behind by more than --max-lag or the stamps jumped.
+  double target(double now, int64_t utime, int64_t published, const PlayerOptions& o) {
+    double t = now;
+    if (anchored) {
+      t = o.fps > 0 ? anchor_wall_s + (published - anchor_count) / (o.fps * o.rate)
+                    : anchor_wall_s + (utime - anchor_utime) * 1e-6 / o.rate;
+    }
+    if (!anchored || now - t > o.max_lag_s || t - now > 60.0) {
+      anchored = true;
+      anchor_wall_s = now;
+      anchor_utime = utime;
+      anchor_count = published;
+      t = now;
+    }
+    return t;
+  }
+};
+
 }  // namespace
 
 std::string playerUsage() {
@@ -304,179 +430,58 @@ void PlayerNode::runLoop(PlayerResult& result) {
   }
   dataset::DatasetReader reader(dataset_, options_.skip_bad, load, start);
   const pplvo_msgs::camera_info_t camera_msg = msgs::toMsg(dataset_.camera().camera);
-  // Duration of one pass plus one frame period: keeps utime increasing across --loop passes.
-  const auto& entries = dataset_.index().entries;
-  const int64_t pass_us =
-      (entries.back().utime - entries[start].utime) +
-      (entries.size() - start > 1 ? (entries.back().utime - entries[start].utime) /
-                                        static_cast<int64_t>(entries.size() - start - 1)
-                                  : 33333);
+  const int64_t pass_us = passDurationUs(dataset_.index().entries, start);
   int64_t loop_offset_us = 0;
   int64_t published_this_pass = 0;
   int64_t skipped_before = 0;
-  // Pacing anchor: wall time and stream time (or frame count for --fps) of a reference frame.
-  bool anchored = false;
-  double anchor_wall_s = 0.0;
-  int64_t anchor_utime = 0;
-  int64_t anchor_count = 0;
+  PacingClock pacing;
 
-  // The next frame is decoded on a worker thread while the current one waits for its slot and
-  // is published (PNG decoding is the slowest step). Only one task touches the reader at a
-  // time: seek() and the next fetch happen after get().
-  struct Fetched {
-    std::optional<dataset::DatasetReader::Item> item;
-    dataset::ReadStats stats;
-    std::exception_ptr error;
-    double load_ms = 0.0;
-  };
-  auto fetch = [&reader]() {
-    Fetched f;
-    Stopwatch watch;
-    try {
-      f.item = reader.next();  // throws FrameLoadError without --skip-bad
-    } catch (...) {
-      f.error = std::current_exception();
-    }
-    f.stats = reader.stats();
-    f.load_ms = watch.elapsedMs();
-    return f;
-  };
-  // --preload: frames decoded now, up to --preload-max-mb, then served from memory; the rest
-  // (if any) is decoded while playing, from `resume_index` on. When everything fitted, the
-  // end marker or a load error is the last entry, so that it surfaces at the same point of the
-  // stream as without --preload.
-  std::vector<Fetched> preloaded;
-  size_t next_preloaded = 0;
-  bool preloaded_all = false;
-  size_t resume_index = start;
+  FrameFeed feed(reader, start);
   if (options_.preload) {
     ScopedStageTimer t(timings_, "preload");
-    const int64_t limit_bytes = options_.preload_max_mb << 20;
-    int64_t bytes = 0, frames = 0;
-    while (!msgs::shutdownRequested()) {
-      Fetched f = fetch();
-      const bool last = !f.item || f.error;
-      if (f.item) {
-        const dataset::RawFrame& raw = f.item->frame;
-        bytes += static_cast<int64_t>(raw.bgr.total() * raw.bgr.elemSize() +
-                                      raw.depth_units.total() * raw.depth_units.elemSize());
-        ++frames;
-        resume_index = f.item->index + 1;
-      }
-      preloaded.push_back(std::move(f));
-      if (last) {
-        preloaded_all = true;
-        break;
-      }
-      // Enough for --max-frames (unless one fails to encode: then the rest streams).
-      if (options_.max_frames > 0 && frames >= options_.max_frames) break;
-      if (bytes >= limit_bytes) {
-        std::fprintf(stderr,
-                     "[%s] preloaded %lld frames (%lld MiB, --preload-max-mb); the rest is "
-                     "decoded while playing\n",
-                     options_.node_name.c_str(), static_cast<long long>(frames),
-                     static_cast<long long>(bytes >> 20));
-        break;
-      }
-    }
+    feed.preload(options_.preload_max_mb << 20, options_.max_frames, options_.node_name);
   }
-  std::future<Fetched> pending;
-  auto fetchNext = [&] {
-    // Frames left in memory, or nothing beyond them: no decoding.
-    if (next_preloaded < preloaded.size() || preloaded_all) return;
-    pending = std::async(std::launch::async, fetch);
-  };
-  auto takeFetched = [&]() -> Fetched {
-    if (next_preloaded < preloaded.size()) return preloaded[next_preloaded++];
-    if (!pending.valid()) return Fetched{};  // interrupted while preloading: the end
-    return pending.get();
-  };
-  fetchNext();
+  feed.fetchNext();
 
   while (!msgs::shutdownRequested()) {
     if (options_.max_frames > 0 && published_ >= options_.max_frames) break;
     Fetched fetched;
     {
       ScopedStageTimer t(timings_, "load_wait");
-      fetched = takeFetched();
+      fetched = feed.take();
     }
     timings_.add("load", fetched.load_ms);
     if (fetched.error) std::rethrow_exception(fetched.error);
-    const int64_t newly_skipped = fetched.stats.frames_skipped - skipped_before;
-    skipped_before = fetched.stats.frames_skipped;
-    if (newly_skipped > 0) {
-      counters_.frames_skipped += newly_skipped;
-      counters_.last_warning = "skipped bad frame: " + fetched.stats.last_error;
-      if (counters_.frames_skipped <= 5 || counters_.frames_skipped % 100 == 0) {
-        std::fprintf(stderr, "[%s] %s\n", options_.node_name.c_str(),
-                     counters_.last_warning.c_str());
-      }
-    }
-    if (!fetched.item) {
+    countSkipped(fetched.stats, &skipped_before);
+    if (!fetched.item) {  // end of the pass: stop, or play it again
       if (!options_.loop || published_this_pass == 0) break;
-      next_preloaded = 0;
-      // Without --preload from the start; with it after the frames held in memory.
-      reader.seek(resume_index);
-      fetchNext();
+      feed.rewind();
       loop_offset_us += pass_us;
       published_this_pass = 0;
       ++result.loops;
       continue;
     }
-    fetchNext();
+    feed.fetchNext();
     std::optional<dataset::DatasetReader::Item> item = std::move(fetched.item);
     ++counters_.frames_in;
     const dataset::DatasetEntry& entry = dataset_.entry(item->index);
     const int64_t utime = entry.utime + loop_offset_us;
 
     if (options_.rate > 0) {
-      const double now = nowS();
-      double target = now;
-      if (anchored) {
-        target = options_.fps > 0
-                     ? anchor_wall_s + (published_ - anchor_count) / (options_.fps * options_.rate)
-                     : anchor_wall_s + (utime - anchor_utime) * 1e-6 / options_.rate;
-      }
-      if (!anchored || now - target > options_.max_lag_s || target - now > 60.0) {
-        anchored = true;  // first frame, fell behind, or stamps jumped: restart the clock
-        anchor_wall_s = now;
-        anchor_utime = utime;
-        anchor_count = published_;
-        target = now;
-      }
-      waitUntil(target);
+      waitUntil(pacing.target(nowS(), utime, published_, options_));
       if (msgs::shutdownRequested()) break;
     }
 
     pplvo_msgs::rgbd_frame_t msg;
-    const bool encoded = msgs::guarded(counters_, options_.node_name.c_str(), [&] {
-      ScopedStageTimer t(timings_, "encode");
-      msg.utime = utime;
-      msg.seq = published_;
-      msg.stamp = entry.stamp_text;
-      msg.source = dataset_.dir();
-      msg.camera = camera_msg;
-      msg.depth_scale = dataset_.camera().depth_scale;
-      msg.rgb = msgs::encodeImage(item->frame.bgr, options_.rgb_encoding, options_.jpeg_quality);
-      msg.depth = msgs::encodeImage(item->frame.depth_units, options_.depth_encoding);
-    });
-    if (!encoded) continue;  // counted by guarded()
+    if (!encodeFrame(*item, entry, utime, camera_msg, &msg)) continue;  // counted by guarded()
     if (options_.lockstep) {
       // At most lockstep_in_flight frames without their pose.
       const int64_t timeouts = result.lockstep_timeouts;
       lockstepWait(published_ - std::max(1, options_.lockstep_in_flight), result);
-      if (result.lockstep_timeouts != timeouts) anchored = false;  // do not rush to catch up
+      if (result.lockstep_timeouts != timeouts) pacing.anchored = false;  // do not rush after
       if (msgs::shutdownRequested()) break;
     }
-    {
-      ScopedStageTimer t(timings_, "publish");
-      if (bus_.publish(options_.channel, &msg) != 0) {
-        throw std::runtime_error("LCM publish failed on " + options_.channel);
-      }
-    }
-    counters_.last_seq = msg.seq;
-    ++counters_.frames_out;
-    ++published_;
+    publishFrame(msg);
     ++published_this_pass;
     // In lockstep the wait before the next publish dispatches the messages (one at a time, so
     // that the next frame goes out as soon as the lockstep allows, mid-way through this one).
@@ -484,6 +489,46 @@ void PlayerNode::runLoop(PlayerResult& result) {
     periodic(false);
   }
   if (options_.lockstep && published_ > 0) lockstepWait(published_ - 1, result);
+}
+
+void PlayerNode::countSkipped(const dataset::ReadStats& stats, int64_t* skipped_before) {
+  const int64_t newly_skipped = stats.frames_skipped - *skipped_before;
+  *skipped_before = stats.frames_skipped;
+  if (newly_skipped <= 0) return;
+  counters_.frames_skipped += newly_skipped;
+  counters_.last_warning = "skipped bad frame: " + stats.last_error;
+  if (counters_.frames_skipped <= 5 || counters_.frames_skipped % 100 == 0) {
+    std::fprintf(stderr, "[%s] %s\n", options_.node_name.c_str(), counters_.last_warning.c_str());
+  }
+}
+
+bool PlayerNode::encodeFrame(const dataset::DatasetReader::Item& item,
+                             const dataset::DatasetEntry& entry, int64_t utime,
+                             const pplvo_msgs::camera_info_t& camera_msg,
+                             pplvo_msgs::rgbd_frame_t* msg) {
+  return msgs::guarded(counters_, options_.node_name.c_str(), [&] {
+    ScopedStageTimer t(timings_, "encode");
+    msg->utime = utime;
+    msg->seq = published_;
+    msg->stamp = entry.stamp_text;
+    msg->source = dataset_.dir();
+    msg->camera = camera_msg;
+    msg->depth_scale = dataset_.camera().depth_scale;
+    msg->rgb = msgs::encodeImage(item.frame.bgr, options_.rgb_encoding, options_.jpeg_quality);
+    msg->depth = msgs::encodeImage(item.frame.depth_units, options_.depth_encoding);
+  });
+}
+
+void PlayerNode::publishFrame(const pplvo_msgs::rgbd_frame_t& msg) {
+  {
+    ScopedStageTimer t(timings_, "publish");
+    if (bus_.publish(options_.channel, &msg) != 0) {
+      throw std::runtime_error("LCM publish failed on " + options_.channel);
+    }
+  }
+  counters_.last_seq = msg.seq;
+  ++counters_.frames_out;
+  ++published_;
 }
 
 void PlayerNode::lockstepWait(int64_t seq, PlayerResult& result) {

@@ -403,6 +403,197 @@ bool poseChangeSmall(const Vector6d& a, const Vector6d& b, const PoseEstimatorOp
          2.0 * (a.tail<3>() - b.tail<3>()).norm() < o.irls_tolerance_rad;
 }
 
+// --- validation: each correspondence becomes a term or a counted skip -----------------------
+
+void addPointTerms(const std::vector<PointMatch3D2D>& matches, JointProblem& problem,
+                   CorrespondenceStats& sk) {
+  problem.points.reserve(matches.size());
+  for (const PointMatch3D2D& m : matches) {
+    if (!m.P_prev.p.allFinite() || !m.P_prev.cov.allFinite() || !m.px_curr.allFinite() ||
+        !std::isfinite(m.sigma_px)) {
+      ++sk.non_finite;
+      continue;
+    }
+    if (!isPsd<3>(m.P_prev.cov) || !(m.sigma_px > 0)) {
+      ++sk.bad_covariance;
+      continue;
+    }
+    PointTerm T;
+    T.P = m.P_prev.p;
+    T.cov = m.P_prev.cov;
+    T.px = m.px_curr;
+    T.var_px2 = m.sigma_px * m.sigma_px;
+    problem.points.push_back(T);
+  }
+}
+
+void addLineTerms(const std::vector<LineMatch3D2D>& matches, JointProblem& problem,
+                  CorrespondenceStats& sk) {
+  for (const LineMatch3D2D& m : matches) {
+    const Line3WithCov& L = m.L_prev;
+    if (!L.p1.allFinite() || !L.p2.allFinite() || !L.cov1.allFinite() || !L.cov2.allFinite() ||
+        !m.l_curr.allFinite() || !std::isfinite(m.sigma_px)) {
+      ++sk.non_finite;
+      continue;
+    }
+    if (!isPsd<3>(L.cov1) || !isPsd<3>(L.cov2) || !(m.sigma_px > 0)) {
+      ++sk.bad_covariance;
+      continue;
+    }
+    const double ab = m.l_curr.head<2>().norm();
+    if (!(ab > 1e-12) || (L.p1 - L.p2).norm() < 1e-9) {
+      ++sk.bad_geometry;
+      continue;
+    }
+    LineTerm T;
+    T.P[0] = L.p1;
+    T.P[1] = L.p2;
+    T.cov[0] = L.cov1;
+    T.cov[1] = L.cov2;
+    T.l = m.l_curr / ab;
+    T.var_px2 = m.sigma_px * m.sigma_px;
+    problem.lines.push_back(T);
+  }
+}
+
+void addPlaneTerms(const std::vector<PlaneMatch3D3D>& matches, JointProblem& problem,
+                   CorrespondenceStats& sk) {
+  for (const PlaneMatch3D3D& m : matches) {
+    if (!m.prev.hessian.allFinite() || !m.curr.hessian.allFinite() || !m.prev.cov.allFinite() ||
+        !m.curr.cov.allFinite()) {
+      ++sk.non_finite;
+      continue;
+    }
+    if (!isPsd<4>(m.prev.cov) || !isPsd<4>(m.curr.cov)) {
+      ++sk.bad_covariance;
+      continue;
+    }
+    const double n0 = m.prev.normal().norm(), n1 = m.curr.normal().norm();
+    if (std::abs(n0 - 1.0) > 1e-3 || std::abs(n1 - 1.0) > 1e-3) {
+      ++sk.bad_geometry;
+      continue;
+    }
+    PlaneTerm T;
+    T.prev = m.prev.hessian;
+    T.prev.head<3>() /= n0;
+    T.curr = m.curr.hessian;
+    T.curr.head<3>() /= n1;
+    T.cov_prev = m.prev.cov;
+    T.cov_curr = m.curr.cov;
+    problem.planes.push_back(T);
+  }
+}
+
+// --- IRLS around Ceres LM -------------------------------------------------------------------
+
+/// Where the IRLS ended: the last weights, and whether a solve failed (xi is then the pose
+/// before that solve).
+struct IrlsResult {
+  JointProblem::ReweightResult rw;
+  bool solver_failed = false;
+};
+
+/// Alternates Tukey reweighting and a Ceres LM solve from `xi` until the pose stops changing,
+/// too few residuals remain, or a solve fails; counts iterations and costs into `est`.
+IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vector6d& xi,
+                     PoseEstimate& est) {
+  IrlsResult out;
+  JointProblem::ReweightResult& rw = out.rw;
+  rw = problem.reweight(xi.data());
+  est.robust_scale = rw.scale;
+  for (int it = 0; it < o.max_irls_iterations; ++it) {
+    if (rw.rows < std::max(6, o.min_residuals)) break;
+    const Vector6d xi_before = xi;
+    JointCost cost(problem, rw.rows);
+    ceres::Problem::Options popts;
+    popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem cp(popts);
+    cp.AddResidualBlock(&cost, nullptr, xi.data());
+    ceres::Solver::Options sopts;
+    sopts.minimizer_type = ceres::TRUST_REGION;
+    sopts.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    sopts.linear_solver_type = ceres::DENSE_QR;
+    sopts.max_num_iterations = o.max_lm_iterations;
+    sopts.num_threads = 1;
+    sopts.logging_type = ceres::SILENT;
+    sopts.minimizer_progress_to_stdout = false;
+    sopts.function_tolerance = 1e-10;
+    sopts.parameter_tolerance = 1e-10;
+    ceres::Solver::Summary summary;
+    ceres::Solve(sopts, &cp, &summary);
+    ++est.irls_iterations;
+    est.lm_iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+    if (it == 0) est.initial_cost = summary.initial_cost;
+    est.final_cost = summary.final_cost;
+    if (summary.termination_type == ceres::FAILURE || !xi.allFinite() ||
+        !(xi.tail<3>().squaredNorm() < 1.0)) {
+      xi = xi_before;
+      out.solver_failed = true;
+      break;
+    }
+    xi = poseToXi(xiToPose(xi));  // keep q_w >= 0
+    rw = problem.reweight(xi.data());
+    est.robust_scale = rw.scale;
+    if (it > 0 && poseChangeSmall(xi, xi_before, o)) break;
+  }
+  return out;
+}
+
+// --- covariance (eq. 21) --------------------------------------------------------------------
+
+/// The pose covariance at `xi` into `est` (covariance, its largest translation and rotation
+/// variances, the smallest relative eigenvalue of the Jacobi-scaled information).
+void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
+                        const PoseEstimatorOptions& o, PoseEstimate& est) {
+  Matrix6d H, M;
+  // The whitened point and line residuals spread by the robust scale s (>= 1, MAD): their
+  // covariance is s^2 Sigma_r, not Sigma_r (on real images s ~ 1.5; 1 on synthetic ones).
+  problem.information(xi.data(), o.tukey_mad_scale ? est.robust_scale * est.robust_scale : 1.0, H,
+                      M);
+  Eigen::Matrix<double, 6, 1> dinv_sqrt;
+  bool diag_ok = H.allFinite() && M.allFinite();
+  for (int i = 0; i < 6; ++i) {
+    if (!(H(i, i) > 1e-300)) diag_ok = false;
+    dinv_sqrt(i) = H(i, i) > 1e-300 ? 1.0 / std::sqrt(H(i, i)) : 1.0;
+  }
+  if (H.allFinite() && M.allFinite()) {
+    // Jacobi-scaled eigen-decomposition: pseudo-inverse on the observable subspace,
+    // kLargeVariance on the unobservable directions.
+    const Matrix6d Hs = dinv_sqrt.asDiagonal() * H * dinv_sqrt.asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Matrix6d> es(Hs);
+    const auto& lam = es.eigenvalues();
+    const double lmax = lam.maxCoeff();
+    est.min_relative_eigenvalue = diag_ok && lmax > 0 ? std::max(0.0, lam.minCoeff() / lmax) : 0.0;
+    Matrix6d Hinv = Matrix6d::Zero(), null_part = Matrix6d::Zero();
+    for (int k = 0; k < 6; ++k) {
+      const Vector6d y = dinv_sqrt.asDiagonal() * es.eigenvectors().col(k);
+      if (diag_ok && lmax > 0 && lam(k) / lmax >= o.min_relative_eigenvalue) {
+        Hinv.noalias() += y * y.transpose() / lam(k);
+      } else {
+        null_part.noalias() += kLargeVariance * y.normalized() * y.normalized().transpose();
+      }
+    }
+    const Matrix6d cov = (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
+    if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
+  }
+  est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
+  est.max_rotation_variance = maxRotationVariance(est.covariance);
+}
+
+// --- rejection tests ------------------------------------------------------------------------
+
+EstimateStatus classify(const PoseEstimate& est, bool solver_failed, int rows,
+                        const PoseEstimatorOptions& o) {
+  if (solver_failed || !est.T_curr_prev.matrix().allFinite()) return EstimateStatus::kSolverFailure;
+  if (rows < std::max(6, o.min_residuals)) return EstimateStatus::kTooFewConstraints;
+  if (est.min_relative_eigenvalue < o.min_relative_eigenvalue) return EstimateStatus::kDegenerate;
+  if (!(est.max_translation_variance_m2 <= o.max_translation_variance_m2) ||
+      !(est.max_rotation_variance <= o.max_rotation_variance)) {
+    return EstimateStatus::kUncertain;
+  }
+  return EstimateStatus::kOk;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -477,82 +668,11 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
                          std::isfinite(camera.cx) && std::isfinite(camera.cy) && camera.fx != 0 &&
                          camera.fy != 0;
 
-  // --- validation -----------------------------------------------------------------------
+  // Validation: bad correspondences are counted in est.skipped, never used.
   JointProblem problem(o, camera);
-  CorrespondenceStats& sk = est.skipped;
-  if (o.use_points && camera_ok) {
-    problem.points.reserve(in.points.size());
-    for (const PointMatch3D2D& m : in.points) {
-      if (!m.P_prev.p.allFinite() || !m.P_prev.cov.allFinite() || !m.px_curr.allFinite() ||
-          !std::isfinite(m.sigma_px)) {
-        ++sk.non_finite;
-        continue;
-      }
-      if (!isPsd<3>(m.P_prev.cov) || !(m.sigma_px > 0)) {
-        ++sk.bad_covariance;
-        continue;
-      }
-      PointTerm T;
-      T.P = m.P_prev.p;
-      T.cov = m.P_prev.cov;
-      T.px = m.px_curr;
-      T.var_px2 = m.sigma_px * m.sigma_px;
-      problem.points.push_back(T);
-    }
-  }
-  if (o.use_lines && camera_ok) {
-    for (const LineMatch3D2D& m : in.lines) {
-      const Line3WithCov& L = m.L_prev;
-      if (!L.p1.allFinite() || !L.p2.allFinite() || !L.cov1.allFinite() || !L.cov2.allFinite() ||
-          !m.l_curr.allFinite() || !std::isfinite(m.sigma_px)) {
-        ++sk.non_finite;
-        continue;
-      }
-      if (!isPsd<3>(L.cov1) || !isPsd<3>(L.cov2) || !(m.sigma_px > 0)) {
-        ++sk.bad_covariance;
-        continue;
-      }
-      const double ab = m.l_curr.head<2>().norm();
-      if (!(ab > 1e-12) || (L.p1 - L.p2).norm() < 1e-9) {
-        ++sk.bad_geometry;
-        continue;
-      }
-      LineTerm T;
-      T.P[0] = L.p1;
-      T.P[1] = L.p2;
-      T.cov[0] = L.cov1;
-      T.cov[1] = L.cov2;
-      T.l = m.l_curr / ab;
-      T.var_px2 = m.sigma_px * m.sigma_px;
-      problem.lines.push_back(T);
-    }
-  }
-  if (o.use_planes && o.plane_scale_alpha > 0) {
-    for (const PlaneMatch3D3D& m : in.planes) {
-      if (!m.prev.hessian.allFinite() || !m.curr.hessian.allFinite() || !m.prev.cov.allFinite() ||
-          !m.curr.cov.allFinite()) {
-        ++sk.non_finite;
-        continue;
-      }
-      if (!isPsd<4>(m.prev.cov) || !isPsd<4>(m.curr.cov)) {
-        ++sk.bad_covariance;
-        continue;
-      }
-      const double n0 = m.prev.normal().norm(), n1 = m.curr.normal().norm();
-      if (std::abs(n0 - 1.0) > 1e-3 || std::abs(n1 - 1.0) > 1e-3) {
-        ++sk.bad_geometry;
-        continue;
-      }
-      PlaneTerm T;
-      T.prev = m.prev.hessian;
-      T.prev.head<3>() /= n0;
-      T.curr = m.curr.hessian;
-      T.curr.head<3>() /= n1;
-      T.cov_prev = m.prev.cov;
-      T.cov_curr = m.curr.cov;
-      problem.planes.push_back(T);
-    }
-  }
+  if (o.use_points && camera_ok) addPointTerms(in.points, problem, est.skipped);
+  if (o.use_lines && camera_ok) addLineTerms(in.lines, problem, est.skipped);
+  if (o.use_planes && o.plane_scale_alpha > 0) addPlaneTerms(in.planes, problem, est.skipped);
   est.n_points_in = static_cast<int>(problem.points.size());
   est.n_lines_in = static_cast<int>(problem.lines.size());
   est.n_planes_in = static_cast<int>(problem.planes.size());
@@ -561,100 +681,20 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
     return est;
   }
 
-  // --- IRLS around Ceres LM ------------------------------------------------------------
+  // The pose: IRLS around Ceres LM from the guess.
   Vector6d xi = poseToXi(est.T_curr_prev);
-  JointProblem::ReweightResult rw = problem.reweight(xi.data());
-  est.robust_scale = rw.scale;
-  bool solver_failed = false;
-  for (int it = 0; it < o.max_irls_iterations; ++it) {
-    if (rw.rows < std::max(6, o.min_residuals)) break;
-    const Vector6d xi_before = xi;
-    JointCost cost(problem, rw.rows);
-    ceres::Problem::Options popts;
-    popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem cp(popts);
-    cp.AddResidualBlock(&cost, nullptr, xi.data());
-    ceres::Solver::Options sopts;
-    sopts.minimizer_type = ceres::TRUST_REGION;
-    sopts.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    sopts.linear_solver_type = ceres::DENSE_QR;
-    sopts.max_num_iterations = o.max_lm_iterations;
-    sopts.num_threads = 1;
-    sopts.logging_type = ceres::SILENT;
-    sopts.minimizer_progress_to_stdout = false;
-    sopts.function_tolerance = 1e-10;
-    sopts.parameter_tolerance = 1e-10;
-    ceres::Solver::Summary summary;
-    ceres::Solve(sopts, &cp, &summary);
-    ++est.irls_iterations;
-    est.lm_iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
-    if (it == 0) est.initial_cost = summary.initial_cost;
-    est.final_cost = summary.final_cost;
-    if (summary.termination_type == ceres::FAILURE || !xi.allFinite() ||
-        !(xi.tail<3>().squaredNorm() < 1.0)) {
-      xi = xi_before;
-      solver_failed = true;
-      break;
-    }
-    xi = poseToXi(xiToPose(xi));  // keep q_w >= 0
-    rw = problem.reweight(xi.data());
-    est.robust_scale = rw.scale;
-    if (it > 0 && poseChangeSmall(xi, xi_before, o)) break;
-  }
+  const IrlsResult irls = solveIrls(problem, o, xi, est);
+  const JointProblem::ReweightResult& rw = irls.rw;
   est.T_curr_prev = xiToPose(xi);
   est.n_points_used = rw.n_points;
   est.n_lines_used = rw.n_lines;
   est.n_planes_used = rw.n_planes;
   est.n_residuals = rw.rows;
 
-  // --- covariance (eq. 21) and rejection tests --------------------------------------------
-  Matrix6d H, M;
-  // The whitened point and line residuals spread by the robust scale s (>= 1, MAD): their
-  // covariance is s^2 Sigma_r, not Sigma_r (on real images s ~ 1.5; 1 on synthetic ones).
-  problem.information(xi.data(), o.tukey_mad_scale ? est.robust_scale * est.robust_scale : 1.0, H,
-                      M);
-  Eigen::Matrix<double, 6, 1> dinv_sqrt;
-  bool diag_ok = H.allFinite() && M.allFinite();
-  for (int i = 0; i < 6; ++i) {
-    if (!(H(i, i) > 1e-300)) diag_ok = false;
-    dinv_sqrt(i) = H(i, i) > 1e-300 ? 1.0 / std::sqrt(H(i, i)) : 1.0;
-  }
-  if (H.allFinite() && M.allFinite()) {
-    // Jacobi-scaled eigen-decomposition: pseudo-inverse on the observable subspace,
-    // kLargeVariance on the unobservable directions.
-    const Matrix6d Hs = dinv_sqrt.asDiagonal() * H * dinv_sqrt.asDiagonal();
-    Eigen::SelfAdjointEigenSolver<Matrix6d> es(Hs);
-    const auto& lam = es.eigenvalues();
-    const double lmax = lam.maxCoeff();
-    est.min_relative_eigenvalue = diag_ok && lmax > 0 ? std::max(0.0, lam.minCoeff() / lmax) : 0.0;
-    Matrix6d Hinv = Matrix6d::Zero(), null_part = Matrix6d::Zero();
-    for (int k = 0; k < 6; ++k) {
-      const Vector6d y = dinv_sqrt.asDiagonal() * es.eigenvectors().col(k);
-      if (diag_ok && lmax > 0 && lam(k) / lmax >= o.min_relative_eigenvalue) {
-        Hinv.noalias() += y * y.transpose() / lam(k);
-      } else {
-        null_part.noalias() += kLargeVariance * y.normalized() * y.normalized().transpose();
-      }
-    }
-    const Matrix6d cov = (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
-    if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
-  }
-  est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
-  est.max_rotation_variance = maxRotationVariance(est.covariance);
-
-  if (solver_failed || !est.T_curr_prev.matrix().allFinite()) {
-    est.status = EstimateStatus::kSolverFailure;
-    est.T_curr_prev = xiToPose(poseToXi(guess));
-  } else if (rw.rows < std::max(6, o.min_residuals)) {
-    est.status = EstimateStatus::kTooFewConstraints;
-  } else if (est.min_relative_eigenvalue < o.min_relative_eigenvalue) {
-    est.status = EstimateStatus::kDegenerate;
-  } else if (!(est.max_translation_variance_m2 <= o.max_translation_variance_m2) ||
-             !(est.max_rotation_variance <= o.max_rotation_variance)) {
-    est.status = EstimateStatus::kUncertain;
-  } else {
-    est.status = EstimateStatus::kOk;
-  }
+  // Its covariance (eq. 21), then the rejection tests; a failed solve returns the guess.
+  estimateCovariance(problem, xi, o, est);
+  est.status = classify(est, irls.solver_failed, rw.rows, o);
+  if (est.status == EstimateStatus::kSolverFailure) est.T_curr_prev = xiToPose(poseToXi(guess));
   return est;
 }
 

@@ -7,14 +7,14 @@
 //                        [--max-points 800] [--max-frames N] [--no-lines] [--no-points]
 #include <algorithm>
 #include <cstdio>
-#include <ctime>
 #include <cstdlib>
+#include <ctime>
+#include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
-#include <opencv2/core/utility.hpp>
 
 #include "match_judge.h"
 #include "pplvo/core/allocator.h"
@@ -57,6 +57,9 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
+/// Match judging tolerance (px).
+constexpr double kTolPx = 3.0;
+
 struct Accum {
   double frames = 0, pairs = 0, features = 0, matches = 0, judged = 0, correct = 0;
   std::vector<double> detect_ms, match_ms, detect_cpu_ms, match_cpu_ms;
@@ -83,10 +86,7 @@ void printRow(const char* kind, const std::string& cfg, const std::string& seq, 
       median(a.detect_ms), median(a.match_cpu_ms), median(a.match_ms));
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
+struct BenchArgs {
   std::vector<std::string> detectors = {"orb", "orb-nogrid", "akaze", "sift", "brisk"};
   std::vector<std::string> line_cfgs = {"0.4", "0.5", "0.5f", "1"};
   int max_points = 800, max_frames = 1 << 30;
@@ -98,143 +98,198 @@ int main(int argc, char** argv) {
   double min_sep = PointExtractorOptions{}.min_separation_px;
   int orb_fast = PointExtractorOptions{}.orb_fast_threshold;
   bool do_lines = true, do_points = true;
+};
+
+/// False (with a message) on an unknown argument.
+bool parseArgs(int argc, char** argv, BenchArgs* b) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
-    if (a == "--detectors") detectors = split(next());
-    else if (a == "--lines") line_cfgs = split(next());
-    else if (a == "--oversample") oversample = std::atof(next().c_str());
-    else if (a == "--ratio") ratio = std::atof(next().c_str());
-    else if (a == "--gate") gate = std::atof(next().c_str());
-    else if (a == "--min-sep") min_sep = std::atof(next().c_str());
-    else if (a == "--max-lines") max_lines = std::atoi(next().c_str());
-    else if (a == "--min-line-px") min_line_px = std::atof(next().c_str());
-    else if (a == "--orb-levels") orb_levels = std::atoi(next().c_str());
-    else if (a == "--orb-fast") orb_fast = std::atoi(next().c_str()); else if (a == "--max-points") max_points = std::atoi(next().c_str());
-    else if (a == "--max-frames") max_frames = std::atoi(next().c_str());
-    else if (a == "--no-lines") do_lines = false;
-    else if (a == "--no-points") do_points = false;
+    if (a == "--detectors")
+      b->detectors = split(next());
+    else if (a == "--lines")
+      b->line_cfgs = split(next());
+    else if (a == "--oversample")
+      b->oversample = std::atof(next().c_str());
+    else if (a == "--ratio")
+      b->ratio = std::atof(next().c_str());
+    else if (a == "--gate")
+      b->gate = std::atof(next().c_str());
+    else if (a == "--min-sep")
+      b->min_sep = std::atof(next().c_str());
+    else if (a == "--max-lines")
+      b->max_lines = std::atoi(next().c_str());
+    else if (a == "--min-line-px")
+      b->min_line_px = std::atof(next().c_str());
+    else if (a == "--orb-levels")
+      b->orb_levels = std::atoi(next().c_str());
+    else if (a == "--orb-fast")
+      b->orb_fast = std::atoi(next().c_str());
+    else if (a == "--max-points")
+      b->max_points = std::atoi(next().c_str());
+    else if (a == "--max-frames")
+      b->max_frames = std::atoi(next().c_str());
+    else if (a == "--no-lines")
+      b->do_lines = false;
+    else if (a == "--no-points")
+      b->do_points = false;
     else {
       std::fprintf(stderr, "unknown argument %s\n", a.c_str());
-      return 2;
+      return false;
     }
   }
-  cv::setNumThreads(1);
-  const double tol_px = 3.0;
-  std::printf("Columns: features/frame, matches/pair, %% of matches judged (depth present), "
-              "precision of judged matches (GT pose + depth, %.0f px), detect+describe "
-              "ms/frame (thread CPU median, CPU mean, wall median), matching ms/pair (CPU median, wall "
-              "median). One thread.\n\n",
-              tol_px);
+  return true;
+}
+
+/// Grey images and metric depth of a sequence's first frames, decoded once before timing.
+struct DecodedFrames {
+  std::vector<cv::Mat> gray, depth;
+};
+DecodedFrames decodeFrames(const SharedSequence& seq, int n) {
+  DecodedFrames f;
+  f.gray.resize(n);
+  for (int k = 0; k < n; ++k) f.gray[k] = loadGray(seq.frames[k]);
+  f.depth.resize(n);
+  for (int k = 0; k < n; ++k) f.depth[k] = loadDepthM(seq.frames[k]);
+  return f;
+}
+
+/// Extracts every frame and matches each consecutive pair with ground truth on both frames,
+/// judging each match with the GT motion and the earlier frame's depth. `extract(gray)` gives
+/// a frame's extraction, `count(extraction)` its features, `match(prev, cur)` a MatchResult
+/// and `judge(prev, cur, i, j, depth, T_c2_c1)` a Verdict.
+template <class Extract, class Count, class Match, class Judge>
+Accum benchSequence(const SharedSequence& seq, const DecodedFrames& f, Extract extract, Count count,
+                    Match match, Judge judge) {
+  Accum acc;
+  decltype(extract(f.gray[0])) prev;
+  for (size_t k = 0; k < f.gray.size(); ++k) {
+    DualTimer sw;
+    auto cur = extract(f.gray[k]);
+    acc.detect_ms.push_back(sw.wall.elapsedMs());
+    acc.detect_cpu_ms.push_back(sw.cpuMs());
+    acc.frames += 1;
+    acc.features += count(cur);
+    if (k > 0 && seq.frames[k].has_gt && seq.frames[k - 1].has_gt) {
+      sw.restart();
+      const MatchResult m = match(prev, cur);
+      acc.match_ms.push_back(sw.wall.elapsedMs());
+      acc.match_cpu_ms.push_back(sw.cpuMs());
+      acc.pairs += 1;
+      acc.matches += m.pairs.size();
+      const Pose3 T_c2_c1 = seq.frames[k].T_w_c.inverse() * seq.frames[k - 1].T_w_c;
+      for (const auto& [i, j] : m.pairs) {
+        const Verdict v = judge(prev, cur, i, j, f.depth[k - 1], T_c2_c1);
+        if (v == Verdict::kUnjudged) continue;
+        acc.judged += 1;
+        acc.correct += v == Verdict::kCorrect;
+      }
+    }
+    prev = std::move(cur);
+  }
+  return acc;
+}
+
+/// One point detector configuration ("orb-nogrid": ORB without grid bucketing); nullopt for
+/// an unknown detector.
+std::optional<Accum> benchPoints(const BenchArgs& b, const std::string& det,
+                                 const SharedSequence& seq, const DecodedFrames& f) {
+  PointExtractorOptions po;
+  po.max_points = b.max_points;
+  po.oversample = b.oversample;
+  po.orb_levels = b.orb_levels;
+  po.min_separation_px = b.min_sep;
+  po.orb_fast_threshold = b.orb_fast;
+  std::string dname = det;
+  if (det == "orb-nogrid") {
+    po.grid_bucketing = false;
+    dname = "orb";
+  }
+  if (!parsePointDetector(dname, &po.detector)) return std::nullopt;
+  PointExtractor ex(po);
+  PointMatchOptions mo;
+  mo.ratio = b.ratio;
+  mo.max_px_distance = b.gate;
+  return benchSequence(
+      seq, f, [&](const cv::Mat& gray) { return ex.extract(gray, seq.camera); },
+      [](const PointExtraction& e) { return e.points.size(); },
+      [&](const PointExtraction& prev, const PointExtraction& cur) {
+        return matchPoints(prev.points, prev.descriptors, cur.points, cur.descriptors, mo);
+      },
+      [&](const PointExtraction& prev, const PointExtraction& cur, int i, int j,
+          const cv::Mat& depth, const Pose3& T_c2_c1) {
+        return judgePointMatch(prev.points[i].px, cur.points[j].px, depth, seq.camera, T_c2_c1,
+                               kTolPx);
+      });
+}
+
+/// One line configuration: detection scale with suffixes f = LBD at full resolution,
+/// o = OpenCV's LSD and LBD (e.g. 0.4o, 0.5fo).
+Accum benchLines(const BenchArgs& b, const std::string& lc, const SharedSequence& seq,
+                 const DecodedFrames& f) {
+  LineExtractorOptions lo;
+  lo.detection_scale = std::atof(lc.c_str());
+  lo.describe_full_resolution = lc.find('f') != std::string::npos;
+  lo.use_opencv = lc.find('o') != std::string::npos;
+  lo.max_lines = b.max_lines;
+  lo.min_length_px = b.min_line_px;
+  LineExtractor ex(lo);
+  LineMatchOptions mo;
+  return benchSequence(
+      seq, f, [&](const cv::Mat& gray) { return ex.extract(gray, seq.camera); },
+      [](const LineExtraction& e) { return e.lines.size(); },
+      [&](const LineExtraction& prev, const LineExtraction& cur) {
+        return matchLines(prev.lines, prev.descriptors, cur.lines, cur.descriptors, mo);
+      },
+      [&](const LineExtraction& prev, const LineExtraction& cur, int i, int j, const cv::Mat& depth,
+          const Pose3& T_c2_c1) {
+        return judgeLineMatch(prev.lines[i].px1, prev.lines[i].px2, cur.lines[j].eq, depth,
+                              seq.camera, T_c2_c1, kTolPx);
+      });
+}
+
+void printHeader() {
+  std::printf(
+      "Columns: features/frame, matches/pair, %% of matches judged (depth present), "
+      "precision of judged matches (GT pose + depth, %.0f px), detect+describe "
+      "ms/frame (thread CPU median, CPU mean, wall median), matching ms/pair (CPU median, wall "
+      "median). One thread.\n\n",
+      kTolPx);
   std::printf("| kind  | config       | sequence                     | feat/fr | match/p | "
               "judged  | prec   | det cpu | det cpu mean | det wall | match cpu | match wall |\n"
               "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  pplvo::keepFrameBuffersMapped();  // frame-sized buffers: no page faults per frame
+  BenchArgs b;
+  if (!parseArgs(argc, argv, &b)) return 2;
+  cv::setNumThreads(1);
+  printHeader();
   for (const std::string name : {"icl_living_room_kt0_short", "tum_fr3_sitting_static_short"}) {
     const auto seq = loadSharedSequence(name);
     if (!seq) {
       std::printf("(sequence %s not found under %s)\n", name.c_str(), sharedDataDir().c_str());
       continue;
     }
-    const int n = std::min<int>(max_frames, seq->frames.size());
-    std::vector<cv::Mat> gray(n);
-    for (int k = 0; k < n; ++k) gray[k] = loadGray(seq->frames[k]);
-    std::vector<cv::Mat> depth(n);
-    for (int k = 0; k < n; ++k) depth[k] = loadDepthM(seq->frames[k]);
-
-    if (do_points) {
-      for (const auto& det : detectors) {
-        PointExtractorOptions po;
-        po.max_points = max_points;
-        po.oversample = oversample;
-        po.orb_levels = orb_levels;
-        po.min_separation_px = min_sep;
-        po.orb_fast_threshold = orb_fast;
-        std::string dname = det;
-        if (det == "orb-nogrid") {
-          po.grid_bucketing = false;
-          dname = "orb";
-        }
-        if (!parsePointDetector(dname, &po.detector)) {
+    const DecodedFrames frames =
+        decodeFrames(*seq, std::min<int>(b.max_frames, seq->frames.size()));
+    if (b.do_points) {
+      for (const auto& det : b.detectors) {
+        const std::optional<Accum> acc = benchPoints(b, det, *seq, frames);
+        if (!acc) {
           std::fprintf(stderr, "unknown detector %s\n", det.c_str());
           return 2;
         }
-        PointExtractor ex(po);
-        PointMatchOptions mo;
-        mo.ratio = ratio;
-        mo.max_px_distance = gate;
-        Accum acc;
-        PointExtraction prev;
-        for (int k = 0; k < n; ++k) {
-          DualTimer sw;
-          PointExtraction cur = ex.extract(gray[k], seq->camera);
-          acc.detect_ms.push_back(sw.wall.elapsedMs());
-          acc.detect_cpu_ms.push_back(sw.cpuMs());
-          acc.frames += 1;
-          acc.features += cur.points.size();
-          if (k > 0 && seq->frames[k].has_gt && seq->frames[k - 1].has_gt) {
-            sw.restart();
-            const MatchResult m = matchPoints(prev.points, prev.descriptors, cur.points,
-                                              cur.descriptors, mo);
-            acc.match_ms.push_back(sw.wall.elapsedMs());
-            acc.match_cpu_ms.push_back(sw.cpuMs());
-            acc.pairs += 1;
-            acc.matches += m.pairs.size();
-            const Pose3 T_c2_c1 = seq->frames[k].T_w_c.inverse() * seq->frames[k - 1].T_w_c;
-            for (const auto& [i, j] : m.pairs) {
-              const Verdict v = judgePointMatch(prev.points[i].px, cur.points[j].px,
-                                                depth[k - 1], seq->camera, T_c2_c1, tol_px);
-              if (v == Verdict::kUnjudged) continue;
-              acc.judged += 1;
-              acc.correct += v == Verdict::kCorrect;
-            }
-          }
-          prev = std::move(cur);
-        }
-        printRow("point", det, name, acc);
+        printRow("point", det, name, *acc);
         std::fflush(stdout);
       }
     }
-    if (do_lines) {
-      for (const auto& lc : line_cfgs) {
-        LineExtractorOptions lo;
-        lo.detection_scale = std::atof(lc.c_str());
-        // Suffixes: f = LBD at full resolution, o = OpenCV's LSD and LBD (e.g. 0.4o, 0.5fo).
-        lo.describe_full_resolution = lc.find('f') != std::string::npos;
-        lo.use_opencv = lc.find('o') != std::string::npos;
-        lo.max_lines = max_lines;
-        lo.min_length_px = min_line_px;
-        LineExtractor ex(lo);
-        LineMatchOptions mo;
-        Accum acc;
-        LineExtraction prev;
-        for (int k = 0; k < n; ++k) {
-          DualTimer sw;
-          LineExtraction cur = ex.extract(gray[k], seq->camera);
-          acc.detect_ms.push_back(sw.wall.elapsedMs());
-          acc.detect_cpu_ms.push_back(sw.cpuMs());
-          acc.frames += 1;
-          acc.features += cur.lines.size();
-          if (k > 0 && seq->frames[k].has_gt && seq->frames[k - 1].has_gt) {
-            sw.restart();
-            const MatchResult m =
-                matchLines(prev.lines, prev.descriptors, cur.lines, cur.descriptors, mo);
-            acc.match_ms.push_back(sw.wall.elapsedMs());
-            acc.match_cpu_ms.push_back(sw.cpuMs());
-            acc.pairs += 1;
-            acc.matches += m.pairs.size();
-            const Pose3 T_c2_c1 = seq->frames[k].T_w_c.inverse() * seq->frames[k - 1].T_w_c;
-            for (const auto& [i, j] : m.pairs) {
-              const Verdict v = judgeLineMatch(prev.lines[i].px1, prev.lines[i].px2,
-                                               cur.lines[j].eq, depth[k - 1], seq->camera,
-                                               T_c2_c1, tol_px);
-              if (v == Verdict::kUnjudged) continue;
-              acc.judged += 1;
-              acc.correct += v == Verdict::kCorrect;
-            }
-          }
-          prev = std::move(cur);
-        }
-        printRow("line", "lsd x" + lc, name, acc);
+    if (b.do_lines) {
+      for (const auto& lc : b.line_cfgs) {
+        printRow("line", "lsd x" + lc, name, benchLines(b, lc, *seq, frames));
         std::fflush(stdout);
       }
     }

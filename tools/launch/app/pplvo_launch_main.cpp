@@ -115,6 +115,416 @@ std::string readFile(const std::string& path) {
   return s.str();
 }
 
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+/// The launcher's progress messages on stderr (none with --quiet).
+struct Narrator {
+  bool quiet = false;
+  void operator()(const std::string& s) const {
+    if (!quiet) std::fprintf(stderr, "[pplvo-launch] %s\n", s.c_str());
+  }
+};
+
+/// Prints every error of the command line, or else of the pipeline options it carries;
+/// true when there was one (exit 2).
+bool reportArgErrors(const ParsedArgs& parsed) {
+  std::vector<std::string> errors = parsed.errors;
+  if (errors.empty()) errors = pipelineArgErrors(parsed.options);
+  if (errors.empty()) return false;
+  for (const std::string& e : errors) std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
+  std::fprintf(stderr, "pplvo-launch: see --help\n");
+  return true;
+}
+
+/// Enters the private network namespace (--isolated); the exit status when that fails.
+std::optional<int> enterIsolation(const Narrator& say) {
+  const IsolationResult iso = enterIsolatedNetwork();
+  if (!iso.ok) {
+    std::fprintf(stderr, "pplvo-launch: --isolated: %s\n", iso.detail.c_str());
+    return iso.unavailable ? 4 : 1;
+  }
+  say("isolated: " + iso.detail);
+  return std::nullopt;
+}
+
+/// Prints the URL policy's warnings and errors; false when there were errors (exit 2).
+bool reportUrlDecision(const UrlDecision& url) {
+  for (const std::string& w : url.warnings)
+    std::fprintf(stderr, "pplvo-launch: warning: %s\n", w.c_str());
+  if (url.errors.empty()) return true;
+  for (const std::string& e : url.errors) std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
+  return false;
+}
+
+/// False, with what to do, when a node program is missing from `bin_dir`.
+bool checkPrograms(const std::string& bin_dir) {
+  const std::vector<std::string> missing = missingPrograms(bin_dir);
+  if (missing.empty()) return true;
+  for (const std::string& m : missing) {
+    std::fprintf(stderr, "pplvo-launch: missing node program %s\n", m.c_str());
+  }
+  std::fprintf(stderr,
+               "pplvo-launch: build the programs (cmake --build build --target pplvo-player "
+               "pplvo-depth-filter pplvo-frontend pplvo-estimator pplvo-logger) or pass "
+               "--bin-dir\n");
+  return false;
+}
+
+/// Where the processes' logs go: --node-logs, or a temporary folder that a successful launch
+/// removes.
+struct LogDir {
+  std::string path;
+  bool temporary = false;
+};
+std::optional<LogDir> makeLogDir(const std::string& node_log_dir) {
+  LogDir dir{node_log_dir, false};
+  if (dir.path.empty()) {
+    char tmpl[] = "/tmp/pplvo-launch-XXXXXX";
+    if (::mkdtemp(tmpl) == nullptr) {
+      std::perror("pplvo-launch: mkdtemp");
+      return std::nullopt;
+    }
+    dir = {tmpl, true};
+  } else {
+    std::error_code ec;
+    std::filesystem::create_directories(dir.path, ec);
+  }
+  return dir;
+}
+
+/// SIGINT/SIGTERM end the launch through g_interrupted (the children are still stopped in
+/// order); a reader that went away must not kill the launcher (SIGPIPE).
+void installSignalHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = onSignal;
+  sigemptyset(&sa.sa_mask);
+  ::sigaction(SIGINT, &sa, nullptr);
+  ::sigaction(SIGTERM, &sa, nullptr);
+  ::signal(SIGPIPE, SIG_IGN);
+}
+
+/// One supervised run (steps 3-6 of main): starts the processes, watches them and the bus
+/// through start-up, the sequence and the drain, stops them all and puts each into the
+/// report. The Supervisor stops every child that is left when the run is destroyed.
+class SupervisedRun {
+ public:
+  SupervisedRun(const LaunchOptions& o, BusMonitor& bus, Narrator say, Clock::time_point t0,
+                LaunchReport& report)
+      : o_(o),
+        bus_(bus),
+        say_(say),
+        t0_(t0),
+        deadline_(t0 + std::chrono::duration<double>(o.timeout_s)),
+        faults_(planTestFaults(o)),
+        report_(report),
+        failures_(report.failures) {}
+
+  /// `specs` in start order, the player last.
+  void run(const std::vector<ProcessSpec>& specs) {
+    try {
+      if (startNodesAndWaitUntilReady(specs)) {
+        playSequence(specs.back());
+        drain();
+      }
+    } catch (const SpawnError& e) {
+      failures_.push_back(e.what());
+    }
+    stopAll();
+    nameTestKill();
+    reportProcesses();
+  }
+  /// The first process that failed, whose log main shows ("" when none did).
+  const std::string& failedProcess() const { return failed_process_; }
+
+ private:
+  double seconds() const { return secondsSince(t0_); }
+
+  static bool mayRestart(const std::string& name) {
+    return name == kDepthFilter || name == kFrontend || name == kEstimator;
+  }
+
+  /// Checks every child; returns false (and records why) if one ended when it should not.
+  /// --restart: a dead stage is scheduled for a restart after its backoff instead, and the
+  /// stages whose time has come are started again.
+  bool checkChildren(bool player_may_end) {
+    for (size_t i : sup_.poll()) {
+      const ChildState& c = sup_.child(i);
+      if (c.stop_requested) continue;
+      if (c.spec.name == kPlayer && player_may_end) continue;
+      const std::string& name = c.spec.name;
+      if (mayRestart(name) && restarts_of_[name] < o_.restart_limit) {
+        const double backoff = o_.restart_backoff_s * (1 << std::min(restarts_of_[name], 16));
+        say_(name + " ended (" + c.exit->text() + "); restarting it in " + std::to_string(backoff) +
+             " s");
+        restart_at_[name] = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                               std::chrono::duration<double>(backoff));
+        restarted_.insert(i);
+        continue;
+      }
+      failures_.push_back(name + " ended early (" + c.exit->text() + ")" +
+                          (restarts_of_[name] > 0
+                               ? " after " + std::to_string(restarts_of_[name]) + " restart(s)"
+                               : ""));
+      if (failed_process_.empty()) failed_process_ = name;
+    }
+    for (auto it = restart_at_.begin(); it != restart_at_.end();) {
+      if (Clock::now() < it->second) {
+        ++it;
+        continue;
+      }
+      const ProcessSpec spec = sup_.child(*sup_.find(it->first)).spec;
+      const size_t i = sup_.spawn(spec);  // the same command line; its log is appended to
+      ++restarts_of_[it->first];
+      ++report_.restarts;
+      say_("restarted " + it->first + " (pid " + std::to_string(sup_.child(i).pid) + ")");
+      it = restart_at_.erase(it);
+    }
+    return failures_.empty();
+  }
+
+  /// False (and why) once interrupted or past --timeout.
+  bool checkLimits(const char* phase) {
+    if (g_interrupted) {
+      failures_.push_back(std::string("interrupted (SIGINT/SIGTERM) during ") + phase);
+      return false;
+    }
+    if (Clock::now() > deadline_) {
+      failures_.push_back("timeout: --timeout " + std::to_string(o_.timeout_s) +
+                          " s reached during " + phase);
+      return false;
+    }
+    return true;
+  }
+
+  /// --test-kill: SIGKILL the stage once enough poses were seen.
+  void maybeTestKill() {
+    if (test_killed_ || faults_.kill_after_poses < 0 || bus_.poses() < faults_.kill_after_poses)
+      return;
+    if (auto i = sup_.find(faults_.kill_node); i && sup_.child(*i).running()) {
+      say_("--test-kill: SIGKILL " + faults_.kill_node + " after " + std::to_string(bus_.poses()) +
+           " poses");
+      sup_.signal(*i, SIGKILL);
+      test_killed_ = true;
+    }
+  }
+
+  /// --test-pause: SIGSTOP the stage once enough poses were seen, SIGCONT it after the pause.
+  void maybeTestPause() {
+    if (pause_done_ || faults_.pause_after_poses < 0) return;
+    const std::optional<size_t> i = sup_.find(faults_.pause_node);
+    if (!i || !sup_.child(*i).running()) return;
+    if (!paused_at_ && bus_.poses() >= faults_.pause_after_poses) {
+      say_("--test-pause: SIGSTOP " + faults_.pause_node + " after " +
+           std::to_string(bus_.poses()) + " poses for " + std::to_string(faults_.pause_s) + " s");
+      sup_.signal(*i, SIGSTOP);
+      paused_at_ = Clock::now();
+    } else if (paused_at_ &&
+               Clock::now() - *paused_at_ >= std::chrono::duration<double>(faults_.pause_s)) {
+      say_("--test-pause: SIGCONT " + faults_.pause_node);
+      sup_.signal(*i, SIGCONT);
+      pause_done_ = true;
+    }
+  }
+
+  /// 3. Nodes and logger, then wait until each node published its first status (proof that
+  /// it is up and its LCM is subscribed; statuses come about once a second). True when all
+  /// are ready.
+  bool startNodesAndWaitUntilReady(const std::vector<ProcessSpec>& specs) {
+    for (size_t k = 0; k + 1 < specs.size(); ++k) {
+      const size_t i = sup_.spawn(specs[k]);
+      say_("started " + specs[k].name + " (pid " + std::to_string(sup_.child(i).pid) + ")");
+    }
+    const auto startup_deadline =
+        Clock::now() + std::chrono::duration<double>(o_.startup_timeout_s);
+    bool ready = false;
+    while (!ready && checkChildren(false) && checkLimits("start-up")) {
+      bus_.handle(20);
+      ready = true;
+      for (const std::string& n : statusNodes()) ready = ready && bus_.hasStatus(n);
+      if (!ready && Clock::now() > startup_deadline) {
+        std::string silent;
+        for (const std::string& n : statusNodes()) {
+          if (!bus_.hasStatus(n)) silent += " " + n;
+        }
+        failures_.push_back("no status message within " + std::to_string(o_.startup_timeout_s) +
+                            " s from" + silent + " (LCM multicast not delivered? try --isolated)");
+        break;
+      }
+    }
+    return ready;
+  }
+
+  /// 4. The player, until it ends; its exit must be clean.
+  void playSequence(const ProcessSpec& player_spec) {
+    // The logger publishes nothing: it was started together with the nodes, is still
+    // alive (checked above), and subscribes right after opening LCM.
+    say_("nodes subscribed after " + std::to_string(seconds()) + " s; starting the player");
+    sup_.spawn(player_spec);
+    const size_t player = *sup_.find(kPlayer);
+    while (sup_.child(player).running() && checkChildren(true) && checkLimits("the run")) {
+      bus_.handle(20);
+      maybeTestKill();
+      maybeTestPause();
+    }
+    if (failures_.empty()) {
+      const ExitInfo& pe = *sup_.child(player).exit;
+      if (!pe.clean()) {
+        failures_.push_back(std::string(kPlayer) + " failed (" + pe.text() + ")");
+        failed_process_ = kPlayer;
+      } else {
+        say_("player ended at " + std::to_string(seconds()) + " s; draining");
+      }
+    }
+  }
+
+  /// 5. Drain: all published frames posed, or no new pose for --drain-idle.
+  void drain() {
+    if (!failures_.empty()) return;
+    DrainMonitor drain(o_.drain_idle_s);
+    while (checkChildren(true) && checkLimits("the drain")) {
+      bus_.handle(20);
+      maybeTestKill();
+      maybeTestPause();
+      int64_t published = bus_.endSeen() ? bus_.endPublished() : -1;
+      if (published < 0) {
+        if (auto s = bus_.status(kPlayer)) published = s->frames_out;
+      }
+      if (drain.drained(seconds(), bus_.poses(), published)) break;
+    }
+    if (failures_.empty()) {
+      say_("drained at " + std::to_string(seconds()) + " s: " + std::to_string(bus_.poses()) +
+           " poses seen");
+    }
+  }
+
+  /// 6. Stop: nodes first (they publish a final status), the logger last so that it records
+  /// them; SIGKILL after the grace period. Everything is stopped on every path.
+  void stopAll() {
+    if (paused_at_ && !pause_done_) {  // never leave a stage stopped: it could not stop cleanly
+      if (auto i = sup_.find(faults_.pause_node)) sup_.signal(*i, SIGCONT);
+    }
+    std::vector<size_t> nodes;
+    for (const std::string& n : {std::string(kPlayer), std::string(kDepthFilter),
+                                 std::string(kFrontend), std::string(kEstimator)}) {
+      if (auto i = sup_.find(n)) nodes.push_back(*i);
+    }
+    sup_.stop(nodes, o_.stop_grace_s, [&] { bus_.handle(10); });
+    bus_.handle(300);
+    // The logger writes each pose as it comes; give it (bounded) time to catch up with every
+    // pose the launcher saw before it is stopped, so that no late pose is cut off.
+    const auto logger_deadline = Clock::now() + std::chrono::seconds(3);
+    while (countTrajectoryLines(o_.output) < bus_.poses() && Clock::now() < logger_deadline) {
+      bus_.handle(20);
+    }
+    if (auto i = sup_.find(kLogger)) sup_.stop({*i}, o_.stop_grace_s, [&] { bus_.handle(10); });
+    bus_.handle(50);
+  }
+
+  /// A kill on request (without a restart) is still a failure of the launch; make sure it is
+  /// named.
+  void nameTestKill() {
+    if (!test_killed_ || report_.restarts != 0) return;
+    bool named = false;
+    for (const std::string& f : failures_) named = named || f.rfind(faults_.kill_node, 0) == 0;
+    if (!named) failures_.push_back(faults_.kill_node + " was killed by --test-kill");
+  }
+
+  /// Each process into the report: exit, faults, counts (the "done:" line of its log, else its
+  /// last status), and the failures not yet named.
+  void reportProcesses() {
+    for (const ChildState& c : sup_.children()) {
+      LaunchReport::Process p;
+      p.name = c.spec.name;
+      p.exit = c.exit;
+      p.stop_requested = c.stop_requested;
+      p.killed = c.killed;
+      p.has_counts = c.spec.name != kLogger;
+      p.pauses = c.pauses;
+      p.paused_s = c.paused_s;
+      p.restarted = restarted_.count(&c - sup_.children().data()) > 0;
+      // A replaced process shares its log with its successor, whose counts those are.
+      if (p.restarted) p.has_counts = false;
+      if (p.has_counts) {
+        const std::string log = readFile(c.spec.log_path);
+        if (auto d = parseDoneLine(log, c.spec.name)) p.counts = *d;
+        if (c.spec.name == kDepthFilter) report_.overload_fusions = parseOverloadFusions(log);
+        if (auto s = bus_.status(c.spec.name)) {
+          // The final status has errors too; the done line is the final word on the counts.
+          if (!p.counts.known) p.counts = *s;
+          p.counts.errors = s->errors;
+        }
+      }
+      if (c.killed && failures_.empty()) {
+        failures_.push_back(c.spec.name + " did not stop within " +
+                            std::to_string(o_.stop_grace_s) + " s of SIGINT (killed)");
+      }
+      if (c.exit && !c.exit->clean() && !c.killed && !p.restarted) {
+        const std::string f = c.spec.name + " ended with " + c.exit->text();
+        bool dup = false;
+        for (const std::string& x : failures_) dup = dup || x.rfind(c.spec.name, 0) == 0;
+        if (!dup) failures_.push_back(f);
+        if (failed_process_.empty()) failed_process_ = c.spec.name;
+      }
+      report_.processes.push_back(p);
+    }
+  }
+
+  const LaunchOptions& o_;
+  BusMonitor& bus_;
+  const Narrator say_;
+  const Clock::time_point t0_;
+  // t0 + --timeout, in double seconds as the comparison with Clock::now() always was.
+  const decltype(Clock::time_point() + std::chrono::duration<double>()) deadline_;
+  const TestFaultPlan faults_;
+  LaunchReport& report_;
+  std::vector<std::string>& failures_;
+  std::string failed_process_;  // whose log to show
+  Supervisor sup_;
+  // --restart: stages that died and when to start them again; restarts done per stage.
+  std::map<std::string, Clock::time_point> restart_at_;
+  std::map<std::string, int> restarts_of_;
+  std::set<size_t> restarted_;  // children that died and were (or will be) replaced
+  bool test_killed_ = false;
+  std::optional<Clock::time_point> paused_at_;  // --test-pause: when the SIGSTOP was sent
+  bool pause_done_ = false;
+};
+
+/// The report's totals once every process has been stopped.
+void finishReport(LaunchReport& report, const BusMonitor& bus, const std::string& trajectory,
+                  Clock::time_point t0) {
+  report.frames_published = bus.endSeen() ? bus.endPublished() : -1;
+  report.takePlayerCounts();
+  report.poses_seen = bus.poses();
+  report.trajectory_poses = countTrajectoryLines(trajectory);
+  report.checkFramesLostToFaults();
+  report.wall_s = secondsSince(t0);
+}
+
+/// Prints the report (stdout) and, on failure, the failed process's last log lines; removes a
+/// temporary log folder after a success. Returns the exit status.
+int printOutcome(const LaunchReport& report, const std::string& failed_process,
+                 const LogDir& logs) {
+  std::printf("%s", report.text().c_str());
+  std::fflush(stdout);
+  if (!report.ok()) {
+    if (!failed_process.empty()) {
+      const std::string path = logs.path + "/" + failed_process + ".log";
+      std::fprintf(stderr, "pplvo-launch: last lines of %s:\n%s", path.c_str(),
+                   tailOfFile(path, 15).c_str());
+    }
+    std::fprintf(stderr, "pplvo-launch: FAILED: %s; process logs kept in %s\n",
+                 report.failures.front().c_str(), logs.path.c_str());
+    return g_interrupted ? 130 : 1;
+  }
+  if (logs.temporary) {
+    std::error_code ec;
+    std::filesystem::remove_all(logs.path, ec);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -124,76 +534,25 @@ int main(int argc, char** argv) {
     std::printf("%s", launchUsage().c_str());
     return 0;
   }
-  std::vector<std::string> errors = parsed.errors;
-  if (errors.empty()) errors = pipelineArgErrors(parsed.options);
-  if (!errors.empty()) {
-    for (const std::string& e : errors) std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
-    std::fprintf(stderr, "pplvo-launch: see --help\n");
-    return 2;
-  }
+  if (reportArgErrors(parsed)) return 2;
   LaunchOptions o = parsed.options;
-  auto say = [&](const std::string& s) {
-    if (!o.quiet) std::fprintf(stderr, "[pplvo-launch] %s\n", s.c_str());
-  };
+  const Narrator say{o.quiet};
 
   // 1. Namespace first: unshare(CLONE_NEWUSER) needs a single-threaded process (no LCM yet).
   if (o.isolated) {
-    const IsolationResult iso = enterIsolatedNetwork();
-    if (!iso.ok) {
-      std::fprintf(stderr, "pplvo-launch: --isolated: %s\n", iso.detail.c_str());
-      return iso.unavailable ? 4 : 1;
-    }
-    say("isolated: " + iso.detail);
+    if (const std::optional<int> status = enterIsolation(say)) return *status;
   }
   const UrlDecision url =
       decideLcmUrl(parsed.options, std::getenv("LCM_DEFAULT_URL"), readRmemMax());
-  for (const std::string& w : url.warnings)
-    std::fprintf(stderr, "pplvo-launch: warning: %s\n", w.c_str());
-  if (!url.errors.empty()) {
-    for (const std::string& e : url.errors) std::fprintf(stderr, "pplvo-launch: %s\n", e.c_str());
-    return 2;
-  }
+  if (!reportUrlDecision(url)) return 2;
   o.compress = o.compress || url.compress;
 
-  // 2. Programs.
+  // 2. Programs, log folder, signals, bus.
   const std::string bin_dir = o.bin_dir.empty() ? selfExecutableDir() : o.bin_dir;
-  std::vector<std::string> missing;
-  for (const std::string& name : allPrograms()) {
-    const std::string why = checkExecutable(bin_dir + "/" + name);
-    if (!why.empty()) missing.push_back(bin_dir + "/" + name + ": " + why);
-  }
-  if (!missing.empty()) {
-    for (const std::string& m : missing) {
-      std::fprintf(stderr, "pplvo-launch: missing node program %s\n", m.c_str());
-    }
-    std::fprintf(stderr,
-                 "pplvo-launch: build the programs (cmake --build build --target pplvo-player "
-                 "pplvo-depth-filter pplvo-frontend pplvo-estimator pplvo-logger) or pass "
-                 "--bin-dir\n");
-    return 1;
-  }
-  std::string log_dir = o.node_log_dir;
-  bool temp_logs = false;
-  if (log_dir.empty()) {
-    char tmpl[] = "/tmp/pplvo-launch-XXXXXX";
-    if (::mkdtemp(tmpl) == nullptr) {
-      std::perror("pplvo-launch: mkdtemp");
-      return 1;
-    }
-    log_dir = tmpl;
-    temp_logs = true;
-  } else {
-    std::error_code ec;
-    std::filesystem::create_directories(log_dir, ec);
-  }
-
-  struct sigaction sa {};
-  sa.sa_handler = onSignal;
-  sigemptyset(&sa.sa_mask);
-  ::sigaction(SIGINT, &sa, nullptr);
-  ::sigaction(SIGTERM, &sa, nullptr);
-  ::signal(SIGPIPE, SIG_IGN);
-
+  if (!checkPrograms(bin_dir)) return 1;
+  const std::optional<LogDir> logs = makeLogDir(o.node_log_dir);
+  if (!logs) return 1;
+  installSignalHandlers();
   lcm::LCM lcm(url.url);
   if (!lcm.good()) {
     std::fprintf(stderr, "pplvo-launch: cannot open LCM at %s%s\n", url.url.c_str(),
@@ -201,298 +560,29 @@ int main(int argc, char** argv) {
     return 1;
   }
   BusMonitor bus(lcm);
-  say("LCM " + url.url + ", programs from " + bin_dir + ", process logs in " + log_dir);
+  say("LCM " + url.url + ", programs from " + bin_dir + ", process logs in " + logs->path);
   for (const std::string& r : url.routes) say("route " + r);
 
   LaunchReport report;
   report.lockstep = o.lockstep;
   report.url = url.url;
   report.trajectory_path = o.output;
-  const std::vector<ProcessSpec> specs = buildProcessSpecs(o, url, bin_dir, log_dir);
+  const std::vector<ProcessSpec> specs = buildProcessSpecs(o, url, bin_dir, logs->path);
   // A reused --node-logs folder holds an earlier run's logs: the report must read this run's
   // counters only (a stage killed before its "done:" line would show the earlier one's).
   for (const ProcessSpec& spec : specs) {
     std::error_code ec;
     std::filesystem::remove(spec.log_path, ec);
   }
-  const auto deadline = t0 + std::chrono::duration<double>(o.timeout_s);
-  auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
 
-  // Killed (--test-kill) and failures.
-  std::string kill_name;
-  int64_t kill_after = -1;
-  if (!o.test_kill.empty()) {
-    const size_t colon = o.test_kill.rfind(':');
-    kill_name = o.test_kill.substr(0, colon);
-    kill_after = std::stoll(o.test_kill.substr(colon + 1));
-  }
-  bool test_killed = false;
-  std::string pause_name;
-  int64_t pause_after = -1;
-  double pause_s = 0.0;
-  if (!o.test_pause.empty()) {
-    const size_t second = o.test_pause.rfind(':');
-    const size_t first = o.test_pause.rfind(':', second - 1);
-    pause_name = o.test_pause.substr(0, first);
-    pause_after = std::stoll(o.test_pause.substr(first + 1, second - first - 1));
-    pause_s = std::stod(o.test_pause.substr(second + 1));
-  }
-  std::optional<Clock::time_point> paused_at;  // --test-pause: when the SIGSTOP was sent
-  bool pause_done = false;
-  std::vector<std::string>& failures = report.failures;
-  std::string failed_process;  // whose log to show
-
+  // 3-6. Start, run, drain, stop.
+  std::string failed_process;
   {
-    Supervisor sup;
-    // Checks every child; returns false (and records why) if one ended when it should not.
-    // --restart: stages that died and when to start them again; restarts done per stage.
-    std::map<std::string, Clock::time_point> restart_at;
-    std::map<std::string, int> restarts_of;
-    std::set<size_t> restarted;  // children that died and were (or will be) replaced
-    auto mayRestart = [&](const std::string& name) {
-      return name == kDepthFilter || name == kFrontend || name == kEstimator;
-    };
-    auto checkChildren = [&](bool player_may_end) {
-      for (size_t i : sup.poll()) {
-        const ChildState& c = sup.child(i);
-        if (c.stop_requested) continue;
-        if (c.spec.name == kPlayer && player_may_end) continue;
-        const std::string& name = c.spec.name;
-        if (mayRestart(name) && restarts_of[name] < o.restart_limit) {
-          const double backoff = o.restart_backoff_s * (1 << std::min(restarts_of[name], 16));
-          say(name + " ended (" + c.exit->text() + "); restarting it in " +
-              std::to_string(backoff) + " s");
-          restart_at[name] = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(backoff));
-          restarted.insert(i);
-          continue;
-        }
-        failures.push_back(name + " ended early (" + c.exit->text() + ")" +
-                           (restarts_of[name] > 0
-                                ? " after " + std::to_string(restarts_of[name]) + " restart(s)"
-                                : ""));
-        if (failed_process.empty()) failed_process = name;
-      }
-      for (auto it = restart_at.begin(); it != restart_at.end();) {
-        if (Clock::now() < it->second) {
-          ++it;
-          continue;
-        }
-        const ProcessSpec spec = sup.child(*sup.find(it->first)).spec;
-        const size_t i = sup.spawn(spec);  // the same command line; its log is appended to
-        ++restarts_of[it->first];
-        ++report.restarts;
-        say("restarted " + it->first + " (pid " + std::to_string(sup.child(i).pid) + ")");
-        it = restart_at.erase(it);
-      }
-      return failures.empty();
-    };
-    auto checkLimits = [&](const char* phase) {
-      if (g_interrupted) {
-        failures.push_back(std::string("interrupted (SIGINT/SIGTERM) during ") + phase);
-        return false;
-      }
-      if (Clock::now() > deadline) {
-        failures.push_back("timeout: --timeout " + std::to_string(o.timeout_s) +
-                           " s reached during " + phase);
-        return false;
-      }
-      return true;
-    };
-    auto maybeTestKill = [&] {
-      if (test_killed || kill_after < 0 || bus.poses() < kill_after) return;
-      if (auto i = sup.find(kill_name); i && sup.child(*i).running()) {
-        say("--test-kill: SIGKILL " + kill_name + " after " + std::to_string(bus.poses()) +
-            " poses");
-        sup.signal(*i, SIGKILL);
-        test_killed = true;
-      }
-    };
-
-    auto maybeTestPause = [&] {
-      if (pause_done || pause_after < 0) return;
-      const std::optional<size_t> i = sup.find(pause_name);
-      if (!i || !sup.child(*i).running()) return;
-      if (!paused_at && bus.poses() >= pause_after) {
-        say("--test-pause: SIGSTOP " + pause_name + " after " + std::to_string(bus.poses()) +
-            " poses for " + std::to_string(pause_s) + " s");
-        sup.signal(*i, SIGSTOP);
-        paused_at = Clock::now();
-      } else if (paused_at && Clock::now() - *paused_at >= std::chrono::duration<double>(pause_s)) {
-        say("--test-pause: SIGCONT " + pause_name);
-        sup.signal(*i, SIGCONT);
-        pause_done = true;
-      }
-    };
-
-    try {
-      // 3. Nodes and logger, then wait until each node published its first status (proof that
-      // it is up and its LCM is subscribed; statuses come about once a second).
-      for (size_t k = 0; k + 1 < specs.size(); ++k) {
-        const size_t i = sup.spawn(specs[k]);
-        say("started " + specs[k].name + " (pid " + std::to_string(sup.child(i).pid) + ")");
-      }
-      const auto startup_deadline =
-          Clock::now() + std::chrono::duration<double>(o.startup_timeout_s);
-      bool ready = false;
-      while (!ready && checkChildren(false) && checkLimits("start-up")) {
-        bus.handle(20);
-        ready = true;
-        for (const std::string& n : statusNodes()) ready = ready && bus.hasStatus(n);
-        if (!ready && Clock::now() > startup_deadline) {
-          std::string silent;
-          for (const std::string& n : statusNodes()) {
-            if (!bus.hasStatus(n)) silent += " " + n;
-          }
-          failures.push_back("no status message within " + std::to_string(o.startup_timeout_s) +
-                             " s from" + silent + " (LCM multicast not delivered? try --isolated)");
-          break;
-        }
-      }
-      if (ready) {
-        // The logger publishes nothing: it was started together with the nodes, is still
-        // alive (checked above), and subscribes right after opening LCM.
-        say("nodes subscribed after " + std::to_string(seconds()) + " s; starting the player");
-        sup.spawn(specs.back());
-        // 4. Until the player ends.
-        const size_t player = *sup.find(kPlayer);
-        while (sup.child(player).running() && checkChildren(true) && checkLimits("the run")) {
-          bus.handle(20);
-          maybeTestKill();
-          maybeTestPause();
-        }
-        if (failures.empty()) {
-          const ExitInfo& pe = *sup.child(player).exit;
-          if (!pe.clean()) {
-            failures.push_back(std::string(kPlayer) + " failed (" + pe.text() + ")");
-            failed_process = kPlayer;
-          } else {
-            say("player ended at " + std::to_string(seconds()) + " s; draining");
-          }
-        }
-        // 5. Drain: all published frames posed, or no new pose for --drain-idle.
-        if (failures.empty()) {
-          DrainMonitor drain(o.drain_idle_s);
-          while (checkChildren(true) && checkLimits("the drain")) {
-            bus.handle(20);
-            maybeTestKill();
-            maybeTestPause();
-            int64_t published = bus.endSeen() ? bus.endPublished() : -1;
-            if (published < 0) {
-              if (auto s = bus.status(kPlayer)) published = s->frames_out;
-            }
-            if (drain.drained(seconds(), bus.poses(), published)) break;
-          }
-          if (failures.empty()) {
-            say("drained at " + std::to_string(seconds()) + " s: " +
-                std::to_string(bus.poses()) + " poses seen");
-          }
-        }
-      }
-    } catch (const SpawnError& e) {
-      failures.push_back(e.what());
-    }
-
-    // 6. Stop: nodes first (they publish a final status), the logger last so that it records
-    // them; SIGKILL after the grace period. Everything is stopped on every path.
-    if (paused_at && !pause_done) {  // never leave a stage stopped: it could not stop cleanly
-      if (auto i = sup.find(pause_name)) sup.signal(*i, SIGCONT);
-    }
-    std::vector<size_t> nodes;
-    for (const std::string& n : {std::string(kPlayer), std::string(kDepthFilter),
-                                 std::string(kFrontend), std::string(kEstimator)}) {
-      if (auto i = sup.find(n)) nodes.push_back(*i);
-    }
-    sup.stop(nodes, o.stop_grace_s, [&] { bus.handle(10); });
-    bus.handle(300);
-    // The logger writes each pose as it comes; give it (bounded) time to catch up with every
-    // pose the launcher saw before it is stopped, so that no late pose is cut off.
-    const auto logger_deadline = Clock::now() + std::chrono::seconds(3);
-    while (countTrajectoryLines(o.output) < bus.poses() && Clock::now() < logger_deadline) {
-      bus.handle(20);
-    }
-    if (auto i = sup.find(kLogger)) sup.stop({*i}, o.stop_grace_s, [&] { bus.handle(10); });
-    bus.handle(50);
-    if (test_killed && report.restarts == 0) {
-      // A kill on request is still a failure of the launch; make sure it is named.
-      bool named = false;
-      for (const std::string& f : failures) named = named || f.rfind(kill_name, 0) == 0;
-      if (!named) failures.push_back(kill_name + " was killed by --test-kill");
-    }
-
-    for (const ChildState& c : sup.children()) {
-      LaunchReport::Process p;
-      p.name = c.spec.name;
-      p.exit = c.exit;
-      p.stop_requested = c.stop_requested;
-      p.killed = c.killed;
-      p.has_counts = c.spec.name != kLogger;
-      p.pauses = c.pauses;
-      p.paused_s = c.paused_s;
-      p.restarted = restarted.count(&c - sup.children().data()) > 0;
-      // A replaced process shares its log with its successor, whose counts those are.
-      if (p.restarted) p.has_counts = false;
-      if (p.has_counts) {
-        const std::string log = readFile(c.spec.log_path);
-        if (auto d = parseDoneLine(log, c.spec.name)) p.counts = *d;
-        if (c.spec.name == kDepthFilter) report.overload_fusions = parseOverloadFusions(log);
-        if (auto s = bus.status(c.spec.name)) {
-          // The final status has errors too; the done line is the final word on the counts.
-          if (!p.counts.known) p.counts = *s;
-          p.counts.errors = s->errors;
-        }
-      }
-      if (c.killed && failures.empty()) {
-        failures.push_back(c.spec.name + " did not stop within " + std::to_string(o.stop_grace_s) +
-                           " s of SIGINT (killed)");
-      }
-      if (c.exit && !c.exit->clean() && !c.killed && !p.restarted) {
-        const std::string f = c.spec.name + " ended with " + c.exit->text();
-        bool dup = false;
-        for (const std::string& x : failures) dup = dup || x.rfind(c.spec.name, 0) == 0;
-        if (!dup) failures.push_back(f);
-        if (failed_process.empty()) failed_process = c.spec.name;
-      }
-      report.processes.push_back(p);
-    }
+    SupervisedRun run(o, bus, say, t0, report);
+    run.run(specs);
+    failed_process = run.failedProcess();
   }  // Supervisor destroyed: nothing survives it.
 
-  report.frames_published = bus.endSeen() ? bus.endPublished() : -1;
-  for (const auto& p : report.processes) {
-    if (report.frames_published < 0 && p.name == kPlayer && p.counts.known) {
-      report.frames_published = p.counts.frames_out;
-    }
-  }
-  if (o.lockstep) {
-    // A pose the player stopped waiting for was lost (UDP loss, a dead node): the lockstep
-    // promise (trajectory equal to pplvo-run's) no longer holds, so the launch fails.
-    for (const auto& p : report.processes) {
-      if (p.name == kPlayer && p.counts.known && p.counts.errors > 0) {
-        failures.push_back(std::to_string(p.counts.errors) +
-                           " lockstep timeout(s): poses lost (receive buffers too small? see "
-                           "docs/launch.md)");
-      }
-    }
-  }
-  report.poses_seen = bus.poses();
-  report.trajectory_poses = countTrajectoryLines(o.output);
-  report.checkFramesLostToFaults();
-  report.wall_s = seconds();
-  std::printf("%s", report.text().c_str());
-  std::fflush(stdout);
-  if (!report.ok()) {
-    if (!failed_process.empty()) {
-      const std::string path = log_dir + "/" + failed_process + ".log";
-      std::fprintf(stderr, "pplvo-launch: last lines of %s:\n%s", path.c_str(),
-                   tailOfFile(path, 15).c_str());
-    }
-    std::fprintf(stderr, "pplvo-launch: FAILED: %s; process logs kept in %s\n",
-                 report.failures.front().c_str(), log_dir.c_str());
-    return g_interrupted ? 130 : 1;
-  }
-  if (temp_logs) {
-    std::error_code ec;
-    std::filesystem::remove_all(log_dir, ec);
-  }
-  return 0;
+  finishReport(report, bus, o.output, t0);
+  return printOutcome(report, failed_process, *logs);
 }

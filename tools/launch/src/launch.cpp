@@ -106,6 +106,208 @@ std::string fmtDouble(double v) {
   return buf;
 }
 
+/// One command-line option being read: its key, the value given inline as "--key=value", and
+/// the shared error list (every problem is reported together).
+class OptionReader {
+ public:
+  OptionReader(const std::vector<std::string>& args, size_t* i, std::vector<std::string>* errors)
+      : args_(args), i_(*i), errors_(*errors), key_(args[*i]) {
+    if (key_.rfind("--", 0) == 0) {
+      const size_t eq = key_.find('=');
+      if (eq != std::string::npos) {
+        value_ = key_.substr(eq + 1);
+        key_ = key_.substr(0, eq);
+        has_inline_ = true;
+      }
+    }
+  }
+  const std::string& key() const { return key_; }
+  void error(const std::string& e) { errors_.push_back(e); }
+  /// The option's value: inline, or the next argument (consumed).
+  bool next(std::string* out) {
+    if (has_inline_) {
+      *out = value_;
+      return true;
+    }
+    if (i_ + 1 >= args_.size()) {
+      error(key_ + " needs a value");
+      return false;
+    }
+    *out = args_[++i_];
+    return true;
+  }
+  /// A finite number >= min_value; `out` is left alone on an error.
+  void number(double* out, double min_value) {
+    std::string t;
+    if (!next(&t)) return;
+    double v = 0;
+    if (!toDouble(t, &v))
+      error(key_ + ": expected a number, not '" + t + "'");
+    else if (v < min_value)
+      error(key_ + ": must be >= " + fmtDouble(min_value));
+    else
+      *out = v;
+  }
+  /// An integer in [lo, hi]. As before the split, a missing value sets `out` to 0 (the
+  /// "needs a value" error is reported anyway).
+  void integerIn(int* out, int64_t lo, int64_t hi) {
+    std::string t;
+    int64_t v = 0;
+    if (next(&t) && (!toInt(t, &v) || v < lo || v > hi)) {
+      error(key_ + ": expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+            "], not '" + t + "'");
+    } else {
+      *out = static_cast<int>(v);
+    }
+  }
+  /// A switch: "--key=value" is refused.
+  void flag(bool* out) {
+    if (has_inline_) error(key_ + " takes no value");
+    *out = true;
+  }
+
+ private:
+  const std::vector<std::string>& args_;
+  size_t& i_;
+  std::vector<std::string>& errors_;
+  std::string key_, value_;
+  bool has_inline_ = false;
+};
+
+// The options by topic; each returns false for a key that is not its own.
+
+/// What the player plays and how fast, where the results go.
+bool readRunOption(OptionReader& r, LaunchOptions& o, bool* rate_given) {
+  const std::string& key = r.key();
+  if (key == "--dataset")
+    r.next(&o.dataset_dir);
+  else if (key == "--output")
+    r.next(&o.output);
+  else if (key == "--lockstep")
+    r.flag(&o.lockstep);
+  else if (key == "--rate") {
+    r.number(&o.rate, 0.0);
+    *rate_given = true;
+  } else if (key == "--lockstep-timeout")
+    r.number(&o.lockstep_timeout_s, 0.1);
+  else if (key == "--lockstep-in-flight")
+    r.integerIn(&o.lockstep_in_flight, 1, 1000);
+  else if (key == "--max-frames") {
+    std::string t;
+    if (r.next(&t) && (!toInt(t, &o.max_frames) || o.max_frames < 0)) {
+      r.error("--max-frames: expected an integer >= 0, not '" + t + "'");
+    }
+  } else if (key == "--fps")
+    r.number(&o.fps, 0.0);
+  else if (key == "--log")
+    r.next(&o.log);
+  else if (key == "--summary")
+    r.next(&o.summary);
+  else if (key == "--preload" || key == "--no-preload") {
+    bool given = false;
+    r.flag(&given);  // refuses "--preload=x"
+    o.preload = key == "--preload";
+  } else if (key == "--quiet")
+    r.flag(&o.quiet);
+  else
+    return false;
+  return true;
+}
+
+/// The pipeline configuration handed to the depth filter, frontend and estimator.
+bool readPipelineOption(OptionReader& r, LaunchOptions& o) {
+  const std::string& key = r.key();
+  if (key == "--config")
+    r.next(&o.config);
+  else if (key == "--set") {
+    std::string kv;
+    if (r.next(&kv)) {
+      if (kv.find('=') == std::string::npos || kv.front() == '=') {
+        r.error("--set: KEY=VALUE, not '" + kv + "'");
+      } else {
+        o.set.push_back(kv);
+      }
+    }
+  } else if (key == "--features")
+    r.next(&o.features);
+  else if (key == "--depth-model") {
+    if (r.next(&o.depth_model) && o.depth_model != "sensor" && o.depth_model != "cgm" &&
+        o.depth_model != "ogm") {
+      r.error("--depth-model: sensor, cgm or ogm, not '" + o.depth_model + "'");
+    }
+  } else
+    return false;
+  return true;
+}
+
+/// The bus and the processes: LCM URL, namespace, programs, logs, compression.
+bool readTransportOption(OptionReader& r, LaunchOptions& o) {
+  const std::string& key = r.key();
+  if (key == "--lcm-url")
+    r.next(&o.lcm_url);
+  else if (key == "--isolated")
+    r.flag(&o.isolated);
+  else if (key == "--single-url")
+    r.flag(&o.single_url);
+  else if (key == "--bin-dir")
+    r.next(&o.bin_dir);
+  else if (key == "--node-logs")
+    r.next(&o.node_log_dir);
+  else if (key == "--compress")
+    r.flag(&o.compress);
+  else
+    return false;
+  return true;
+}
+
+/// Time limits and restarts of the supervision.
+bool readSupervisionOption(OptionReader& r, LaunchOptions& o) {
+  const std::string& key = r.key();
+  if (key == "--timeout")
+    r.number(&o.timeout_s, 1.0);
+  else if (key == "--startup-timeout")
+    r.number(&o.startup_timeout_s, 1.0);
+  else if (key == "--drain-idle")
+    r.number(&o.drain_idle_s, 0.1);
+  else if (key == "--stop-grace")
+    r.number(&o.stop_grace_s, 0.1);
+  else if (key == "--restart")
+    r.integerIn(&o.restart_limit, 0, 1000);
+  else if (key == "--restart-backoff")
+    r.number(&o.restart_backoff_s, 0.0);
+  else
+    return false;
+  return true;
+}
+
+/// True when `text` matches `re` and its first group names one of the programs.
+bool namesAProgram(const std::string& text, const std::regex& re) {
+  std::smatch m;
+  bool known = false;
+  if (std::regex_match(text, m, re)) {
+    for (const std::string& n : allPrograms()) known = known || n == m[1].str();
+  }
+  return known;
+}
+
+/// The faults injected by tests (--test-kill, --test-pause).
+bool readTestOption(OptionReader& r, LaunchOptions& o) {
+  const std::string& key = r.key();
+  if (key == "--test-kill") {
+    static const std::regex re("(pplvo-[a-z-]+):([0-9]+)");
+    if (r.next(&o.test_kill) && !namesAProgram(o.test_kill, re)) {
+      r.error("--test-kill: NODE:POSES with NODE one of the programs");
+    }
+  } else if (key == "--test-pause") {
+    static const std::regex re("(pplvo-[a-z-]+):([0-9]+):([0-9]+(\\.[0-9]*)?)");
+    if (r.next(&o.test_pause) && !namesAProgram(o.test_pause, re)) {
+      r.error("--test-pause: NODE:POSES:SECONDS with NODE one of the programs");
+    }
+  } else
+    return false;
+  return true;
+}
+
 }  // namespace
 
 ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
@@ -113,159 +315,47 @@ ParsedArgs parseLaunchArgs(const std::vector<std::string>& args) {
   LaunchOptions& o = p.options;
   bool rate_given = false;
   for (size_t i = 0; i < args.size(); ++i) {
-    std::string key = args[i];
-    std::string value;
-    bool has_inline = false;
-    if (key.rfind("--", 0) == 0) {
-      const size_t eq = key.find('=');
-      if (eq != std::string::npos) {
-        value = key.substr(eq + 1);
-        key = key.substr(0, eq);
-        has_inline = true;
-      }
-    }
-    auto next = [&](std::string* out) {
-      if (has_inline) {
-        *out = value;
-        return true;
-      }
-      if (i + 1 >= args.size()) {
-        p.errors.push_back(key + " needs a value");
-        return false;
-      }
-      *out = args[++i];
-      return true;
-    };
-    auto number = [&](double* out, double min_value) {
-      std::string t;
-      if (!next(&t)) return;
-      double v = 0;
-      if (!toDouble(t, &v))
-        p.errors.push_back(key + ": expected a number, not '" + t + "'");
-      else if (v < min_value)
-        p.errors.push_back(key + ": must be >= " + fmtDouble(min_value));
-      else
-        *out = v;
-    };
-    auto flag = [&](bool* out) {
-      if (has_inline) p.errors.push_back(key + " takes no value");
-      *out = true;
-    };
-    if (key == "--help" || key == "-h")
+    OptionReader r(args, &i, &p.errors);
+    if (r.key() == "--help" || r.key() == "-h") {
       p.help = true;
-    else if (key == "--dataset")
-      next(&o.dataset_dir);
-    else if (key == "--output")
-      next(&o.output);
-    else if (key == "--lockstep")
-      flag(&o.lockstep);
-    else if (key == "--rate") {
-      number(&o.rate, 0.0);
-      rate_given = true;
-    } else if (key == "--lockstep-timeout")
-      number(&o.lockstep_timeout_s, 0.1);
-    else if (key == "--lockstep-in-flight") {
-      std::string t;
-      int64_t v = 0;
-      if (next(&t) && (!toInt(t, &v) || v < 1 || v > 1000))
-        p.errors.push_back("--lockstep-in-flight: expected an integer in [1, 1000], not '" + t +
-                           "'");
-      else
-        o.lockstep_in_flight = static_cast<int>(v);
-    } else if (key == "--config")
-      next(&o.config);
-    else if (key == "--set") {
-      std::string kv;
-      if (next(&kv)) {
-        if (kv.find('=') == std::string::npos || kv.front() == '=') {
-          p.errors.push_back("--set: KEY=VALUE, not '" + kv + "'");
-        } else {
-          o.set.push_back(kv);
-        }
-      }
-    } else if (key == "--features")
-      next(&o.features);
-    else if (key == "--depth-model") {
-      if (next(&o.depth_model) && o.depth_model != "sensor" && o.depth_model != "cgm" &&
-          o.depth_model != "ogm") {
-        p.errors.push_back("--depth-model: sensor, cgm or ogm, not '" + o.depth_model + "'");
-      }
-    } else if (key == "--max-frames") {
-      std::string t;
-      if (next(&t) && (!toInt(t, &o.max_frames) || o.max_frames < 0)) {
-        p.errors.push_back("--max-frames: expected an integer >= 0, not '" + t + "'");
-      }
-    } else if (key == "--fps")
-      number(&o.fps, 0.0);
-    else if (key == "--log")
-      next(&o.log);
-    else if (key == "--summary")
-      next(&o.summary);
-    else if (key == "--lcm-url")
-      next(&o.lcm_url);
-    else if (key == "--isolated")
-      flag(&o.isolated);
-    else if (key == "--single-url")
-      flag(&o.single_url);
-    else if (key == "--preload" || key == "--no-preload") {
-      bool given = false;
-      flag(&given);  // refuses "--preload=x"
-      o.preload = key == "--preload";
-    } else if (key == "--bin-dir")
-      next(&o.bin_dir);
-    else if (key == "--node-logs")
-      next(&o.node_log_dir);
-    else if (key == "--timeout")
-      number(&o.timeout_s, 1.0);
-    else if (key == "--startup-timeout")
-      number(&o.startup_timeout_s, 1.0);
-    else if (key == "--drain-idle")
-      number(&o.drain_idle_s, 0.1);
-    else if (key == "--stop-grace")
-      number(&o.stop_grace_s, 0.1);
-    else if (key == "--restart") {
-      std::string t;
-      int64_t v = 0;
-      if (next(&t) && (!toInt(t, &v) || v < 0 || v > 1000))
-        p.errors.push_back("--restart: expected an integer in [0, 1000], not '" + t + "'");
-      else
-        o.restart_limit = static_cast<int>(v);
-    } else if (key == "--restart-backoff")
-      number(&o.restart_backoff_s, 0.0);
-    else if (key == "--test-kill") {
-      if (next(&o.test_kill)) {
-        static const std::regex re("(pplvo-[a-z-]+):([0-9]+)");
-        std::smatch m;
-        bool known = false;
-        if (std::regex_match(o.test_kill, m, re)) {
-          for (const std::string& n : allPrograms()) known = known || n == m[1].str();
-        }
-        if (!known) p.errors.push_back("--test-kill: NODE:POSES with NODE one of the programs");
-      }
-    } else if (key == "--test-pause") {
-      if (next(&o.test_pause)) {
-        static const std::regex re("(pplvo-[a-z-]+):([0-9]+):([0-9]+(\\.[0-9]*)?)");
-        std::smatch m;
-        bool known = false;
-        if (std::regex_match(o.test_pause, m, re)) {
-          for (const std::string& n : allPrograms()) known = known || n == m[1].str();
-        }
-        if (!known) {
-          p.errors.push_back("--test-pause: NODE:POSES:SECONDS with NODE one of the programs");
-        }
-      }
-    } else if (key == "--quiet")
-      flag(&o.quiet);
-    else if (key == "--compress")
-      flag(&o.compress);
-    else
+    } else if (!readRunOption(r, o, &rate_given) && !readPipelineOption(r, o) &&
+               !readTransportOption(r, o) && !readSupervisionOption(r, o) &&
+               !readTestOption(r, o)) {
       p.errors.push_back("unknown option " + args[i]);
+    }
   }
   if (p.help) return p;
+  // Lockstep runs as fast as the pipeline unless a rate was asked for.
   if (!rate_given && o.lockstep) o.rate = 0.0;
   if (o.dataset_dir.empty()) p.errors.push_back("--dataset is required");
   if (o.output.empty()) p.errors.push_back("--output is required");
   return p;
+}
+
+TestFaultPlan planTestFaults(const LaunchOptions& o) {
+  TestFaultPlan plan;
+  if (!o.test_kill.empty()) {
+    const size_t colon = o.test_kill.rfind(':');
+    plan.kill_node = o.test_kill.substr(0, colon);
+    plan.kill_after_poses = std::stoll(o.test_kill.substr(colon + 1));
+  }
+  if (!o.test_pause.empty()) {
+    const size_t second = o.test_pause.rfind(':');
+    const size_t first = o.test_pause.rfind(':', second - 1);
+    plan.pause_node = o.test_pause.substr(0, first);
+    plan.pause_after_poses = std::stoll(o.test_pause.substr(first + 1, second - first - 1));
+    plan.pause_s = std::stod(o.test_pause.substr(second + 1));
+  }
+  return plan;
+}
+
+std::vector<std::string> missingPrograms(const std::string& bin_dir) {
+  std::vector<std::string> missing;
+  for (const std::string& name : allPrograms()) {
+    const std::string why = checkExecutable(bin_dir + "/" + name);
+    if (!why.empty()) missing.push_back(bin_dir + "/" + name + ": " + why);
+  }
+  return missing;
 }
 
 LcmUrl parseLcmUrl(const std::string& url) {
@@ -623,6 +713,25 @@ std::vector<std::string> LaunchReport::faults() const {
 int64_t LaunchReport::framesWithoutPose() const {
   if (frames_published < 0 || trajectory_poses < 0) return -1;
   return std::max<int64_t>(0, frames_published - trajectory_poses);
+}
+
+void LaunchReport::takePlayerCounts() {
+  for (const auto& p : processes) {
+    if (frames_published < 0 && p.name == kPlayer && p.counts.known) {
+      frames_published = p.counts.frames_out;
+    }
+  }
+  if (lockstep) {
+    // A pose the player stopped waiting for was lost (UDP loss, a dead node): the lockstep
+    // promise (trajectory equal to pplvo-run's) no longer holds, so the launch fails.
+    for (const auto& p : processes) {
+      if (p.name == kPlayer && p.counts.known && p.counts.errors > 0) {
+        failures.push_back(std::to_string(p.counts.errors) +
+                           " lockstep timeout(s): poses lost (receive buffers too small? see "
+                           "docs/launch.md)");
+      }
+    }
+  }
 }
 
 void LaunchReport::checkFramesLostToFaults() {

@@ -246,6 +246,117 @@ struct PeerOdometry::Impl {
     ++stats->keyframe_fallbacks;
     return true;
   }
+
+  /// The pose given to a frame that is not tracked: the last output, moved on by the last
+  /// motion under FailurePolicy::kConstantVelocity.
+  Pose3 predictedPose(const PeerOdometryOptions& o) const {
+    if (!has_reference) return T_w_last;
+    if (o.failure_policy == FailurePolicy::kConstantVelocity && has_motion)
+      return T_w_last * T_prev_curr;
+    return T_w_last;
+  }
+
+  /// Every result leaves through here: counts it into `stats` and, for a failure, gives it the
+  /// predicted pose and ages the reference.
+  PeerFrameResult finish(PeerFrameResult& res, double compute_ms, const PeerOdometryOptions& o,
+                         PeerStats* stats) {
+    res.compute_ms = compute_ms;
+    ++stats->frames;
+    stats->total_ms += res.compute_ms;
+    stats->max_ms = std::max(stats->max_ms, res.compute_ms);
+    switch (res.status) {
+      case PeerStatus::kFirst:
+        break;
+      case PeerStatus::kOk:
+        ++stats->tracked;
+        break;
+      case PeerStatus::kNoDepth:
+        ++stats->no_depth;
+        break;
+      case PeerStatus::kNotConverged:
+        ++stats->not_converged;
+        break;
+      case PeerStatus::kBadInput:
+        ++stats->bad_input;
+        break;
+      case PeerStatus::kOpenCvError:
+        ++stats->opencv_errors;
+        break;
+    }
+    if (!res.ok()) {
+      ++stats->failures;
+      res.T_w_c = predictedPose(o);
+      res.T_ref_c = Pose3::Identity();
+      if (has_reference) {
+        ++frames_since_reference;
+        ++consecutive_failures;
+      }
+    }
+    T_w_last = res.T_w_c;
+    return res;
+  }
+
+  /// Grey image and metric depth as OpenCV expects them (CV_8UC1, CV_32FC1 metres), with the
+  /// mask of valid depth, flipped for mirrored cameras.
+  struct OdometryInput {
+    cv::Mat grey, depth, valid;
+  };
+  OdometryInput prepareImages(const RgbdFrame& frame, const PeerOdometryOptions& o) const {
+    OdometryInput in;
+    if (frame.bgr.type() == CV_8UC3) {
+      cv::cvtColor(frame.bgr, in.grey, cv::COLOR_BGR2GRAY);
+    } else {
+      in.grey = frame.bgr.clone();
+    }
+    in.depth = frame.depth_m.clone();
+    // Valid depth: finite and inside (min, max); everything else becomes 0 (missing), and the
+    // mask tells OpenCV the same.
+    in.valid = (in.depth == in.depth) & (in.depth > o.min_depth_m) & (in.depth < o.max_depth_m);
+    in.depth.setTo(0.0f, ~in.valid);
+    if (flip_code != 2) {
+      cv::flip(in.grey, in.grey, flip_code);
+      cv::flip(in.depth, in.depth, flip_code);
+      cv::flip(in.valid, in.valid, flip_code);
+    }
+    return in;
+  }
+
+  /// ReferenceMode::kFrameToFrame, a frame with enough depth: registers `current` to the
+  /// reference from the motion prior. True: r holds the pose and the reference moved on to
+  /// `current`. False: r holds the failure, the state is unchanged.
+  bool trackAgainstReference(const PeerOdometryOptions& o,
+                             cv::Ptr<cv::rgbd::OdometryFrame>& current, int64_t seq,
+                             PeerFrameResult* r) {
+    const int steps = frames_since_reference + 1;
+    cv::Mat init;
+    if (o.use_motion_prior && has_motion) {
+      // OpenCV's Rt maps reference points into the current frame: Rt = T_c_ref.
+      init = poseToMat(scaledMotion(T_prev_curr, steps).inverse());
+    }
+    cv::Mat Rt;
+    bool ok = odometry->compute(reference, current, Rt, init);
+    Pose3 T_ref_c = Pose3::Identity();
+    if (ok) {
+      const Pose3 T_c_ref = matToPose(Rt);
+      T_ref_c = T_c_ref.inverse();
+      if (!T_ref_c.matrix().allFinite()) {
+        ok = false;
+        r->status = PeerStatus::kNotConverged;
+        r->message = "non-finite motion";
+      }
+    } else {
+      r->status = PeerStatus::kNotConverged;
+      r->message = "OpenCV odometry did not converge or the motion exceeded its limits";
+    }
+    if (!ok) return false;
+    r->status = PeerStatus::kOk;
+    r->T_ref_c = T_ref_c;
+    r->T_w_c = T_w_ref * T_ref_c;
+    T_prev_curr = scaledMotion(T_ref_c, 1.0 / steps);
+    has_motion = true;
+    setReference(current, seq, r->T_w_c);
+    return true;
+  }
 };
 
 PeerOdometry::PeerOdometry(const PeerOdometryOptions& options)
@@ -282,50 +393,7 @@ PeerFrameResult PeerOdometry::process(const RgbdFrame& frame) {
   Impl& s = *impl_;
   const PeerOdometryOptions& o = options_;
   PeerFrameResult r;
-
-  // Pose predicted for this frame if it cannot be tracked.
-  auto predictedPose = [&]() {
-    if (!s.has_reference) return s.T_w_last;
-    if (o.failure_policy == FailurePolicy::kConstantVelocity && s.has_motion)
-      return s.T_w_last * s.T_prev_curr;
-    return s.T_w_last;
-  };
-  auto finish = [&](PeerFrameResult& res) -> PeerFrameResult {
-    res.compute_ms = watch.elapsedMs();
-    ++stats_.frames;
-    stats_.total_ms += res.compute_ms;
-    stats_.max_ms = std::max(stats_.max_ms, res.compute_ms);
-    switch (res.status) {
-      case PeerStatus::kFirst:
-        break;
-      case PeerStatus::kOk:
-        ++stats_.tracked;
-        break;
-      case PeerStatus::kNoDepth:
-        ++stats_.no_depth;
-        break;
-      case PeerStatus::kNotConverged:
-        ++stats_.not_converged;
-        break;
-      case PeerStatus::kBadInput:
-        ++stats_.bad_input;
-        break;
-      case PeerStatus::kOpenCvError:
-        ++stats_.opencv_errors;
-        break;
-    }
-    if (!res.ok()) {
-      ++stats_.failures;
-      res.T_w_c = predictedPose();
-      res.T_ref_c = Pose3::Identity();
-      if (s.has_reference) {
-        ++s.frames_since_reference;
-        ++s.consecutive_failures;
-      }
-    }
-    s.T_w_last = res.T_w_c;
-    return res;
-  };
+  auto finish = [&](PeerFrameResult& res) { return s.finish(res, watch.elapsedMs(), o, &stats_); };
 
   const std::string bad = checkFrame(frame);
   if (!bad.empty()) {
@@ -345,31 +413,13 @@ PeerFrameResult PeerOdometry::process(const RgbdFrame& frame) {
         ++stats_.reference_resets;
       }
     }
-
-    // Grey image and metric depth as OpenCV expects (CV_8UC1, CV_32FC1 metres), flipped for
-    // mirrored cameras.
-    cv::Mat grey;
-    if (frame.bgr.type() == CV_8UC3) {
-      cv::cvtColor(frame.bgr, grey, cv::COLOR_BGR2GRAY);
-    } else {
-      grey = frame.bgr.clone();
-    }
-    cv::Mat depth = frame.depth_m.clone();
-    // Valid depth: finite and inside (min, max); everything else becomes 0 (missing), and the
-    // mask tells OpenCV the same.
-    cv::Mat valid = (depth == depth) & (depth > o.min_depth_m) & (depth < o.max_depth_m);
-    depth.setTo(0.0f, ~valid);
-    if (s.flip_code != 2) {
-      cv::flip(grey, grey, s.flip_code);
-      cv::flip(depth, depth, s.flip_code);
-      cv::flip(valid, valid, s.flip_code);
-    }
-    r.valid_depth_pixels = cv::countNonZero(valid);
-
+    Impl::OdometryInput in = s.prepareImages(frame, o);
+    r.valid_depth_pixels = cv::countNonZero(in.valid);
     const bool enough_depth = r.valid_depth_pixels >= o.min_valid_depth_pixels;
-    auto current =
-        cv::rgbd::OdometryFrame::create(grey, depth, valid, cv::Mat(), static_cast<int>(frame.seq));
+    auto current = cv::rgbd::OdometryFrame::create(in.grey, in.depth, in.valid, cv::Mat(),
+                                                   static_cast<int>(frame.seq));
 
+    // The first frame (or the first after a reset) becomes the reference.
     if (!s.has_reference) {
       if (!enough_depth) {
         r.status = PeerStatus::kNoDepth;
@@ -388,45 +438,16 @@ PeerFrameResult PeerOdometry::process(const RgbdFrame& frame) {
       return finish(r);
     }
 
+    // Tracking against the keyframe or the reference.
     r.reference_seq =
         o.reference_mode == ReferenceMode::kKeyframe ? s.keyframe_seq : s.reference_seq;
-    bool ok = false;
-    Pose3 T_ref_c = Pose3::Identity();
     if (!enough_depth) {
       r.status = PeerStatus::kNoDepth;
       r.message = "too few valid depth pixels";
     } else if (o.reference_mode == ReferenceMode::kKeyframe) {
       if (s.trackAgainstKeyframe(o, current, frame.seq, &r, &stats_)) return finish(r);
     } else {
-      const int steps = s.frames_since_reference + 1;
-      cv::Mat init;
-      if (o.use_motion_prior && s.has_motion) {
-        // OpenCV's Rt maps reference points into the current frame: Rt = T_c_ref.
-        init = poseToMat(scaledMotion(s.T_prev_curr, steps).inverse());
-      }
-      cv::Mat Rt;
-      ok = s.odometry->compute(s.reference, current, Rt, init);
-      if (ok) {
-        const Pose3 T_c_ref = matToPose(Rt);
-        T_ref_c = T_c_ref.inverse();
-        if (!T_ref_c.matrix().allFinite()) {
-          ok = false;
-          r.status = PeerStatus::kNotConverged;
-          r.message = "non-finite motion";
-        }
-      } else {
-        r.status = PeerStatus::kNotConverged;
-        r.message = "OpenCV odometry did not converge or the motion exceeded its limits";
-      }
-      if (ok) {
-        r.status = PeerStatus::kOk;
-        r.T_ref_c = T_ref_c;
-        r.T_w_c = s.T_w_ref * T_ref_c;
-        s.T_prev_curr = scaledMotion(T_ref_c, 1.0 / steps);
-        s.has_motion = true;
-        s.setReference(current, frame.seq, r.T_w_c);
-        return finish(r);
-      }
+      if (s.trackAgainstReference(o, current, frame.seq, &r)) return finish(r);
     }
     // Failure: keep the reference unless it has failed too often.
     PeerFrameResult res = finish(r);

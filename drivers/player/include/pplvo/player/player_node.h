@@ -3,8 +3,10 @@
 /// node over pplvo_dataset; usage and channels in docs/player.md.
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
+#include <pplvo_msgs/camera_info_t.hpp>
 #include <pplvo_msgs/image_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
+#include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <string>
 #include <vector>
 
@@ -108,6 +110,14 @@ class PlayerNode {
   void onPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
               const pplvo_msgs::pose_t* msg);
   void runLoop(PlayerResult& result);
+  /// Counts (and reports) the frames the reader skipped since `*skipped_before`.
+  void countSkipped(const dataset::ReadStats& stats, int64_t* skipped_before);
+  /// The frame as a message; false when encoding failed (counted by msgs::guarded).
+  bool encodeFrame(const dataset::DatasetReader::Item& item, const dataset::DatasetEntry& entry,
+                   int64_t utime, const pplvo_msgs::camera_info_t& camera_msg,
+                   pplvo_msgs::rgbd_frame_t* msg);
+  /// Publishes the frame and counts it.
+  void publishFrame(const pplvo_msgs::rgbd_frame_t& msg);
   void publishStream(int8_t event, const PlayerResult& result);
   void periodic(bool force);
   void drain();

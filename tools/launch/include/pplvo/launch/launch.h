@@ -73,6 +73,20 @@ struct ParsedArgs {
 ParsedArgs parseLaunchArgs(const std::vector<std::string>& args);
 std::string launchUsage();
 
+/// --test-kill NODE:POSES and --test-pause NODE:POSES:SECONDS taken apart (their form was
+/// checked by parseLaunchArgs); a fault not asked for has after_poses -1.
+struct TestFaultPlan {
+  std::string kill_node;
+  int64_t kill_after_poses = -1;
+  std::string pause_node;
+  int64_t pause_after_poses = -1;
+  double pause_s = 0.0;
+};
+TestFaultPlan planTestFaults(const LaunchOptions& o);
+
+/// The programs of allPrograms() that `bin_dir` lacks or cannot run, each as "PATH: why".
+std::vector<std::string> missingPrograms(const std::string& bin_dir);
+
 /// An LCM provider URL taken apart (only what the policy needs).
 struct LcmUrl {
   std::string provider;  ///< "udpm", "memq", "file", ...
@@ -189,6 +203,10 @@ struct LaunchReport {
   /// Adds the failure "frames lost to a fault" when there were faults() and frames without
   /// pose: a pipeline that recovered still lost them, the launch is not ok.
   void checkFramesLostToFaults();
+  /// Once the processes are in: frames_published from the player's final counts when no END
+  /// event gave it (frames_published < 0), and with `lockstep` a failure when the player
+  /// counted lockstep timeouts (poses lost: the trajectory is no longer pplvo-run's).
+  void takePlayerCounts();
   bool ok() const { return failures.empty(); }
   /// Table plus "launch.key: value" lines for scripts.
   std::string text() const;
