@@ -28,7 +28,8 @@ struct CapturedFrame {
   cv::Mat bgr;        ///< CV_8UC3
   cv::Mat depth_u16;  ///< CV_16UC1, depth_scale units per metre, 0 = missing
   double depth_scale = 1000;
-  uint64_t device_ticks = 0;
+  uint64_t device_ticks = 0;                ///< colour frame's device counter
+  int64_t depth_minus_colour_ticks = 0;     ///< depth frame's counter minus the colour's
   int64_t host_arrival_utime = 0;
 };
 

@@ -1,6 +1,7 @@
 // The LCM side of pplvo-camera: messages, counters, outage handling. See camera_node.h.
 #include "camera_node.h"
 
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <optional>
@@ -151,7 +152,10 @@ class CameraPublisher {
         limiter_(options.max_fps) {}
 
   void setSource(const std::string& s) { source_ = s; }
-  void resetClock(const DeviceClockOptions& clock) { clock_.emplace(clock); }
+  void resetClock(const DeviceClockOptions& clock) {
+    clock_.emplace(clock);
+    clock_ticks_per_second_ = clock.ticks_per_second;
+  }
 
   void onFrame(const CapturedFrame& f) {
     ++counters_.frames_in;
@@ -173,6 +177,8 @@ class CameraPublisher {
       }
       pplvo_msgs::rgbd_frame_t msg;
       msg.utime = utime;
+      msg.depth_utime = utime + static_cast<int64_t>(std::llround(
+                                    f.depth_minus_colour_ticks * 1e6 / clock_ticks_per_second_));
       msg.seq = seq_;
       msg.stamp = stampText(utime);
       msg.source = source_;
@@ -221,6 +227,7 @@ class CameraPublisher {
   pplvo::PinholeCamera camera_;
   std::string source_;
   std::optional<DeviceClockMapper> clock_;
+  double clock_ticks_per_second_ = 1e6;
   RateLimiter limiter_;
   pm::NodeCounters counters_;
   pplvo::StageTimings timings_;

@@ -301,7 +301,7 @@ void FramePairer::match() {
       ready_.pop_front();
       ++dropped_;
     }
-    ready_.push_back(Pair{colour_->first, depth_->first, colour_->second});
+    ready_.push_back(Pair{colour_->first, depth_->first, colour_->second, -d});
     depth_.reset();
     colour_.reset();
     return;

@@ -144,6 +144,7 @@ class FreenectBackend final : public Backend {
         }
         out->depth_scale = 1000.0;
         out->device_ticks = pair->device_ticks;
+        out->depth_minus_colour_ticks = pair->depth_minus_colour_ticks;
         out->host_arrival_utime = arrival_utime_;
         return GrabStatus::Frame;
       }

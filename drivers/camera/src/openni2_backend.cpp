@@ -106,6 +106,7 @@ class Openni2Backend final : public Backend {
         out->depth_u16 = pair->depth;
         out->depth_scale = depth_scale_;
         out->device_ticks = pair->device_ticks;
+        out->depth_minus_colour_ticks = pair->depth_minus_colour_ticks;
         out->host_arrival_utime = arrival_utime_;
         return GrabStatus::Frame;
       }

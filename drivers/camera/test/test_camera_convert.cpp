@@ -357,6 +357,7 @@ TEST(FramePairer, PairsWithinToleranceAndDropsStaleHalves) {
   auto pair = p.pop();
   ASSERT_TRUE(pair);
   EXPECT_EQ(pair->device_ticks, 10500u);
+  EXPECT_EQ(pair->depth_minus_colour_ticks, -500);  // depth captured 500 ticks earlier
   EXPECT_EQ(pair->depth.at<uint16_t>(0, 0), 7);
   EXPECT_FALSE(p.pop());
   // A colour frame far ahead of the depth frame: the depth one is dropped, colour waits.
@@ -365,11 +366,15 @@ TEST(FramePairer, PairsWithinToleranceAndDropsStaleHalves) {
   EXPECT_FALSE(p.pop());
   EXPECT_EQ(p.dropped(), 1);
   p.pushDepth(d, 40200);
-  EXPECT_TRUE(p.pop());
+  pair = p.pop();
+  ASSERT_TRUE(pair);
+  EXPECT_EQ(pair->depth_minus_colour_ticks, 200);
   // Pairing across the 32-bit wrap.
   p.pushDepth(d, 0xffffff00u);
   p.pushColour(c, 0x00000100u);
-  EXPECT_TRUE(p.pop());
+  pair = p.pop();
+  ASSERT_TRUE(pair);
+  EXPECT_EQ(pair->depth_minus_colour_ticks, -512);
   // Several pairs completed before the consumer pops: kept in order, up to max_ready (4).
   const int64_t before = p.dropped();
   for (uint64_t k = 0; k < 6; ++k) {

@@ -143,6 +143,7 @@ RgbdFrame Dataset::loadFrame(size_t i, const FrameLoadOptions& options) const {
   const DatasetEntry& e = entry(i);
   RgbdFrame f;
   f.utime = e.utime;
+  f.depth_utime = e.depth_utime;
   f.seq = static_cast<int64_t>(i);
   f.stamp = e.stamp_text;
   f.camera = camera_.camera;

@@ -364,13 +364,21 @@ void assignUtimes(const std::vector<double>& listed_stamps, const DatasetOptions
   sum.index_frame_rate_hz =
       sum.index_stamps ? (options.index_frame_rate_hz > 0 ? options.index_frame_rate_hz : 30.0)
                        : 0.0;
-  for (auto& e : index.entries) {
+  const auto toUtime = [&](const std::string& text, double value) {
     if (sum.index_stamps) {
-      e.utime = static_cast<int64_t>(std::llround(e.stamp * 1e6 / sum.index_frame_rate_hz));
-    } else {
-      const auto us = stampTextToUtime(e.stamp_text);
-      e.utime = us ? *us : static_cast<int64_t>(std::llround(e.stamp * 1e6));
+      return static_cast<int64_t>(std::llround(value * 1e6 / sum.index_frame_rate_hz));
     }
+    const auto us = stampTextToUtime(text);
+    return us ? *us : static_cast<int64_t>(std::llround(value * 1e6));
+  };
+  for (auto& e : index.entries) {
+    e.utime = toUtime(e.stamp_text, e.stamp);
+    // The depth stamp parsed when the index was read; a text that is not a number (never
+    // associated then) leaves the depth at the colour instant.
+    const double depth_stamp = std::strtod(e.depth_stamp_text.c_str(), nullptr);
+    e.depth_utime = std::isfinite(depth_stamp) && !e.depth_stamp_text.empty()
+                        ? toUtime(e.depth_stamp_text, depth_stamp)
+                        : e.utime;
   }
 }
 

@@ -172,6 +172,8 @@ TEST(Associate, AssociationsFileBothColumnOrders) {
     ASSERT_EQ(idx.entries.size(), 4u);
     EXPECT_EQ(idx.entries[0].stamp_text, "200.10");
     EXPECT_EQ(idx.entries[0].depth_stamp_text, "200.20");
+    EXPECT_EQ(idx.entries[0].utime, 200100000);
+    EXPECT_EQ(idx.entries[0].depth_utime, 200200000);  // the depth image's own instant
     EXPECT_NE(idx.entries[0].rgb_path.find("rgb/0.png"), std::string::npos);
     EXPECT_NE(idx.entries[0].depth_path.find("depth/0.png"), std::string::npos);
     EXPECT_EQ(idx.entries[3].stamp_text, "200.14");
@@ -241,6 +243,7 @@ TEST(Associate, IntegerStampsAreFrameIndices) {
   ASSERT_EQ(idx.entries.size(), 4u);
   EXPECT_EQ(idx.entries[3].stamp_text, "3");
   EXPECT_EQ(idx.entries[3].utime, 100000);  // 3 / 30 Hz
+  EXPECT_EQ(idx.entries[3].depth_utime, 100000);
   DatasetOptions opt;
   opt.index_frame_rate_hz = 10.0;
   EXPECT_EQ(buildIndex(t.str(), opt).entries[3].utime, 300000);

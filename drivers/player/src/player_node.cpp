@@ -509,6 +509,7 @@ bool PlayerNode::encodeFrame(const dataset::DatasetReader::Item& item,
   return msgs::guarded(counters_, options_.node_name.c_str(), [&] {
     ScopedStageTimer t(timings_, "encode");
     msg->utime = utime;
+    msg->depth_utime = entry.depth_utime + (utime - entry.utime);  // same loop offset
     msg->seq = published_;
     msg->stamp = entry.stamp_text;
     msg->source = dataset_.dir();

@@ -145,6 +145,7 @@ TEST(Player, PublishesAllIclFramesAsFastAsPossible) {
     EXPECT_EQ(f.seq, static_cast<int64_t>(i));
     EXPECT_EQ(f.stamp, std::to_string(i));  // verbatim ICL frame index
     EXPECT_EQ(f.utime, static_cast<int64_t>(std::llround(i * 1e6 / 30.0)));  // 30 Hz
+    EXPECT_EQ(f.depth_utime, f.utime);  // ICL-NUIM renders both at once
   }
   // Frame content: camera with the signed fy, raw depth equal to the PNG.
   const auto& f0 = rec.frames[2];
@@ -345,6 +346,30 @@ TEST(Player, LoopKeepsSeqAndUtimeIncreasing) {
                        cv::NORM_INF),
               0.0);
   }
+}
+
+// TUM fr1's Kinect captures depth and colour independently: each frame carries its depth
+// image's own instant (depth.txt), which the depth filter moves to the colour instant.
+TEST(Player, FramesCarryTheDepthImagesOwnInstant) {
+  const std::string dir = std::filesystem::path(iclDir()).parent_path() / "tum_fr1_xyz_short";
+  lcm::LCM lcm("memq://");
+  Recorder rec(lcm);
+  PlayerOptions o = baseOptions();
+  o.dataset_dir = dir;
+  o.max_frames = 5;
+  PlayerNode node(o, lcm);
+  ASSERT_FALSE(node.run().failed);
+  ASSERT_EQ(rec.frames.size(), 5u);
+  int differing = 0;
+  for (const auto& f : rec.frames) {
+    EXPECT_NE(f.depth_utime, 0);
+    EXPECT_LE(std::abs(f.depth_utime - f.utime), 20000) << f.stamp;  // TUM's 20 ms window
+    if (f.depth_utime != f.utime) ++differing;
+  }
+  EXPECT_EQ(differing, 5);
+  // fr1's first frame: colour 1305031102.175304, depth 1305031102.160407 (depth.txt).
+  EXPECT_EQ(rec.frames[0].utime, 1305031102175304);
+  EXPECT_EQ(rec.frames[0].depth_utime, 1305031102160407);
 }
 
 TEST(Player, PreloadBeyondItsBoundDecodesTheRestWhilePlaying) {

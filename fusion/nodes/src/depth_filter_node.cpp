@@ -63,8 +63,14 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   p.utime = msg.utime;
   p.stamp = msg.stamp;
   p.camera = frame.camera;
-  // Depth in the undistorted pinhole model, as every later stage reads it.
-  const cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
+  // Depth in the undistorted pinhole model and at the colour instant, as every later stage
+  // reads it.
+  cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
+  if (options_.filter.time_alignment && frame.depth_utime != 0 &&
+      frame.depth_utime != frame.utime) {
+    ScopedStageTimer t(timings_, "time_align");
+    depth_m = time_aligner_.apply(frame.camera, depth_m, msg.seq, frame.utime, frame.depth_utime);
+  }
   if (options_.filter.model == DepthModel::kSensor) {
     ScopedStageTimer t(timings_, "sensor");
     p.depth = depth_filter::applySensorModel(sensor_, depth_m);
@@ -118,6 +124,8 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     }
     throw;
   }
+  time_aligner_.observePose(pose.seq, pose.utime, pose.T_w_c,
+                            pose.status == TrackingStatus::kTracking);
   std::optional<Pending> taken = takePending(pose.seq);
   if (!taken) {
     ++unknown_poses_;

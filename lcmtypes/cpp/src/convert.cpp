@@ -253,6 +253,7 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
 RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units) {
   RgbdFrame f;
   f.utime = msg.utime;
+  f.depth_utime = msg.depth_utime;
   f.seq = msg.seq;
   f.stamp = msg.stamp;
   f.camera = fromMsg(msg.camera);
@@ -278,6 +279,7 @@ pplvo_msgs::rgbd_frame_t toMsg(const RgbdFrame& f, double depth_scale, int8_t rg
                                int8_t depth_encoding, const std::string& source) {
   pplvo_msgs::rgbd_frame_t m;
   m.utime = f.utime;
+  m.depth_utime = f.depth_utime;
   m.seq = f.seq;
   m.stamp = f.stamp;
   m.source = source;

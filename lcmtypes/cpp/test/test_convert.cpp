@@ -23,6 +23,7 @@ PinholeCamera vga() {
 RgbdFrame makeFrame() {
   RgbdFrame f;
   f.utime = 1341845688561749;
+  f.depth_utime = 1341845688548315;
   f.seq = 7;
   f.stamp = "1341845688.561749";
   f.camera = vga();
@@ -60,6 +61,8 @@ TEST_P(EncodingRoundTrip, LosslessEncodingsReproduceDepth) {
   const RgbdFrame f = makeFrame();
   const auto msg = roundTripBytes(toMsg(f, 5000.0, Img::ENCODING_PNG, GetParam(), "test"));
   const RgbdFrame back = fromMsg(msg);
+  EXPECT_EQ(back.utime, f.utime);
+  EXPECT_EQ(back.depth_utime, f.depth_utime);
   EXPECT_EQ(back.seq, f.seq);
   EXPECT_EQ(back.stamp, f.stamp);
   EXPECT_EQ(back.camera, f.camera);

@@ -181,6 +181,28 @@ TEST(DecodeMessage, ReportsTheTypeAndNeverThrows) {
   pplvo_msgs::features_t wrong_type;
   const std::string error = decodeMessage(bytes.data(), bytes.size(), &wrong_type);
   EXPECT_NE(error.find("features_t"), std::string::npos) << error;
+  EXPECT_NE(error.find("fingerprint differs"), std::string::npos) << error;
+}
+
+// A frame written before rgbd_frame_t had depth_utime: its body is today's minus that field,
+// and its fingerprint the one lcm-gen gave the old layout.
+TEST(DecodeMessage, NamesAnOlderLogVersion) {
+  std::vector<uint8_t> bytes = encode(frame());
+  ASSERT_GE(bytes.size(), 24u);
+  bytes.erase(bytes.begin() + 16, bytes.begin() + 24);  // fingerprint, utime, [depth_utime]
+  const uint64_t old_fingerprint = 0x91c3a57269ce5245ULL;
+  for (int i = 0; i < 8; ++i) bytes[i] = static_cast<uint8_t>(old_fingerprint >> (56 - 8 * i));
+  pplvo_msgs::rgbd_frame_t out;
+  const std::string error = decodeMessage(bytes.data(), bytes.size(), &out);
+  EXPECT_NE(error.find("older log version"), std::string::npos) << error;
+  EXPECT_NE(error.find("depth_utime"), std::string::npos) << error;
+
+  // Today's layout still decodes, and carries the depth instant.
+  pplvo_msgs::rgbd_frame_t now = frame();
+  now.depth_utime = now.utime - 13000;
+  const std::vector<uint8_t> current = encode(now);
+  EXPECT_EQ(decodeMessage(current.data(), current.size(), &out), "");
+  EXPECT_EQ(out.depth_utime, now.utime - 13000);
 }
 
 }  // namespace

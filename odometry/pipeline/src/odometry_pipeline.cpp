@@ -21,7 +21,12 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
   }
   PipelineFrameResult r;
   // Stage 1-2 of the depth filter, on depth in the undistorted pinhole model.
-  const cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
+  cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
+  if (options_.depth_filter.time_alignment && frame.depth_utime != 0 &&
+      frame.depth_utime != frame.utime) {
+    ScopedStageTimer t(depth_timings_, "time_align");
+    depth_m = time_aligner_.apply(frame.camera, depth_m, frame.seq, frame.utime, frame.depth_utime);
+  }
   DepthWithVariance depth;
   if (options_.depth_filter.model == depth_filter::DepthModel::kSensor) {
     ScopedStageTimer t(depth_timings_, "sensor");
@@ -38,6 +43,8 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
   r.pose.utime = frame.utime;
   r.pose.seq = frame.seq;
   r.pose.stamp = frame.stamp;
+  time_aligner_.observePose(frame.seq, frame.utime, r.pose.T_w_c,
+                            r.pose.status == TrackingStatus::kTracking);
   // O-GM on the new pose (as the depth filter process does on pose_t).
   const DepthWithVariance* fused = &depth;
   if (options_.depth_filter.model == depth_filter::DepthModel::kOgm) {

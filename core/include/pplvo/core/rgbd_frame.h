@@ -11,7 +11,10 @@ namespace pplvo {
 
 /// One registered RGB-D frame.
 struct RgbdFrame {
-  int64_t utime = 0;    ///< capture time, microseconds
+  int64_t utime = 0;    ///< capture time of the colour image, microseconds
+  /// Capture time of the depth image, same clock; 0 = the same instant as `utime`. Free-running
+  /// sensors (Kinect v1, TUM fr1/fr2) deliver depth up to half a frame apart from colour.
+  int64_t depth_utime = 0;
   int64_t seq = 0;      ///< frame number from the source
   std::string stamp;    ///< source timestamp text, verbatim
   PinholeCamera camera;

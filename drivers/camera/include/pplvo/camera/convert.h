@@ -166,6 +166,7 @@ class FramePairer {
     cv::Mat bgr;
     cv::Mat depth;
     uint64_t device_ticks = 0;  ///< colour frame's counter
+    int64_t depth_minus_colour_ticks = 0;  ///< depth frame's counter minus the colour's
   };
   void pushDepth(const cv::Mat& depth, uint64_t ticks);
   void pushColour(const cv::Mat& bgr, uint64_t ticks);

@@ -79,6 +79,7 @@ struct DatasetEntry {
   double stamp = 0.0;            ///< colour stamp as a number
   int64_t utime = 0;             ///< microseconds: stamp * 1e6, or index / rate for ICL-NUIM
   std::string depth_stamp_text;  ///< depth stamp, verbatim
+  int64_t depth_utime = 0;       ///< depth stamp in microseconds, same clock as `utime`
   std::string rgb_path;          ///< absolute (dataset folder joined with the index path)
   std::string depth_path;
 };

@@ -34,6 +34,9 @@ struct DepthFilterOptions {
   CgmOptions cgm;
   OgmOptions ogm;
   DepthFilterOverloadOptions overload;
+  /// Move depth captured at another instant than colour to the colour instant
+  /// (depth_time_alignment.h); a no-op for sensors that capture both at once.
+  bool time_alignment = true;
 };
 
 /// Schema of DepthFilterOverloadOptions (pplvo/core/config_schema.h).
@@ -54,6 +57,10 @@ void visit(V& v, DepthFilterOptions& o) {
   v.field("model", o.model,
           "depth used downstream: sensor (stage 1, Sec. 3.1), cgm (stages 1-2, Sec. 3.2) or "
           "ogm (all three, Sec. 3.3-3.4; the paper's full method)");
+  v.field("time_alignment", o.time_alignment,
+          "move depth captured at another instant than colour (rgbd_frame_t.depth_utime) to "
+          "the colour instant with the camera's velocity (free-running sensors such as Kinect "
+          "v1); no effect when both instants are the same");
   v.section("sensor", "Stage 1: depth sensor error model (Sec. 3.1, eq. 1)",
             [&] { visit(v, o.sensor); });
   v.section("cgm", "Stage 2: convolution of Gaussian mixtures, 3x3 kernel (Sec. 3.2, eqs. 2-6)",

@@ -21,6 +21,7 @@
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/depth_filter_options.h"
 #include "pplvo/depth_filter/depth_rectification.h"
+#include "pplvo/depth_filter/depth_time_alignment.h"
 #include "pplvo/depth_filter/depth_model.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
 #include "pplvo/msgs/bus.h"
@@ -105,6 +106,7 @@ class DepthFilterNode {
   msgs::Bus bus_;
   std::vector<msgs::BusSubscription> subscriptions_;
   depth_filter::DepthRectifier rectifier_;
+  depth_filter::DepthTimeAligner time_aligner_;
   depth_filter::QuadraticSensorModel sensor_;
   depth_filter::CgmFilter cgm_;
   depth_filter::OgmFusion ogm_;

@@ -5,10 +5,45 @@
 /// allocating gigabytes; decodeMessage() also catches whatever an allocation may still throw.
 #include <climits>
 #include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <string>
 
 namespace pplvo::msgs {
+
+/// Fingerprints (lcm-gen's 8-byte type hash) of message layouts that earlier pplvo versions
+/// wrote, so that an old log is named as such instead of "not a valid ...". docs/channels.md,
+/// "Message versions".
+struct OlderMessageVersion {
+  const char* type;  ///< getTypeName(), e.g. "rgbd_frame_t"
+  int64_t fingerprint;
+  const char* what;  ///< how it differs from today's layout
+};
+inline constexpr OlderMessageVersion kOlderMessageVersions[] = {
+    {"rgbd_frame_t", static_cast<int64_t>(0x91c3a57269ce5245ULL),
+     "rgbd_frame_t without depth_utime (pplvo before 2026-12-02)"},
+};
+
+/// Why `size` bytes whose fingerprint is not MessageT's are not one: an older pplvo layout, or
+/// another type or version. Empty when the fingerprint matches (the body is what is wrong).
+template <class MessageT>
+std::string fingerprintMismatch(const void* data, size_t size) {
+  if (size < 8) return "";
+  const auto* b = static_cast<const unsigned char*>(data);
+  uint64_t h = 0;
+  for (int i = 0; i < 8; ++i) h = (h << 8) | b[i];  // LCM writes it big-endian
+  const auto fingerprint = static_cast<int64_t>(h);
+  if (fingerprint == MessageT::getHash()) return "";
+  const std::string type = MessageT::getTypeName();
+  for (const OlderMessageVersion& v : kOlderMessageVersions) {
+    if (type == v.type && fingerprint == v.fingerprint) {
+      return "older log version: " + std::string(v.what) +
+             "; replay it with the pplvo that wrote it, or re-record it";
+    }
+  }
+  return "its type fingerprint differs from this build's " + type +
+         " (another message type, or a version of it this build does not know)";
+}
 
 /// Decodes `size` bytes as one MessageT into `msg`. Returns an empty string on success, else why
 /// the bytes are not a MessageT (wrong type hash, lengths beyond the packet, truncated). Never
@@ -22,8 +57,9 @@ std::string decodeMessage(const void* data, size_t size, MessageT* msg) {
   }
   try {
     if (msg->decode(data, 0, static_cast<int>(size)) < 0) {
+      const std::string why = fingerprintMismatch<MessageT>(data, size);
       return "not a valid " + std::string(MessageT::getTypeName()) + " (" + std::to_string(size) +
-             " bytes)";
+             " bytes)" + (why.empty() ? "" : ": " + why);
     }
     return "";
   } catch (const std::exception& e) {

@@ -1,0 +1,135 @@
+// Depth moved from its capture instant to the colour instant (depth_time_alignment.h), against
+// hand-computed projections.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "pplvo/depth_filter/depth_time_alignment.h"
+
+namespace pplvo::depth_filter {
+namespace {
+
+PinholeCamera smallCamera() {
+  PinholeCamera c;
+  c.width = 64;
+  c.height = 48;
+  c.fx = c.fy = 50;
+  c.cx = 31.5;
+  c.cy = 23.5;
+  return c;
+}
+
+Pose3 translation(double x, double y, double z) {
+  Pose3 T = Pose3::Identity();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+TEST(WarpDepth, FrontoParallelPlaneMovedAlongTheAxisChangesOnlyItsDepth) {
+  const PinholeCamera cam = smallCamera();
+  const cv::Mat depth(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
+  // The target camera is 10 cm behind the source: every point is 10 cm farther. The plane
+  // shrinks towards the principal point, so a border ring (pixels whose sources lie outside
+  // the image) is empty and the inside is whole.
+  const cv::Mat out = warpDepth(cam, depth, translation(0, 0, 0.1));
+  EXPECT_FLOAT_EQ(out.at<float>(0, 0), 0.0f);
+  for (int v = 4; v < cam.height - 4; ++v) {
+    for (int u = 4; u < cam.width - 4; ++u) {
+      ASSERT_NEAR(out.at<float>(v, u), 2.1f, 1e-5f) << u << "," << v;
+    }
+  }
+}
+
+TEST(WarpDepth, LateralMotionShiftsByFocalTimesTranslationOverDepth) {
+  const PinholeCamera cam = smallCamera();
+  cv::Mat depth(cam.height, cam.width, CV_32FC1, cv::Scalar(0.0f));
+  depth.at<float>(20, 30) = 1.0f;
+  // Points move by -4 cm in x in the target camera: 50 px/m * 0.04 m / 1 m = 2 px to the left.
+  const cv::Mat out = warpDepth(cam, depth, translation(-0.04, 0, 0));
+  EXPECT_FLOAT_EQ(out.at<float>(20, 28), 1.0f);
+  EXPECT_EQ(cv::countNonZero(out), 1);
+}
+
+TEST(WarpDepth, NearestSurfaceWinsAndStepsStayOpen) {
+  const PinholeCamera cam = smallCamera();
+  cv::Mat depth(cam.height, cam.width, CV_32FC1, cv::Scalar(0.0f));
+  // A 4 cm shift moves a point f * 0.04 / z pixels to the left: 2 px at 1 m, 4 px at 0.5 m,
+  // 1 px at 2 m.
+  depth.at<float>(10, 12) = 1.0f;  // to (10, 10)
+  depth.at<float>(10, 11) = 0.5f;  // to (10, 7)
+  depth.at<float>(10, 10) = 2.0f;  // to (10, 9)
+  depth.at<float>(10, 9) = 1.0f;   // to (10, 7) as well, behind the 0.5 m point
+  const cv::Mat out = warpDepth(cam, depth, translation(-0.04, 0, 0));
+  EXPECT_FLOAT_EQ(out.at<float>(10, 7), 0.5f);  // 0.5 m and 1.0 m land here: the nearer wins
+  EXPECT_FLOAT_EQ(out.at<float>(10, 10), 1.0f);
+  EXPECT_FLOAT_EQ(out.at<float>(10, 9), 2.0f);
+  // (10, 8) lies between 0.5 and 2.0 m: a step, not a crack, so it stays empty.
+  EXPECT_FLOAT_EQ(out.at<float>(10, 8), 0.0f);
+}
+
+TEST(WarpDepth, OnePixelCrackOfAContinuousSurfaceIsClosed) {
+  const PinholeCamera cam = smallCamera();
+  // As a surface stretched by the motion leaves it: a one-pixel gap between two depths 0.5 %
+  // apart (the identity warp keeps the samples where they are), closed with their mean.
+  const Pose3 T = Pose3::Identity();
+  cv::Mat stretched(cam.height, cam.width, CV_32FC1, cv::Scalar(0.0f));
+  stretched.at<float>(10, 20) = 1.000f;
+  stretched.at<float>(10, 22) = 1.005f;
+  const cv::Mat out = warpDepth(cam, stretched, T);
+  EXPECT_NEAR(out.at<float>(10, 21), 1.0025f, 1e-6f);
+  EXPECT_FLOAT_EQ(out.at<float>(10, 20), 1.000f);
+  EXPECT_FLOAT_EQ(out.at<float>(10, 22), 1.005f);
+}
+
+TEST(WarpDepth, RejectsDepthOfAnotherSize) {
+  const PinholeCamera cam = smallCamera();
+  EXPECT_THROW(warpDepth(cam, cv::Mat(10, 10, CV_32FC1, cv::Scalar(1.0f)), Pose3::Identity()),
+               std::invalid_argument);
+}
+
+TEST(DepthTimeAligner, UsesTheVelocityOfPosesTwoFramesBackAndMovesDepthByIt) {
+  const PinholeCamera cam = smallCamera();
+  const cv::Mat depth(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
+  DepthTimeAligner aligner;
+  // Camera moving forward (+z) at 0.3 m/s, frames 1/30 s apart.
+  const auto pose = [](int seq) { return translation(0, 0, 0.01 * seq); };
+  const auto utime = [](int seq) { return int64_t{1000000} + seq * int64_t{33333}; };
+  // Frame 2 with only frame 0's pose known: no velocity, left as is and counted.
+  aligner.observePose(0, utime(0), pose(0), true);
+  cv::Mat out = aligner.apply(cam, depth, 2, utime(2), utime(2) - 10000);
+  EXPECT_EQ(out.data, depth.data);
+  EXPECT_EQ(aligner.stats().frames_without_velocity, 1);
+  aligner.observePose(1, utime(1), pose(1), true);
+  aligner.observePose(2, utime(2), pose(2), true);  // too recent for frame 3 (lag 2)
+  // Depth 10 ms before colour: the depth camera was 3 mm behind, so the scene is 3 mm nearer
+  // at the colour instant.
+  const std::optional<Pose3> T = aligner.colourFromDepth(3, utime(3), utime(3) - 10000);
+  ASSERT_TRUE(T);
+  EXPECT_NEAR(T->translation().z(), -0.003, 1e-6);
+  out = aligner.apply(cam, depth, 3, utime(3), utime(3) - 10000);
+  EXPECT_NEAR(out.at<float>(24, 32), 1.997f, 1e-5f);
+  EXPECT_EQ(aligner.stats().frames_aligned, 1);
+  EXPECT_NEAR(aligner.stats().last_offset_ms, -10.0, 1e-9);
+  // Same instant: nothing to do, no copy.
+  EXPECT_EQ(aligner.apply(cam, depth, 3, utime(3), utime(3)).data, depth.data);
+  EXPECT_EQ(aligner.apply(cam, depth, 3, utime(3), 0).data, depth.data);
+  // An offset beyond the bound is an association problem: left as is.
+  EXPECT_EQ(aligner.apply(cam, depth, 3, utime(3), utime(3) - 200000).data, depth.data);
+}
+
+TEST(DepthTimeAligner, ALossBreaksTheVelocity) {
+  const PinholeCamera cam = smallCamera();
+  DepthTimeAligner aligner;
+  aligner.observePose(0, 0, translation(0, 0, 0), true);
+  aligner.observePose(1, 33333, translation(0, 0, 0.01), false);  // lost
+  EXPECT_FALSE(aligner.colourFromDepth(3, 100000, 90000));
+  aligner.observePose(2, 66666, translation(0, 0, 0.02), true);
+  aligner.observePose(3, 100000, translation(0, 0, 0.03), true);
+  EXPECT_FALSE(aligner.colourFromDepth(4, 133333, 123333));  // (2, 3) too recent, (1, 2) lost
+  EXPECT_TRUE(aligner.colourFromDepth(5, 166666, 156666));   // (2, 3)
+  aligner.reset();
+  EXPECT_FALSE(aligner.colourFromDepth(5, 166666, 156666));
+}
+
+}  // namespace
+}  // namespace pplvo::depth_filter
