@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/image_header.h"
 #include "pplvo/core/rgbd_frame.h"
 
 namespace pplvo::dataset {
@@ -144,6 +145,11 @@ DatasetCamera loadCameraYaml(const std::string& path);
 struct FrameLoadOptions {
   /// Depth beyond this range counts as missing (0 = only the 65535 invalid marker), metres.
   double max_depth_m = 0.0;
+  /// Size bounds checked on each image's header before it is decoded (docs/fuzzing.md): a
+  /// colour image must have image_limits.expected when given (Dataset::loadRaw sets the
+  /// camera's size when it is empty), else at most image_limits.max_pixels; the depth image
+  /// must have the colour image's size.
+  ImageLimits image_limits;
 };
 
 /// A frame as stored: colour image and depth in integer units (0 = missing).
@@ -154,7 +160,8 @@ struct RawFrame {
 
 /// Loads colour (PNG or JPEG) and depth (16-bit PNG) of one entry. Depth above the max range
 /// and the 65535 marker are set to 0. Throws FrameLoadError naming the file when it is
-/// missing, cannot be decoded, is not 16-bit, or the two sizes disagree.
+/// missing, cannot be decoded, is not 16-bit, announces a size options.image_limits refuses,
+/// or the two sizes disagree (both checked on the headers, before decoding).
 RawFrame loadRawFrame(const DatasetEntry& entry, double depth_scale,
                       const FrameLoadOptions& options = {});
 
