@@ -135,11 +135,17 @@ struct DatasetCamera {
 /// Throws DatasetError naming the file when it cannot be read or lacks the intrinsics.
 DatasetCamera loadCalibParamsXml(const std::string& path);
 
+/// The same from the file's text (`source` names it in errors and DatasetCamera::source).
+DatasetCamera parseCalibParams(const std::string& text, const std::string& source);
+
 /// Reads a YAML camera file with keys `width height fx fy cx cy distortion [k1 k2 p1 p2 k3]
 /// depth_scale`. fx fy cx cy are required; width/height default to 0 (taken from the first
 /// frame); distortion defaults to zeros; depth_scale to 5000. Unknown keys are errors. All
 /// problems are reported together in one DatasetError.
 DatasetCamera loadCameraYaml(const std::string& path);
+
+/// The same from the file's text (`source` names it in errors and DatasetCamera::source).
+DatasetCamera parseCameraYaml(const std::string& text, const std::string& source);
 
 /// Options for decoding one frame.
 struct FrameLoadOptions {
