@@ -7,7 +7,7 @@
 #
 # Seeds: the shared sequences' PNG images, index files and calib_params.xml when
 # ../shared/data is there (copied into BUILD_DIR/corpus, never into the repository), the
-# camera YAML example of docs/player.md, config/pplvo.yaml, and small image_t planes (zlib
+# camera YAML example of docs/player.md, config/pplvo.yaml's values, and small image_t planes (zlib
 # label, depth and float planes, raw planes) made here, and JPEGs written from a few colour
 # frames by make_jpeg_seeds (two with an Exif block); the LCM harness starts from nothing
 # (libFuzzer's comparison tracing finds the type hashes). Each harness's corpus is
@@ -82,7 +82,11 @@ PY
 fi
 printf 'fx: 535.4\nfy: 539.2\ncx: 320.1\ncy: 247.6\ndistortion: [0, 0, 0, 0, 0]\ndepth_scale: 5000\nwidth: 640\nheight: 480\n' \
   >"$build/corpus/fuzz_camera_file/camera.yaml"
-cp "$root/config/pplvo.yaml" "$build/corpus/fuzz_pipeline_config/pplvo.yaml"
+# The configuration's values without its comment lines (4 KB of the 19 KB): the parse of each
+# input is the harness's cost, and the comments are still read back in every round trip
+# (the harness parses the full documented dump).
+grep -v '^[[:space:]]*#' "$root/config/pplvo.yaml" | grep -v '^[[:space:]]*$' \
+  >"$build/corpus/fuzz_pipeline_config/pplvo-values.yaml"
 # JPEGs: colour frames (a synthetic gradient without ../shared/data) scaled to 160x120 as
 # baseline, progressive, restart-interval and grey files, and two with an Exif block.
 if [ -x "$build/bin/make_jpeg_seeds" ]; then

@@ -69,25 +69,28 @@ void readSmallMatrix(const cv::FileNode& node, const char* name, int max_element
 }  // namespace
 
 DatasetCamera loadCalibParamsXml(const std::string& path) {
-  DatasetCamera cam;
-  cam.source = path;
-  std::vector<std::string> errors;
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw DatasetError("calibration file does not exist: " + path);
   }
-  {
-    // OpenCV 4.6's FileStorage parser dereferences a null pointer on some files with NUL
-    // bytes (found by tests/fuzz/fuzz_camera_file); a text calibration file has none.
-    std::ifstream in(path, std::ios::binary);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!in.good() && !in.eof()) throw DatasetError("cannot read calibration file " + path);
-    if (text.find('\0') != std::string::npos) {
-      throw DatasetError("calibration file " + path + " is not text (it contains NUL bytes)");
-    }
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) throw DatasetError("cannot read calibration file " + path);
+  return parseCalibParams(text, path);
+}
+
+DatasetCamera parseCalibParams(const std::string& text, const std::string& path) {
+  DatasetCamera cam;
+  cam.source = path;
+  std::vector<std::string> errors;
+  // OpenCV 4.6's FileStorage parser dereferences a null pointer on some files with NUL bytes
+  // (found by tests/fuzz/fuzz_camera_file); a text calibration file has none.
+  if (text.find('\0') != std::string::npos) {
+    throw DatasetError("calibration file " + path + " is not text (it contains NUL bytes)");
   }
   try {
-    cv::FileStorage fs(path, cv::FileStorage::READ);
+    // From memory: FileStorage picks XML, YAML or JSON from the content, as it does for a file.
+    cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     if (!fs.isOpened()) throw DatasetError("cannot open calibration file " + path);
     cv::Mat K, D;
     readSmallMatrix(fs["RGB_intrinsic_params"], "RGB_intrinsic_params", 9, &K, errors);
@@ -126,13 +129,19 @@ DatasetCamera loadCalibParamsXml(const std::string& path) {
 }
 
 DatasetCamera loadCameraYaml(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw DatasetError("cannot open camera file " + path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) throw DatasetError("cannot read camera file " + path);
+  return parseCameraYaml(text, path);
+}
+
+DatasetCamera parseCameraYaml(const std::string& text, const std::string& path) {
   DatasetCamera cam;
   cam.source = path;
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw DatasetError("cannot open camera file " + path);
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw DatasetError("cannot parse camera file " + path + ": " + e.what());
   }

@@ -31,19 +31,20 @@ std::vector<uchar> readBytes(const std::string& path) {
   return bytes;
 }
 
-cv::Mat decode(const std::vector<uchar>& bytes, int flags, const std::string& path) {
+cv::Mat decode(const std::vector<uchar>& bytes, int flags, const std::string& path,
+               const ImageLimits& limits) {
   // PNG (the datasets' format) and JPEG (colour, as 7-Scenes): the fast decoders, which leave
   // unusual layouts to OpenCV and refuse corrupt files themselves. Anything else goes to OpenCV.
   if (looksLikePng(bytes.data(), bytes.size())) {
     try {
-      return decodePng(bytes.data(), bytes.size(), flags);
+      return decodePng(bytes.data(), bytes.size(), flags, nullptr, limits);
     } catch (const PngError& e) {
       throw FrameLoadError(path, std::string("corrupt image file (") + e.what() + ")");
     }
   }
   if (looksLikeJpeg(bytes.data(), bytes.size())) {
     try {
-      return decodeJpeg(bytes.data(), bytes.size(), flags);
+      return decodeJpeg(bytes.data(), bytes.size(), flags, nullptr, limits);
     } catch (const JpegError& e) {
       throw FrameLoadError(path, std::string("corrupt image file (") + e.what() + ")");
     }
@@ -63,9 +64,13 @@ cv::Mat decode(const std::vector<uchar>& bytes, int flags, const std::string& pa
 RawFrame loadRawFrame(const DatasetEntry& entry, double depth_scale,
                       const FrameLoadOptions& options) {
   RawFrame f;
-  f.bgr = decode(readBytes(entry.rgb_path), cv::IMREAD_COLOR, entry.rgb_path);
+  f.bgr = decode(readBytes(entry.rgb_path), cv::IMREAD_COLOR, entry.rgb_path,
+                 options.image_limits);
   if (f.bgr.type() != CV_8UC3) throw FrameLoadError(entry.rgb_path, "colour image is not 8-bit");
-  f.depth_units = decode(readBytes(entry.depth_path), cv::IMREAD_UNCHANGED, entry.depth_path);
+  ImageLimits depth_limits;
+  depth_limits.expected = f.bgr.size();
+  f.depth_units =
+      decode(readBytes(entry.depth_path), cv::IMREAD_UNCHANGED, entry.depth_path, depth_limits);
   if (f.depth_units.type() != CV_16UC1) {
     throw FrameLoadError(entry.depth_path, "depth image is not a 16-bit single-channel PNG");
   }
@@ -128,7 +133,10 @@ Dataset Dataset::open(const std::string& dir, const DatasetOptions& options) {
 
 RawFrame Dataset::loadRaw(size_t i, const FrameLoadOptions& options) const {
   const DatasetEntry& e = entry(i);
-  RawFrame f = loadRawFrame(e, camera_.depth_scale, options);
+  FrameLoadOptions bounded = options;
+  if (bounded.image_limits.expected.empty())
+    bounded.image_limits.expected = cv::Size(camera_.camera.width, camera_.camera.height);
+  RawFrame f = loadRawFrame(e, camera_.depth_scale, bounded);
   if (f.bgr.cols != camera_.camera.width || f.bgr.rows != camera_.camera.height) {
     throw FrameLoadError(
         e.rgb_path, "image size " + std::to_string(f.bgr.cols) + "x" + std::to_string(f.bgr.rows) +

@@ -4,14 +4,12 @@
 #include <turbojpeg.h>
 
 #include <memory>
+#include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
 namespace pplvo::dataset {
 namespace {
-
-// Largest image accepted, as OpenCV's default limit (CV_IO_MAX_IMAGE_PIXELS).
-constexpr uint64_t kMaxPixels = 1ull << 30;
 
 struct HandleDeleter {
   void operator()(void* h) const { tjDestroy(h); }
@@ -117,7 +115,8 @@ bool looksLikeJpeg(const uint8_t* data, size_t size) {
   return size >= 3 && data[0] == 0xFF && data[1] == 0xD8 && data[2] == 0xFF;
 }
 
-cv::Mat decodeJpeg(const uint8_t* data, size_t size, int flags, JpegDecodePath* path) {
+cv::Mat decodeJpeg(const uint8_t* data, size_t size, int flags, JpegDecodePath* path,
+                   const ImageLimits& limits) {
   if (path) *path = JpegDecodePath::kTurbo;
   if (!looksLikeJpeg(data, size)) throw JpegError("bad JPEG signature");
   if (size > 0xFFFFFFFFul) throw JpegError("JPEG larger than 4 GiB");
@@ -127,10 +126,22 @@ cv::Mat decodeJpeg(const uint8_t* data, size_t size, int flags, JpegDecodePath* 
                           &colorspace) != 0) {
     fail("bad JPEG header", h);
   }
-  if (width <= 0 || height <= 0 || uint64_t(width) * uint64_t(height) > kMaxPixels) {
-    throw JpegError("JPEG size " + std::to_string(width) + "x" + std::to_string(height) +
-                    " out of range");
+  // Before either path allocates the image (TurboJPEG's size is the one both allocate: OpenCV
+  // reads the header with the same libjpeg): a Huffman-coded file must be long enough for its
+  // frame, and the size must pass the limits.
+  const std::optional<ImageHeader> frame = readJpegHeader(data, size);
+  if (frame && frame->width == width && frame->height == height &&
+      frame->min_entropy_bits > uint64_t(size) * 8) {
+    throw JpegError("JPEG of " + std::to_string(size) + " bytes too short for a Huffman-coded " +
+                    std::to_string(width) + "x" + std::to_string(height) + " image (at least " +
+                    std::to_string((frame->min_entropy_bits + 7) / 8) + " bytes of scan data)");
   }
+  // OpenCV applies an Exif orientation unless told not to (IMREAD_UNCHANGED or
+  // IMREAD_IGNORE_ORIENTATION): the decoded image may be transposed.
+  const bool may_rotate =
+      flags != cv::IMREAD_UNCHANGED && (flags & cv::IMREAD_IGNORE_ORIENTATION) == 0;
+  const std::string problem = imageSizeProblem(width, height, limits, may_rotate);
+  if (!problem.empty()) throw JpegError("JPEG " + problem);
   const bool rotating = flags == cv::IMREAD_COLOR || flags == cv::IMREAD_GRAYSCALE;
   const bool known_flags = rotating || flags == cv::IMREAD_UNCHANGED;
   if (!known_flags || colorspace == TJCS_CMYK || colorspace == TJCS_YCCK ||

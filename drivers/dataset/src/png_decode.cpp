@@ -20,8 +20,9 @@ namespace pplvo::dataset {
 namespace {
 
 constexpr uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-// Largest image the fast path accepts, as OpenCV's own limits (1 << 20 pixels a side and
-// 1 << 30 pixels): anything bigger is refused as corrupt rather than allocated.
+// Largest image any IHDR may announce, as OpenCV's own limits (1 << 20 pixels a side and
+// 1 << 30 pixels): anything bigger is a bad IHDR. The caller's ImageLimits (by default
+// pplvo::kMaxImagePixels) are checked after the chunk walk, before anything is allocated.
 constexpr uint32_t kMaxSide = 1u << 20;
 constexpr uint64_t kMaxPixels = 1ull << 30;
 // DEFLATE cannot expand by more than 1032:1 (a 258-byte match in two bits), so an IDAT
@@ -48,6 +49,17 @@ std::string chunkName(const uint8_t* t) {
 }
 
 bool isType(const uint8_t* t, const char* name) { return std::memcmp(t, name, 4) == 0; }
+
+/// Samples per pixel of a PNG colour type (validateHeader has checked it).
+int channelsOf(int colour_type) {
+  switch (colour_type) {
+    case 0: return 1;  // grey
+    case 2: return 3;  // RGB
+    case 3: return 1;  // palette index
+    case 4: return 2;  // grey + alpha
+    default: return 4;  // 6: RGBA
+  }
+}
 
 /// An uninitialised byte buffer that only grows (kept per thread: no page faults or zeroing
 /// per frame once it has reached the frame size).
@@ -505,10 +517,26 @@ bool looksLikePng(const uint8_t* data, size_t size) {
   return size >= 4 && std::memcmp(data, kSignature, 4) == 0;
 }
 
-cv::Mat decodePng(const uint8_t* data, size_t size, int flags, PngDecodePath* path) {
+cv::Mat decodePng(const uint8_t* data, size_t size, int flags, PngDecodePath* path,
+                  const ImageLimits& limits) {
   ThreadState& ts = threadState();
   const Scan scan = scanChunks(data, size, ts.idat_spans);
   const Header& h = scan.ihdr;
+  // Before either path allocates the image: the IDAT data must be able to inflate to the
+  // image's samples (filter bytes left out, so the bound holds for Adam7 interlacing too), and
+  // the size must pass the limits.
+  const uint64_t sample_bytes =
+      (uint64_t(h.width) * h.height * uint64_t(channelsOf(h.colour_type) * h.bit_depth) + 7) / 8;
+  if (sample_bytes > scan.idat_bytes * kMaxDeflateRatio + 1024) {
+    throw PngError("IDAT data (" + std::to_string(scan.idat_bytes) + " bytes) too short for a " +
+                   std::to_string(h.width) + "x" + std::to_string(h.height) + " image");
+  }
+  // OpenCV applies an eXIf orientation unless told not to (IMREAD_UNCHANGED or
+  // IMREAD_IGNORE_ORIENTATION): the decoded image may be transposed.
+  const bool may_rotate = scan.has_exif && flags != cv::IMREAD_UNCHANGED &&
+                          (flags & cv::IMREAD_IGNORE_ORIENTATION) == 0;
+  const std::string problem = imageSizeProblem(h.width, h.height, limits, may_rotate);
+  if (!problem.empty()) throw PngError("PNG " + problem);
   const Layout layout = fastLayout(h, flags, scan.has_exif);
   if (layout.cv_type < 0) {
     if (path) *path = PngDecodePath::kOpenCv;

@@ -4,6 +4,7 @@
 // Exif-rotated and CMYK files left to OpenCV; safe from several threads; the dataset reader
 // reading rgb/*.jpg.
 #include <gtest/gtest.h>
+#include <turbojpeg.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <thread>
@@ -215,6 +217,124 @@ TEST(JpegDecode, ExifOrientationIsLeftToOpenCv) {
   const cv::Mat half = decodeJpeg(jpg.data(), jpg.size(), cv::IMREAD_REDUCED_COLOR_2, &path);
   EXPECT_EQ(path, JpegDecodePath::kOpenCv);
   EXPECT_TRUE(identical(half, cv::imdecode(jpg, cv::IMREAD_REDUCED_COLOR_2)));
+}
+
+/// The JPEG with its frame header's size replaced (the first SOFn marker).
+Bytes withFrameSize(Bytes jpg, int width, int height) {
+  for (size_t i = 2; i + 9 < jpg.size(); ++i) {
+    if (jpg[i] == 0xFF && jpg[i + 1] >= 0xC0 && jpg[i + 1] <= 0xC2) {
+      jpg[i + 5] = uint8_t(height >> 8);
+      jpg[i + 6] = uint8_t(height);
+      jpg[i + 7] = uint8_t(width >> 8);
+      jpg[i + 8] = uint8_t(width);
+      return jpg;
+    }
+  }
+  ADD_FAILURE() << "no frame header";
+  return jpg;
+}
+
+/// The JPEG with an Exif APP1 block (orientation 6: OpenCV rotates it by 90 degrees).
+Bytes withExifOrientation6(const Bytes& jpg) {
+  const Bytes payload = {'E', 'x', 'i', 'f', 0, 0, 'M', 'M', 0, 42, 0, 0, 0, 8, 0, 1, 0x01, 0x12,
+                         0,   3,   0, 0, 0,   1, 0,   6,  0, 0, 0, 0, 0, 0, 0, 0};
+  const size_t len = payload.size() + 2;
+  Bytes out = {0xFF, 0xD8, 0xFF, 0xE1, uint8_t(len >> 8), uint8_t(len)};
+  out.reserve(out.size() + payload.size() + jpg.size());
+  out.insert(out.end(), payload.begin(), payload.end());
+  out.insert(out.end(), jpg.begin() + 2, jpg.end());
+  return out;
+}
+
+// (c2) The size a header announces is bounded before anything is allocated (issue 20): a
+// file too short for a Huffman-coded image of that size, a size over the pixel limit, a size
+// other than the expected one. Before the bounds, the 20000x20000 header of a 1 KB file (400
+// Mpixels, under the old 2^30 limit) had a 1.2 GB image allocated (on the OpenCV path, written
+// in full) before the data was read; those files then failed with "corrupt JPEG data".
+TEST(JpegDecode, AnnouncedSizeIsBoundedBeforeDecoding) {
+  const Bytes small = encode(sampleImage(16, 16, CV_8UC3, 51), 90);
+  ASSERT_LT(small.size(), 2000u);
+  for (const int variant : {0, 1}) {  // baseline, progressive
+    const Bytes huge = withFrameSize(encode(sampleImage(16, 16, CV_8UC3, 52), 90, variant),
+                                     20000, 20000);
+    for (const Bytes& b : {huge, withExifOrientation6(huge)}) {
+      for (const int flags : {cv::IMREAD_COLOR, cv::IMREAD_GRAYSCALE, cv::IMREAD_UNCHANGED}) {
+        const std::string e = errorOf(b, flags);
+        EXPECT_NE(e.find("too short for a Huffman-coded 20000x20000 image"), std::string::npos)
+            << e;
+      }
+    }
+  }
+  // 60000 x 60000 (over 2^30 too): the same refusal.
+  EXPECT_NE(errorOf(withFrameSize(small, 60000, 60000)).find("too short"), std::string::npos);
+
+  // A real 4100x4100 image (uniform: about 2 bits per block, well within the Huffman bound) is
+  // over the default limit of 4096 x 4096 pixels; a raised limit decodes it.
+  const Bytes big = encode(cv::Mat(4100, 4100, CV_8UC1, cv::Scalar(90)), 90);
+  EXPECT_NE(errorOf(big, cv::IMREAD_UNCHANGED)
+                .find("JPEG announced size 4100x4100 is over the limit of 16777216 pixels"),
+            std::string::npos)
+      << errorOf(big, cv::IMREAD_UNCHANGED);
+  pplvo::ImageLimits raised;
+  raised.max_pixels = 4100 * 4100;
+  EXPECT_EQ(decodeJpeg(big.data(), big.size(), cv::IMREAD_UNCHANGED, nullptr, raised).size(),
+            cv::Size(4100, 4100));
+
+  // A known size: the header must announce it (or its transpose when OpenCV rotates).
+  const Bytes wide = encode(sampleImage(16, 24, CV_8UC3, 53), 90);  // 24 x 16
+  pplvo::ImageLimits expect;
+  expect.expected = cv::Size(24, 16);
+  EXPECT_EQ(decodeJpeg(wide.data(), wide.size(), cv::IMREAD_COLOR, nullptr, expect).size(),
+            cv::Size(24, 16));
+  expect.expected = cv::Size(32, 16);
+  try {
+    decodeJpeg(wide.data(), wide.size(), cv::IMREAD_COLOR, nullptr, expect);
+    ADD_FAILURE() << "a 24x16 JPEG passed for 32x16";
+  } catch (const JpegError& e) {
+    EXPECT_NE(std::string(e.what()).find("announced size 24x16 differs from the expected 32x16"),
+              std::string::npos)
+        << e.what();
+  }
+  const Bytes rotated = withExifOrientation6(wide);
+  expect.expected = cv::Size(16, 24);  // OpenCV's rotated image
+  EXPECT_EQ(decodeJpeg(rotated.data(), rotated.size(), cv::IMREAD_COLOR, nullptr, expect).size(),
+            cv::Size(16, 24));
+}
+
+// The Huffman bound holds on the files that compress best: uniform images, every TurboJPEG
+// subsampling (grey, 4:4:4 to 4:1:1), baseline and progressive, low to top quality (each file
+// at least min_entropy_bits long).
+TEST(JpegDecode, HuffmanLengthBoundHoldsOnUniformImages) {
+  const int width = 1400, height = 1000;
+  const std::vector<uint8_t> bgr(size_t(width) * height * 3, 128);
+  for (const int sampling : {TJSAMP_GRAY, TJSAMP_444, TJSAMP_422, TJSAMP_420, TJSAMP_440,
+                             TJSAMP_411}) {
+    for (const int tj_flags : {0, TJFLAG_PROGRESSIVE}) {
+      for (const int quality : {10, 50, 100}) {
+        // A fresh handle per file: with one handle reused after a progressive file, libjpeg-turbo
+        // 2.1.5 wrote baseline files that libjpeg then read as truncated.
+        const std::unique_ptr<void, int (*)(tjhandle)> tj(tjInitCompress(), tjDestroy);
+        ASSERT_TRUE(tj);
+        unsigned char* out = nullptr;
+        unsigned long out_size = 0;
+        ASSERT_EQ(tjCompress2(tj.get(), bgr.data(), width, 0, height, TJPF_BGR, &out, &out_size,
+                              sampling, quality, tj_flags),
+                  0)
+            << tjGetErrorStr2(tj.get());
+        const Bytes jpg(out, out + out_size);
+        tjFree(out);
+        const auto h = pplvo::readJpegHeader(jpg.data(), jpg.size());
+        ASSERT_TRUE(h.has_value());
+        EXPECT_EQ(h->width, width);
+        EXPECT_EQ(h->height, height);
+        EXPECT_GT(h->min_entropy_bits, 0u);
+        EXPECT_LE(h->min_entropy_bits, jpg.size() * 8)
+            << "sampling " << sampling << " flags " << tj_flags << " quality " << quality;
+        EXPECT_EQ(errorOf(jpg, cv::IMREAD_UNCHANGED), "")
+            << "sampling " << sampling << " flags " << tj_flags << " quality " << quality;
+      }
+    }
+  }
 }
 
 // (d) One TurboJPEG handle per thread: concurrent decoding is safe and exact.

@@ -665,6 +665,71 @@ TEST(PngDecode, CorruptContentWithValidCrcs) {
 }
 
 // loadRawFrame turns decoder errors into FrameLoadError naming the file and the reason.
+// The size an IHDR announces is bounded before anything is allocated, on OpenCV's path too
+// (issue 20): IDAT data too short to inflate to the image, a size over the pixel limit, a size
+// other than the expected one. Before, the fallback layouts (interlaced, palette, ...) went to
+// cv::imdecode, which allocated a 20000x20000 image (1.2 GB) before it found the data short
+// ("OpenCV could not decode this PNG layout").
+TEST(PngDecode, AnnouncedSizeIsBoundedBeforeDecoding) {
+  const Bytes one_row(1 + 3 * 4, 0);
+  const Bytes plte = {0, 0, 0, 255, 255, 255};
+  const std::vector<std::pair<Bytes, const char*>> huge = {
+      {buildPng(ihdr(20000, 20000, 8, 2, 1), one_row), "interlaced RGB"},
+      {buildPng(ihdr(20000, 20000, 1, 3), one_row, 1, {{"PLTE", plte}}), "1-bit palette"},
+      {buildPng(ihdr(20000, 20000, 8, 2), one_row), "RGB (fast path)"}};
+  for (const auto& [png, what] : huge) {
+    for (const int flags : {cv::IMREAD_COLOR, cv::IMREAD_UNCHANGED, cv::IMREAD_GRAYSCALE}) {
+      const std::string e = errorOf(png, flags);
+      EXPECT_NE(e.find("too short for a 20000x20000 image"), std::string::npos)
+          << what << " flags " << flags << ": " << e;
+    }
+  }
+
+  // A real 4100x4100 grey PNG (zeros: deflate near its 1032:1 maximum) is over the default
+  // limit of 4096 x 4096 pixels on both paths; a raised limit decodes it.
+  const int side = 4100;
+  const Bytes big = buildPng(ihdr(side, side, 8, 0), Bytes(size_t(side) * (side + 1), 0));
+  for (const int flags : {cv::IMREAD_UNCHANGED, cv::IMREAD_GRAYSCALE}) {
+    const std::string e = errorOf(big, flags);
+    EXPECT_NE(e.find("PNG announced size 4100x4100 is over the limit of 16777216 pixels"),
+              std::string::npos)
+        << "flags " << flags << ": " << e;
+  }
+  pplvo::ImageLimits raised;
+  raised.max_pixels = uint64_t(side) * side;
+  PngDecodePath path{};
+  EXPECT_EQ(decodePng(big.data(), big.size(), cv::IMREAD_UNCHANGED, &path, raised).size(),
+            cv::Size(side, side));
+  EXPECT_EQ(path, PngDecodePath::kFast);
+
+  // A known size: the IHDR must announce it (or its transpose when OpenCV rotates by eXIf).
+  Bytes small;
+  ASSERT_TRUE(cv::imencode(".png", cv::Mat(7, 5, CV_8UC3, cv::Scalar(1, 2, 3)), small));  // 5x7
+  pplvo::ImageLimits expect;
+  expect.expected = cv::Size(5, 7);
+  EXPECT_EQ(decodePng(small.data(), small.size(), cv::IMREAD_COLOR, nullptr, expect).size(),
+            cv::Size(5, 7));
+  expect.expected = cv::Size(7, 7);
+  try {
+    decodePng(small.data(), small.size(), cv::IMREAD_COLOR, nullptr, expect);
+    ADD_FAILURE() << "a 5x7 PNG passed for 7x7";
+  } catch (const PngError& e) {
+    EXPECT_NE(std::string(e.what()).find("announced size 5x7 differs from the expected 7x7"),
+              std::string::npos)
+        << e.what();
+  }
+  const Bytes exif = {'M', 'M', 0, 42, 0, 0, 0, 8, 0, 1, 0x01, 0x12, 0, 3,
+                      0,   0,   0, 1,  0, 6, 0, 0, 0, 0, 0, 0,    0,    0};
+  auto chunks = parseChunks(small);
+  chunks.insert(chunks.begin() + 1, Chunk{"eXIf", exif});
+  const Bytes rotated = assemble(chunks);
+  expect.expected = cv::Size(7, 5);  // OpenCV's rotated image
+  EXPECT_EQ(decodePng(rotated.data(), rotated.size(), cv::IMREAD_COLOR, nullptr, expect).size(),
+            cv::Size(7, 5));
+  EXPECT_THROW(decodePng(rotated.data(), rotated.size(), cv::IMREAD_UNCHANGED, nullptr, expect),
+               PngError);  // not rotated: 5x7
+}
+
 TEST(PngDecode, LoadRawFrameReportsTheReason) {
   const fs::path dir = fs::temp_directory_path() / ("pplvo_test_png_" + std::to_string(::getpid()));
   fs::create_directories(dir);

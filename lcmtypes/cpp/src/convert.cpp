@@ -9,6 +9,9 @@
 #include <zlib.h>
 
 #include <memory>
+#include <optional>
+
+#include "pplvo/core/image_header.h"
 
 namespace pplvo::msgs {
 namespace {
@@ -179,9 +182,13 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
                        std::to_string(msg.data.size()) + " data bytes");
   }
   if (msg.encoding == Img::ENCODING_NONE) return cv::Mat();
-  if (msg.width <= 0 || msg.height <= 0 || msg.width > 16384 || msg.height > 16384) {
+  // Every plane is allocated at the message's size before its payload is decoded: at most the
+  // largest frame of a supported sensor (pplvo::kMaxImagePixels, pplvo/core/image_header.h).
+  if (msg.width <= 0 || msg.height <= 0 ||
+      uint64_t(msg.width) * uint64_t(msg.height) > kMaxImagePixels) {
     throw MessageError("image dimensions " + std::to_string(msg.width) + "x" +
-                       std::to_string(msg.height) + " are invalid");
+                       std::to_string(msg.height) + " are invalid (at most " +
+                       std::to_string(kMaxImagePixels) + " pixels)");
   }
   const int bpp = bytesPerPixel(msg.encoding);
   if (bpp > 0) {
@@ -204,6 +211,17 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
     const int type = msg.encoding == Img::ENCODING_ZLIB_U8    ? CV_8UC1
                      : msg.encoding == Img::ENCODING_ZLIB_U16 ? CV_16UC1
                                                               : CV_32FC1;
+    // DEFLATE expands at most 1032:1 (a 258-byte match in two bits): a payload too short for
+    // the plane is refused before the plane is allocated.
+    const uint64_t plane_bytes =
+        uint64_t(msg.width) * uint64_t(msg.height) * uint64_t(CV_ELEM_SIZE(type));
+    if (plane_bytes > uint64_t(msg.data.size()) * 1032 + 1024) {
+      throw MessageError("corrupt zlib image payload (" + std::to_string(msg.data.size()) +
+                         " bytes cannot inflate to the " + std::to_string(plane_bytes) +
+                         " bytes of a " + std::to_string(msg.width) + "x" +
+                         std::to_string(msg.height) + " " + encodingName(msg.encoding) +
+                         " plane)");
+    }
     cv::Mat out(msg.height, msg.width, type);
     zlibDecompress(msg, out);
     return out;
@@ -226,6 +244,23 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
       std::memcmp(msg.data.data(), signature, signature_size) != 0) {
     throw MessageError("corrupt " + encodingName(msg.encoding) + " payload: no " +
                        (jpeg ? "JPEG" : "PNG") + " signature");
+  }
+  // cv::imdecode allocates the size the payload's header announces before it reads the data:
+  // that size must be the message's (or its transpose, when OpenCV applies an Exif
+  // orientation: every flag here but IMREAD_UNCHANGED), checked first.
+  const std::optional<ImageHeader> header = jpeg
+                                                ? readJpegHeader(msg.data.data(), msg.data.size())
+                                                : readPngHeader(msg.data.data(), msg.data.size());
+  if (!header) {
+    throw MessageError("corrupt " + encodingName(msg.encoding) + " payload: no " +
+                       (jpeg ? "JPEG frame header" : "PNG IHDR"));
+  }
+  ImageLimits limits;
+  limits.expected = cv::Size(msg.width, msg.height);
+  const std::string problem =
+      imageSizeProblem(header->width, header->height, limits, flags != cv::IMREAD_UNCHANGED);
+  if (!problem.empty()) {
+    throw MessageError("corrupt " + encodingName(msg.encoding) + " payload: " + problem);
   }
   cv::Mat out;
   try {

@@ -145,6 +145,57 @@ TEST(Convert, PayloadsWithoutTheirEncodingsSignatureThrow) {
   }
 }
 
+// Every plane is allocated at the message's size before its payload is decoded, so the size
+// is bounded first (issue 20): at most pplvo::kMaxImagePixels; a zlib payload long enough to
+// inflate to the plane; a PNG or JPEG payload whose header announces the message's size.
+// Before, a 16x16 message whose JPEG header announced 20000x20000 had cv::imdecode allocate
+// 1.2 GB before it failed ("corrupt jpeg payload"), and a 10-byte zlib payload of a
+// 16384x16384 f32 message had 1 GB allocated.
+TEST(Convert, PlaneSizesAreBoundedBeforeDecoding) {
+  auto expectError = [](const Img& m, const std::string& want) {
+    try {
+      decodeImage(m);
+      ADD_FAILURE() << "decoded; wanted '" << want << "'";
+    } catch (const MessageError& e) {
+      EXPECT_NE(std::string(e.what()).find(want), std::string::npos) << e.what();
+    }
+  };
+  auto raw = encodeImage(cv::Mat(4, 4, CV_8UC1, cv::Scalar(3)), Img::ENCODING_RAW_U8);
+  raw.width = raw.height = 8192;
+  expectError(raw, "image dimensions 8192x8192 are invalid (at most 16777216 pixels)");
+
+  auto z = encodeImage(cv::Mat(16, 16, CV_32FC1, cv::Scalar(1.f)), Img::ENCODING_ZLIB_F32);
+  z.width = z.height = 4000;
+  expectError(z, "cannot inflate to the 64000000 bytes of a 4000x4000 zlib_f32 plane");
+
+  cv::Mat bgr(16, 16, CV_8UC3, cv::Scalar(10, 20, 30));
+  auto jpeg = encodeImage(bgr, Img::ENCODING_JPEG);
+  for (size_t i = 2; i + 9 < jpeg.data.size(); ++i) {  // SOF0: FF C0 len(2) P height width
+    if (jpeg.data[i] == 0xFF && jpeg.data[i + 1] == 0xC0) {
+      jpeg.data[i + 5] = jpeg.data[i + 7] = 20000 >> 8;
+      jpeg.data[i + 6] = jpeg.data[i + 8] = 20000 & 255;
+      break;
+    }
+  }
+  expectError(jpeg, "corrupt jpeg payload: announced size 20000x20000 differs from the expected 16x16");
+  jpeg.data.resize(2);  // SOI only: no frame header
+  jpeg.size = 2;
+  expectError(jpeg, "signature");
+  jpeg.data = {0xFF, 0xD8, 0xFF, 0xD9};  // SOI, EOI
+  jpeg.size = 4;
+  expectError(jpeg, "no JPEG frame header");
+
+  auto png = encodeImage(bgr, Img::ENCODING_PNG);
+  png.data[16] = png.data[20] = 0;  // IHDR width and height: 0x00004E20 = 20000
+  png.data[17] = png.data[21] = 0;
+  png.data[18] = png.data[22] = 20000 >> 8;
+  png.data[19] = png.data[23] = 20000 & 255;
+  expectError(png, "corrupt png payload: announced size 20000x20000 differs from the expected 16x16");
+  // The message's own size still decodes, PNG and JPEG.
+  EXPECT_EQ(decodeImage(encodeImage(bgr, Img::ENCODING_PNG)).size(), cv::Size(16, 16));
+  EXPECT_EQ(decodeImage(encodeImage(bgr, Img::ENCODING_JPEG)).size(), cv::Size(16, 16));
+}
+
 TEST(Convert, FrameWithMismatchedDepthSizeThrows) {
   RgbdFrame f = makeFrame();
   auto m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/image_header.h"
 #include "pplvo/core/rgbd_frame.h"
 
 namespace pplvo::dataset {
@@ -135,16 +136,27 @@ struct DatasetCamera {
 /// Throws DatasetError naming the file when it cannot be read or lacks the intrinsics.
 DatasetCamera loadCalibParamsXml(const std::string& path);
 
+/// The same from the file's text (`source` names it in errors and DatasetCamera::source).
+DatasetCamera parseCalibParams(const std::string& text, const std::string& source);
+
 /// Reads a YAML camera file with keys `width height fx fy cx cy distortion [k1 k2 p1 p2 k3]
 /// depth_scale`. fx fy cx cy are required; width/height default to 0 (taken from the first
 /// frame); distortion defaults to zeros; depth_scale to 5000. Unknown keys are errors. All
 /// problems are reported together in one DatasetError.
 DatasetCamera loadCameraYaml(const std::string& path);
 
+/// The same from the file's text (`source` names it in errors and DatasetCamera::source).
+DatasetCamera parseCameraYaml(const std::string& text, const std::string& source);
+
 /// Options for decoding one frame.
 struct FrameLoadOptions {
   /// Depth beyond this range counts as missing (0 = only the 65535 invalid marker), metres.
   double max_depth_m = 0.0;
+  /// Size bounds checked on each image's header before it is decoded (docs/fuzzing.md): a
+  /// colour image must have image_limits.expected when given (Dataset::loadRaw sets the
+  /// camera's size when it is empty), else at most image_limits.max_pixels; the depth image
+  /// must have the colour image's size.
+  ImageLimits image_limits;
 };
 
 /// A frame as stored: colour image and depth in integer units (0 = missing).
@@ -155,7 +167,8 @@ struct RawFrame {
 
 /// Loads colour (PNG or JPEG) and depth (16-bit PNG) of one entry. Depth above the max range
 /// and the 65535 marker are set to 0. Throws FrameLoadError naming the file when it is
-/// missing, cannot be decoded, is not 16-bit, or the two sizes disagree.
+/// missing, cannot be decoded, is not 16-bit, announces a size options.image_limits refuses,
+/// or the two sizes disagree (both checked on the headers, before decoding).
 RawFrame loadRawFrame(const DatasetEntry& entry, double depth_scale,
                       const FrameLoadOptions& options = {});
 

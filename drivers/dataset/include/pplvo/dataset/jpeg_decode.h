@@ -9,6 +9,8 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
+#include "pplvo/core/image_header.h"
+
 namespace pplvo::dataset {
 
 /// A corrupt or truncated JPEG (bad header, premature end of data, corrupt entropy-coded
@@ -32,6 +34,14 @@ bool looksLikeJpeg(const uint8_t* data, size_t size);
 /// JpegError on corrupt input (on the OpenCV path: when it returns no image). Thread-safe:
 /// each thread keeps its own TurboJPEG handle (thread_local). `path`, if given, receives the
 /// decoder used.
-cv::Mat decodeJpeg(const uint8_t* data, size_t size, int flags, JpegDecodePath* path = nullptr);
+///
+/// Before anything is allocated, the frame header's size is checked against `limits` (equal to
+/// limits.expected when given, else at most limits.max_pixels, pplvo::kMaxImagePixels by
+/// default; with an Exif orientation OpenCV applies, the transposed size too; with
+/// IMREAD_REDUCED_* flags, the stored full size), and a Huffman-coded file must be long enough to hold one bit per 8x8 block of its
+/// smallest component (ImageHeader::min_entropy_bits): otherwise JpegError ("announced size
+/// ..." / "... too short for ..."), on both paths.
+cv::Mat decodeJpeg(const uint8_t* data, size_t size, int flags, JpegDecodePath* path = nullptr,
+                   const ImageLimits& limits = {});
 
 }  // namespace pplvo::dataset

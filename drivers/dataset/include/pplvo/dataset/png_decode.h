@@ -10,6 +10,8 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
+#include "pplvo/core/image_header.h"
+
 namespace pplvo::dataset {
 
 /// A corrupt or truncated PNG: bad signature, truncated chunk, CRC mismatch, bad IHDR, missing
@@ -33,6 +35,14 @@ bool looksLikePng(const uint8_t* data, size_t size);
 /// decoded, on both paths. Throws PngError on corrupt input, also when OpenCV cannot decode a
 /// fallback layout. Thread-safe: each thread keeps its own libdeflate decompressor and scratch
 /// buffers (thread_local), reused from call to call. `path`, if given, receives the decoder used.
-cv::Mat decodePng(const uint8_t* data, size_t size, int flags, PngDecodePath* path = nullptr);
+///
+/// Before anything is allocated, on both paths: the IDAT data must be long enough to inflate
+/// to the image (DEFLATE expands at most 1032:1), then the IHDR size is checked against
+/// `limits` (equal to limits.expected when given, else at most limits.max_pixels,
+/// pplvo::kMaxImagePixels by default; with an eXIf orientation OpenCV applies, the transposed
+/// size too): otherwise PngError ("... too short ..." / "PNG announced
+/// size ...").
+cv::Mat decodePng(const uint8_t* data, size_t size, int flags, PngDecodePath* path = nullptr,
+                  const ImageLimits& limits = {});
 
 }  // namespace pplvo::dataset
