@@ -67,6 +67,11 @@ void DepthTimeAligner::observePose(int64_t seq, int64_t colour_utime, const Pose
   if (poses_.size() > kKept) poses_.erase(poses_.begin(), poses_.end() - kKept);
 }
 
+bool DepthTimeAligner::hasPose(int64_t seq) const {
+  return std::any_of(poses_.begin(), poses_.end(),
+                     [seq](const KnownPose& p) { return p.seq == seq; });
+}
+
 std::optional<Pose3> DepthTimeAligner::colourFromDepth(int64_t seq, int64_t colour_utime,
                                                        int64_t depth_utime) const {
   // The newest pair of consecutive tracked poses at least kPoseLag frames before this one.

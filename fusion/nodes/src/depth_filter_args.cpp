@@ -43,6 +43,7 @@ DepthFilterArgs parseDepthFilterArgs(const std::vector<std::string>& args) {
       .option("--fused-channel", &o.fused_channel)
       .option("--status-channel", &o.status_channel)
       .option("--max-pending", &o.max_pending, 1)
+      .option("--max-alignment-wait-ms", &o.max_alignment_wait_ms, 0)
       .flag("--compress", &o.compress);
   p.parse(args);
   a.help = p.help();
@@ -70,6 +71,8 @@ std::string depthFilterUsage() {
          "  --fused-channel NAME     out, depth_map_t (PPLVO_DEPTH_FUSED)\n"
          "  --status-channel NAME    out, node_status_t (PPLVO_STATUS)\n"
          "  --max-pending N          frames waiting for their pose (30)\n"
+         "  --max-alignment-wait-ms N  longest wait of a frame for the pose its time\n"
+         "                           alignment needs (100)\n"
          "  --compress               zlib-compress published maps\n"
          "depth filter options (the depth_filter section of the configuration; keys of other\n"
          "sections are accepted and left to the processes that use them):\n" +

@@ -37,6 +37,11 @@ void DepthFilterNode::onFrame(const lcm::ReceiveBuffer*, const std::string&,
 void DepthFilterNode::onPose(const lcm::ReceiveBuffer*, const std::string&,
                              const pplvo_msgs::pose_t* msg) {
   msgs::guarded(counters_, kName, [&] { handlePose(*msg); });
+  msgs::guarded(counters_, kName, [&] { releaseDeferred(); });
+}
+
+void DepthFilterNode::poll() {
+  msgs::guarded(counters_, kName, [&] { releaseDeferred(); });
 }
 
 void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
@@ -58,10 +63,53 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
       frame.depth_m.cols != frame.camera.width) {
     throw msgs::MessageError("rgbd_frame_t: depth size disagrees with camera_info");
   }
+  frame.stamp = msg.stamp;
+  if (deferred_.empty() && !waitsForAlignmentPose(frame)) {
+    processFrame(frame);
+    return;
+  }
+  deferred_.push_back({std::move(frame), std::chrono::steady_clock::now()});
+  releaseDeferred();
+}
+
+bool DepthFilterNode::waitsForAlignmentPose(const RgbdFrame& frame) const {
+  if (!options_.filter.time_alignment || frame.depth_utime == 0 ||
+      frame.depth_utime == frame.utime) {
+    return false;
+  }
+  const int64_t needed = frame.seq - depth_filter::DepthTimeAligner::kPoseLag;
+  if (time_aligner_.hasPose(needed)) return false;
+  // Only a frame still waiting for its own pose will bring it.
+  return std::any_of(pending_.begin(), pending_.end(),
+                     [needed](const Pending& p) { return p.seq == needed; });
+}
+
+void DepthFilterNode::releaseDeferred() {
+  const auto now = std::chrono::steady_clock::now();
+  const auto max_wait = std::chrono::milliseconds(options_.max_alignment_wait_ms);
+  while (!deferred_.empty()) {
+    const Deferred& d = deferred_.front();
+    if (waitsForAlignmentPose(d.frame)) {
+      const bool too_many = static_cast<int>(deferred_.size()) > options_.max_deferred;
+      if (!too_many && now - d.since < max_wait) return;
+      ++alignment_waits_timed_out_;
+      counters_.last_warning = "frame " + std::to_string(d.frame.seq) +
+                               ": depth moved with an older velocity (the pose of frame " +
+                               std::to_string(d.frame.seq -
+                                              depth_filter::DepthTimeAligner::kPoseLag) +
+                               " did not come in time)";
+    }
+    const RgbdFrame frame = std::move(deferred_.front().frame);
+    deferred_.pop_front();
+    processFrame(frame);
+  }
+}
+
+void DepthFilterNode::processFrame(const RgbdFrame& frame) {
   Pending p;
-  p.seq = msg.seq;
-  p.utime = msg.utime;
-  p.stamp = msg.stamp;
+  p.seq = frame.seq;
+  p.utime = frame.utime;
+  p.stamp = frame.stamp;
   p.camera = frame.camera;
   // Depth in the undistorted pinhole model and at the colour instant, as every later stage
   // reads it.
@@ -69,7 +117,8 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   if (options_.filter.time_alignment && frame.depth_utime != 0 &&
       frame.depth_utime != frame.utime) {
     ScopedStageTimer t(timings_, "time_align");
-    depth_m = time_aligner_.apply(frame.camera, depth_m, msg.seq, frame.utime, frame.depth_utime);
+    depth_m = time_aligner_.apply(frame.camera, depth_m, frame.seq, frame.utime,
+                                  frame.depth_utime);
   }
   if (options_.filter.model == DepthModel::kSensor) {
     ScopedStageTimer t(timings_, "sensor");

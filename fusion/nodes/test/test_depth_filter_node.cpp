@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -10,6 +11,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "pplvo/depth_filter_node/depth_filter_convert.h"
@@ -160,6 +162,60 @@ TEST(DepthFilterNode, MemqFramesAndPosesGiveCgmAndFusedMaps) {
   EXPECT_EQ(node.counters().errors, 0);
   node.publishStatus(1);
   drain(lcm);
+}
+
+// Depth 15 ms older than colour: frame j's depth is moved with the velocity of frames j-3 and
+// j-2. A frame that comes before the pose of frame j-2 (another channel, another port in a
+// launch) waits for it, so the motion is the same in every layout; a pose that never comes
+// costs only max_alignment_wait_ms.
+TEST(DepthFilterNode, FrameWaitsForThePoseItsTimeAlignmentNeeds) {
+  AnalyticScene scene(smallScene());
+  lcm::LCM lcm("memq://");
+  DepthFilterNodeOptions o;
+  o.max_alignment_wait_ms = 50;
+  DepthFilterNode node(o, lcm);
+  Collector c;
+  lcm.subscribe(channels::kDepthCgm, &Collector::onDepth, &c);
+  const auto frame = [&](int i) {
+    pplvo_msgs::rgbd_frame_t f = frameMsg(scene, i);
+    f.depth_utime = f.utime - 15000;
+    lcm.publish(channels::kRgbd, &f);
+    drain(lcm);
+  };
+  const auto pose = [&](int i) {
+    pplvo_msgs::pose_t p = poseMsg(scene, i);
+    lcm.publish(channels::kPose, &p);
+    drain(lcm);
+  };
+  frame(0);  // frames 0 and 1 need poses of frames that never were
+  frame(1);
+  pose(0);
+  frame(2);  // the pose of frame 0 is there
+  EXPECT_EQ(c.cgm.size(), 3u);
+  frame(3);  // needs the pose of frame 1, which frame 1 still waits for
+  EXPECT_EQ(c.cgm.size(), 3u);
+  EXPECT_EQ(node.deferred(), 1);
+  frame(4);  // behind frame 3, in order
+  EXPECT_EQ(node.deferred(), 2);
+  pose(1);  // frame 3 can go; frame 4 needs the pose of frame 2
+  ASSERT_EQ(c.cgm.size(), 4u);
+  EXPECT_EQ(c.cgm.back().seq, 3);
+  pose(2);
+  ASSERT_EQ(c.cgm.size(), 5u);
+  EXPECT_EQ(c.cgm.back().seq, 4);
+  EXPECT_EQ(node.alignmentWaitsTimedOut(), 0);
+  // The pose of frame 3 never comes: frame 5 goes on after the wait, counted.
+  frame(5);
+  EXPECT_EQ(node.deferred(), 1);
+  node.poll();
+  EXPECT_EQ(node.deferred(), 1);  // not yet 50 ms
+  std::this_thread::sleep_for(std::chrono::milliseconds(60));
+  node.poll();
+  drain(lcm);
+  EXPECT_EQ(node.deferred(), 0);
+  ASSERT_EQ(c.cgm.size(), 6u);
+  EXPECT_EQ(node.alignmentWaitsTimedOut(), 1);
+  EXPECT_NE(node.counters().last_warning.find("older velocity"), std::string::npos);
 }
 
 TEST(DepthFilterNode, OverloadWindowRule) {

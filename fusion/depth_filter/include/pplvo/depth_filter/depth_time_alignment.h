@@ -41,7 +41,8 @@ class DepthTimeAligner {
   /// The velocity for frame `seq` comes from the poses of frames `seq - kPoseLag - 1` and
   /// `seq - kPoseLag` (or the newest consecutive pair before them): in a lockstep pipeline with
   /// two frames in flight (pplvo-run's and pplvo-launch's default) those are the newest poses
-  /// certain to be known when the frame's depth arrives, so every layout uses the same motion.
+  /// published before the frame (pplvo-depth-filter waits for the second when it is handled
+  /// after the frame), so every layout uses the same motion.
   static constexpr int64_t kPoseLag = 2;
 
   /// Largest |depth - colour| instant corrected; beyond it the frame is left as is (a pair
@@ -59,6 +60,9 @@ class DepthTimeAligner {
   /// `depth_m` of frame `seq` moved to the colour instant (itself when nothing to correct).
   cv::Mat apply(const PinholeCamera& camera, const cv::Mat& depth_m, int64_t seq,
                 int64_t colour_utime, int64_t depth_utime);
+
+  /// True when the pose of frame `seq` was observed (and is still kept).
+  bool hasPose(int64_t seq) const;
 
   void reset() { poses_.clear(); }
   const DepthTimeAlignmentStats& stats() const { return stats_; }

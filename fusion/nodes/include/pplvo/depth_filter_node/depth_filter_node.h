@@ -8,6 +8,7 @@
 /// | PPLVO_DEPTH_CGM     | depth_map_t   | out       | stage 1 or 2, at once on each frame      |
 /// | PPLVO_DEPTH_FUSED   | depth_map_t   | out       | O-GM on the frame's pose (or C-GM copy)  |
 /// | PPLVO_STATUS        | node_status_t | out       | once a second                            |
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <lcm/lcm-cpp.hpp>
@@ -20,9 +21,9 @@
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/depth_filter_options.h"
+#include "pplvo/depth_filter/depth_model.h"
 #include "pplvo/depth_filter/depth_rectification.h"
 #include "pplvo/depth_filter/depth_time_alignment.h"
-#include "pplvo/depth_filter/depth_model.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
@@ -44,6 +45,14 @@ struct DepthFilterNodeOptions {
   /// Frames waiting for their pose (1 s at 30 Hz); older ones are dropped and counted.
   int max_pending = 30;
   bool compress = false;  ///< ZLIB_F32 instead of RAW_F32 on the outputs
+  /// A frame whose depth is moved to the colour instant (filter.time_alignment) needs the pose
+  /// of the frame two before it (DepthTimeAligner::kPoseLag). In a lockstep pipeline that pose
+  /// was published before the frame, but it comes on another channel (and port) and may be
+  /// handled after it: the frame then waits for it, at most this long (ms) and never while
+  /// more than max_deferred frames wait, so every layout moves the depth by the same motion and
+  /// a dead estimator costs only the wait.
+  int max_alignment_wait_ms = 100;
+  int max_deferred = 3;
   /// The algorithm's options: the `depth_filter` section of the configuration (model, sensor,
   /// cgm, ogm, overload; pplvo/depth_filter/depth_filter_options.h). With model sensor or cgm
   /// the PPLVO_DEPTH_FUSED output is the stage-1/2 map, unchanged. pplvo-run and lockstep
@@ -69,6 +78,11 @@ class DepthFilterNode {
 
   /// Publishes node_status_t (counters, stage timings).
   void publishStatus(int64_t utime);
+  /// Between messages (runLcmNode): releases frames that waited max_alignment_wait_ms.
+  void poll();
+  /// Frames that waited for a pose to move their depth and went on without it.
+  int64_t alignmentWaitsTimedOut() const { return alignment_waits_timed_out_; }
+  int deferred() const { return static_cast<int>(deferred_.size()); }
 
   const msgs::NodeCounters& counters() const { return counters_; }
   const depth_filter::OgmStats& ogmStats() const { return ogm_.stats(); }
@@ -92,7 +106,17 @@ class DepthFilterNode {
     PinholeCamera camera;
     DepthWithVariance depth;
   };
+  struct Deferred {
+    RgbdFrame frame;
+    std::chrono::steady_clock::time_point since;
+  };
   void handleFrame(const pplvo_msgs::rgbd_frame_t& msg);
+  /// Stages 0-2 of one decoded frame: publish its stage-1/2 map and queue it for its pose.
+  void processFrame(const RgbdFrame& frame);
+  /// True while `frame` should wait for the pose its time alignment needs.
+  bool waitsForAlignmentPose(const RgbdFrame& frame) const;
+  /// Processes the waiting frames, in order, that no longer wait (or waited long enough).
+  void releaseDeferred();
   /// Handles a pose; a pose msgs::fromMsg rejects (NaN, invalid rotation, inconsistent window
   /// arrays) releases its frame's stage-1/2 map as the fused output and rethrows the
   /// MessageError, which guarded() counts in frames_skipped.
@@ -112,6 +136,8 @@ class DepthFilterNode {
   depth_filter::OgmFusion ogm_;
   depth_filter::OgmResult fused_;  ///< reused output buffers of the fusion
   std::deque<Pending> pending_;
+  std::deque<Deferred> deferred_;
+  int64_t alignment_waits_timed_out_ = 0;
   msgs::NodeCounters counters_;
   StageTimings timings_;
   int64_t unknown_poses_ = 0;
