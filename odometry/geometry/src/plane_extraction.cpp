@@ -62,12 +62,17 @@ PlaneExtractor::PlaneExtractor(const PinholeCamera& camera, const PlaneExtractio
   x_factor_.resize(std::max(0, camera_.width));
   y_factor_.resize(std::max(0, camera_.height));
   cell_of_col_.resize(std::max(0, camera_.width));
+  ray_x_.resize(x_factor_.size());
+  ray_y_.resize(y_factor_.size());
   for (int u = 0; u < camera_.width; ++u) {
     x_factor_[u] = static_cast<float>((u - camera_.cx) / camera_.fx);
+    ray_x_[u] = (static_cast<double>(u) - camera_.cx) / camera_.fx;
     cell_of_col_[u] = u / cs;
   }
-  for (int v = 0; v < camera_.height; ++v)
+  for (int v = 0; v < camera_.height; ++v) {
     y_factor_[v] = static_cast<float>((v - camera_.cy) / camera_.fy);
+    ray_y_[v] = (static_cast<double>(v) - camera_.cy) / camera_.fy;
+  }
   const size_t nc = static_cast<size_t>(cells_x_) * cells_y_;
   cell_moments_.resize(nc);
   cell_planes_.resize(nc);
@@ -578,8 +583,8 @@ PlaneFitResult PlaneExtractor::fitSegment(const DepthWithVariance& depth, const 
       if (!(var > 0.0) || !std::isfinite(var)) var = noise.varianceZ(zf);
       var = std::max(var, floor2);
       const double z = zf;
-      const Point3WithCov pt =
-          backprojectWithCov(camera_, u, v, z, var, options_.pixel_variance_px2);
+      const Point3WithCov pt = backprojectRayWithCov(camera_, ray_x_[u], ray_y_[v], z, var,
+                                                     options_.pixel_variance_px2);
       P.push_back(pt.p);
       C.push_back(pt.cov);
       V.push_back(var);

@@ -207,6 +207,7 @@ class PlaneExtractor {
   PlaneExtractionOptions options_;
   int cells_x_ = 0, cells_y_ = 0;
   std::vector<float> x_factor_, y_factor_;  // (u - cx)/fx per column, (v - cy)/fy per row
+  std::vector<double> ray_x_, ray_y_;       // the same in double (backprojectRayWithCov)
   std::vector<int> cell_of_col_;
   std::vector<Moments> cell_moments_;
   std::vector<CellPlane> cell_planes_;
