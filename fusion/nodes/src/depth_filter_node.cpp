@@ -57,7 +57,9 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   RgbdFrame frame;
   {
     ScopedStageTimer t(timings_, "decode");
-    frame = msgs::fromMsg(msg);  // MessageError -> counted skip in guarded()
+    // Only the depth: the colour image is the frontend's. MessageError -> counted skip in
+    // guarded().
+    frame = msgs::fromMsg(msg, 65535, msgs::FrameImages::kDepth);
   }
   if (frame.depth_m.empty() || frame.depth_m.rows != frame.camera.height ||
       frame.depth_m.cols != frame.camera.width) {

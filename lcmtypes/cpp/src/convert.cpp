@@ -176,7 +176,15 @@ pplvo_msgs::image_t encodeImage(const cv::Mat& image_in, int8_t encoding, int jp
   return msg;
 }
 
-cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
+namespace {
+cv::Mat decodeImage(const pplvo_msgs::image_t& msg, bool view_raw);
+}  // namespace
+
+cv::Mat decodeImage(const pplvo_msgs::image_t& msg) { return decodeImage(msg, false); }
+cv::Mat decodeImageView(const pplvo_msgs::image_t& msg) { return decodeImage(msg, true); }
+
+namespace {
+cv::Mat decodeImage(const pplvo_msgs::image_t& msg, bool view_raw) {
   if (msg.size != static_cast<int32_t>(msg.data.size())) {
     throw MessageError("image size field " + std::to_string(msg.size) + " disagrees with " +
                        std::to_string(msg.data.size()) + " data bytes");
@@ -202,6 +210,8 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
     if (msg.encoding == Img::ENCODING_RAW_BGR8) type = CV_8UC3;
     if (msg.encoding == Img::ENCODING_RAW_U16) type = CV_16UC1;
     if (msg.encoding == Img::ENCODING_RAW_F32) type = CV_32FC1;
+    // A view: const only by convention (cv::Mat has no const element type).
+    if (view_raw) return cv::Mat(msg.height, msg.width, type, const_cast<uint8_t*>(msg.data.data()));
     cv::Mat out(msg.height, msg.width, type);
     std::memcpy(out.ptr(), msg.data.data(), expected);
     return out;
@@ -284,8 +294,29 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg) {
   }
   return out;
 }
+}  // namespace
 
-RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units) {
+namespace {
+
+/// Size of an image a node does not decode, from its header; empty for ENCODING_NONE. The
+/// payload is not read (decodeImage checks it where the image is used).
+cv::Size headerSize(const pplvo_msgs::image_t& msg) {
+  if (msg.encoding == Img::ENCODING_NONE) return cv::Size();
+  if (msg.width <= 0 || msg.height <= 0 || msg.width > 16384 || msg.height > 16384) {
+    throw MessageError("image dimensions " + std::to_string(msg.width) + "x" +
+                       std::to_string(msg.height) + " are invalid");
+  }
+  return cv::Size(msg.width, msg.height);
+}
+
+bool isDepthEncoding(int8_t encoding) {
+  return encoding == Img::ENCODING_RAW_U16 || encoding == Img::ENCODING_ZLIB_U16 ||
+         encoding == Img::ENCODING_PNG_U16;
+}
+
+}  // namespace
+
+RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units, FrameImages images) {
   RgbdFrame f;
   f.utime = msg.utime;
   f.depth_utime = msg.depth_utime;
@@ -295,18 +326,38 @@ RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units) {
   if (!(msg.depth_scale > 0) || !std::isfinite(msg.depth_scale)) {
     throw MessageError("depth_scale must be positive, got " + std::to_string(msg.depth_scale));
   }
-  f.bgr = decodeImage(msg.rgb);
-  if (f.bgr.empty()) throw MessageError("frame has no colour image");
-  const cv::Mat depth = decodeImage(msg.depth);
-  if (depth.empty()) throw MessageError("frame has no depth image");
-  if (depth.type() != CV_16UC1) throw MessageError("depth must be a 16-bit encoding");
-  if (depth.size() != f.bgr.size() || f.bgr.cols != f.camera.width || f.bgr.rows != f.camera.height) {
-    throw MessageError("colour " + std::to_string(f.bgr.cols) + "x" + std::to_string(f.bgr.rows) +
-                       ", depth " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+  const bool colour = images != FrameImages::kDepth, depth_too = images != FrameImages::kColour;
+  cv::Size colour_size;
+  if (colour) {
+    f.bgr = decodeImage(msg.rgb);
+    colour_size = f.bgr.size();
+  } else {
+    colour_size = headerSize(msg.rgb);
+  }
+  if (colour_size.empty()) throw MessageError("frame has no colour image");
+  cv::Mat depth;
+  cv::Size depth_size;
+  if (depth_too) {
+    depth = decodeImage(msg.depth);
+    if (depth.empty()) throw MessageError("frame has no depth image");
+    if (depth.type() != CV_16UC1) throw MessageError("depth must be a 16-bit encoding");
+    depth_size = depth.size();
+  } else {
+    depth_size = headerSize(msg.depth);
+    if (depth_size.empty()) throw MessageError("frame has no depth image");
+    if (!isDepthEncoding(msg.depth.encoding)) {
+      throw MessageError("depth must be a 16-bit encoding");
+    }
+  }
+  if (depth_size != colour_size || colour_size.width != f.camera.width ||
+      colour_size.height != f.camera.height) {
+    throw MessageError("colour " + std::to_string(colour_size.width) + "x" +
+                       std::to_string(colour_size.height) + ", depth " +
+                       std::to_string(depth_size.width) + "x" + std::to_string(depth_size.height) +
                        " and camera " + std::to_string(f.camera.width) + "x" +
                        std::to_string(f.camera.height) + " sizes disagree");
   }
-  f.depth_m = depthUnitsToMetres(depth, msg.depth_scale, max_depth_units);
+  if (depth_too) f.depth_m = depthUnitsToMetres(depth, msg.depth_scale, max_depth_units);
   return f;
 }
 
@@ -341,11 +392,12 @@ pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& d, const PinholeCamera& c
   return m;
 }
 
-DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& m) {
+namespace {
+DepthWithVariance decodeDepthMap(const pplvo_msgs::depth_map_t& m, bool view_raw) {
   DepthWithVariance d;
   d.window_length = m.window_length;
-  d.depth_m = decodeImage(m.depth);
-  d.var_m2 = decodeImage(m.variance);
+  d.depth_m = decodeImage(m.depth, view_raw);
+  d.var_m2 = decodeImage(m.variance, view_raw);
   if (d.depth_m.type() != CV_32FC1 || d.var_m2.type() != CV_32FC1) {
     throw MessageError("depth map planes must be float32");
   }
@@ -355,6 +407,11 @@ DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& m) {
   }
   return d;
 }
+}  // namespace
+
+DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& m) { return decodeDepthMap(m, false); }
+
+DepthWithVariance viewOfMsg(const pplvo_msgs::depth_map_t& m) { return decodeDepthMap(m, true); }
 
 pplvo_msgs::node_status_t toStatusMsg(const std::string& node, const NodeCounters& c,
                                       const StageTimings& timings, int64_t utime) {

@@ -221,6 +221,66 @@ TEST(Convert, DepthMapRoundTrip) {
   }
 }
 
+TEST(Convert, FrameImagesDecodeOnlyTheChosenImage) {
+  const RgbdFrame f = makeFrame();
+  for (const int8_t depth_encoding : {Img::ENCODING_RAW_U16, Img::ENCODING_PNG_U16}) {
+    const auto m = toMsg(f, 5000.0, Img::ENCODING_PNG, depth_encoding);
+    const RgbdFrame both = fromMsg(m);
+    const RgbdFrame colour = fromMsg(m, 65535, FrameImages::kColour);
+    const RgbdFrame depth = fromMsg(m, 65535, FrameImages::kDepth);
+    EXPECT_TRUE(colour.depth_m.empty());
+    EXPECT_TRUE(depth.bgr.empty());
+    EXPECT_EQ(cv::norm(colour.bgr, both.bgr, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(depth.depth_m, both.depth_m, cv::NORM_INF), 0.0);
+    EXPECT_EQ(colour.camera, both.camera);
+    EXPECT_EQ(depth.seq, both.seq);
+  }
+}
+
+TEST(Convert, FrameImagesStillCheckTheOtherImagesHeader) {
+  const RgbdFrame f = makeFrame();
+  for (const FrameImages images : {FrameImages::kColour, FrameImages::kDepth}) {
+    auto m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);
+    m.depth = encodeImage(cv::Mat(10, 10, CV_16UC1, cv::Scalar(0)), Img::ENCODING_RAW_U16);
+    EXPECT_THROW(fromMsg(m, 65535, images), MessageError);  // sizes disagree
+    m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);
+    m.rgb = encodeImage(cv::Mat(10, 10, CV_8UC3, cv::Scalar(0)), Img::ENCODING_RAW_BGR8);
+    EXPECT_THROW(fromMsg(m, 65535, images), MessageError);
+    m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);
+    m.depth = encodeImage(cv::Mat(48, 64, CV_8UC1, cv::Scalar(0)), Img::ENCODING_RAW_U8);
+    EXPECT_THROW(fromMsg(m, 65535, images), MessageError);  // not a 16-bit depth
+    m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);
+    m.depth = pplvo_msgs::image_t();
+    m.depth.encoding = Img::ENCODING_NONE;
+    EXPECT_THROW(fromMsg(m, 65535, images), MessageError);  // no depth
+    m = toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16);
+    m.rgb = pplvo_msgs::image_t();
+    m.rgb.encoding = Img::ENCODING_NONE;
+    EXPECT_THROW(fromMsg(m, 65535, images), MessageError);  // no colour
+  }
+}
+
+TEST(Convert, DepthMapViewSharesRawPayloadsAndDecodesCompressedOnes) {
+  DepthWithVariance d;
+  d.depth_m = cv::Mat(48, 64, CV_32FC1);
+  cv::randu(d.depth_m, 0.5f, 4.0f);
+  d.var_m2 = d.depth_m.mul(d.depth_m) * 1e-4;
+  d.window_length = 4;
+  for (bool compress : {false, true}) {
+    const auto m = roundTripBytes(toMsg(d, vga(), 5, 3, "3", pplvo_msgs::depth_map_t::STAGE_OGM, compress));
+    const DepthWithVariance view = viewOfMsg(m);
+    EXPECT_EQ(view.window_length, 4);
+    EXPECT_EQ(cv::norm(view.depth_m, d.depth_m, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(view.var_m2, d.var_m2, cv::NORM_INF), 0.0);
+    EXPECT_EQ(view.depth_m.data == m.depth.data.data(), !compress);
+    EXPECT_EQ(view.var_m2.data == m.variance.data.data(), !compress);
+  }
+  auto bad = toMsg(d, vga(), 5, 3, "3", pplvo_msgs::depth_map_t::STAGE_OGM, false);
+  bad.depth.data.pop_back();
+  bad.depth.size = static_cast<int32_t>(bad.depth.data.size());
+  EXPECT_THROW(viewOfMsg(bad), MessageError);
+}
+
 TEST(Convert, StatusCarriesStages) {
   NodeCounters c;
   c.frames_in = 3;

@@ -62,12 +62,17 @@ PlaneExtractor::PlaneExtractor(const PinholeCamera& camera, const PlaneExtractio
   x_factor_.resize(std::max(0, camera_.width));
   y_factor_.resize(std::max(0, camera_.height));
   cell_of_col_.resize(std::max(0, camera_.width));
+  ray_x_.resize(x_factor_.size());
+  ray_y_.resize(y_factor_.size());
   for (int u = 0; u < camera_.width; ++u) {
     x_factor_[u] = static_cast<float>((u - camera_.cx) / camera_.fx);
+    ray_x_[u] = (static_cast<double>(u) - camera_.cx) / camera_.fx;
     cell_of_col_[u] = u / cs;
   }
-  for (int v = 0; v < camera_.height; ++v)
+  for (int v = 0; v < camera_.height; ++v) {
     y_factor_[v] = static_cast<float>((v - camera_.cy) / camera_.fy);
+    ray_y_[v] = (static_cast<double>(v) - camera_.cy) / camera_.fy;
+  }
   const size_t nc = static_cast<size_t>(cells_x_) * cells_y_;
   cell_moments_.resize(nc);
   cell_planes_.resize(nc);
@@ -548,23 +553,38 @@ void PlaneExtractor::labelCell(const cv::Mat& depth_m, int cx, int cy, const Cel
 
 // WLS fit of segment i on a regular subsample of its pixels.
 PlaneFitResult PlaneExtractor::fitSegment(const DepthWithVariance& depth, const cv::Mat& labels,
-                                          const LabelStats& ls, int i) const {
+                                          const LabelStats& ls, int i,
+                                          FitSamples* samples) const {
   const DepthNoiseModel& noise = options_.noise;
   const int step =
       std::max(1, static_cast<int>(std::floor(std::sqrt(static_cast<double>(ls.count[i]) /
                                                         std::max(1, options_.max_fit_points)))));
-  std::vector<Eigen::Vector3d> P;
-  std::vector<Eigen::Matrix3d> C;
-  std::vector<double> V;
+  std::vector<Eigen::Vector3d>& P = samples->points;
+  std::vector<Eigen::Matrix3d>& C = samples->covs;
+  std::vector<double>& V = samples->var_z;
+  P.clear();
+  C.clear();
+  V.clear();
+  // depthAt() with its per-pixel checks hoisted: the grid lies inside the image (the labels'
+  // box) and the variance map is usable or not for the whole image.
+  const bool has_var = !depth.var_m2.empty() && depth.var_m2.size() == depth.depth_m.size();
+  const double floor2 = noise.sigma_z_floor_m * noise.sigma_z_floor_m;
+  const uint8_t label = static_cast<uint8_t>(i + 1);
   // Grid anchored at multiples of the step (independent of the bounding box).
   for (int v = (ls.vmin[i] + step - 1) / step * step; v <= ls.vmax[i]; v += step) {
     const uint8_t* lr = labels.ptr<uint8_t>(v);
+    const float* zr = depth.depth_m.ptr<float>(v);
+    const float* vr = has_var ? depth.var_m2.ptr<float>(v) : nullptr;
     for (int u = (ls.umin[i] + step - 1) / step * step; u <= ls.umax[i]; u += step) {
-      if (lr[u] != i + 1) continue;
-      double z, var;
-      if (!depthAt(depth, u, v, noise, &z, &var)) continue;
-      const Point3WithCov pt =
-          backprojectWithCov(camera_, u, v, z, var, options_.pixel_variance_px2);
+      if (lr[u] != label) continue;
+      const float zf = zr[u];
+      if (!(zf > 0.0f) || !std::isfinite(zf)) continue;
+      double var = has_var ? static_cast<double>(vr[u]) : 0.0;
+      if (!(var > 0.0) || !std::isfinite(var)) var = noise.varianceZ(zf);
+      var = std::max(var, floor2);
+      const double z = zf;
+      const Point3WithCov pt = backprojectRayWithCov(camera_, ray_x_[u], ray_y_[v], z, var,
+                                                     options_.pixel_variance_px2);
       P.push_back(pt.p);
       C.push_back(pt.cov);
       V.push_back(var);
@@ -575,7 +595,7 @@ PlaneFitResult PlaneExtractor::fitSegment(const DepthWithVariance& depth, const 
 
 // 6) WLS fit (eqs. 10-11) on a regular subsample of each segment's pixels; order by size.
 void PlaneExtractor::fitSegments(const DepthWithVariance& depth, const LabelStats& ls, int np,
-                                 PlaneExtractionResult* res) const {
+                                 PlaneExtractionResult* res) {
   PlaneExtractionStats& st = res->stats;
   std::vector<int> order;
   for (int i = 0; i < np; ++i) {
@@ -589,8 +609,10 @@ void PlaneExtractor::fitSegments(const DepthWithVariance& depth, const LabelStat
   // The fits are independent: all candidates in parallel, then kept in size order.
   std::vector<PlaneFitResult> fits(order.size());
   const int n_fits = static_cast<int>(order.size());
-  forEachTask(n_fits, std::max(1, options_.threads),
-              [&](int k) { fits[k] = fitSegment(depth, res->labels, ls, order[k]); });
+  if (fit_samples_.size() < order.size()) fit_samples_.resize(order.size());
+  forEachTask(n_fits, std::max(1, options_.threads), [&](int k) {
+    fits[k] = fitSegment(depth, res->labels, ls, order[k], &fit_samples_[static_cast<size_t>(k)]);
+  });
   std::vector<uint8_t> lut(256, 0);
   for (int k = 0; k < n_fits; ++k) {
     if (static_cast<int>(res->planes.size()) >= options_.max_planes) break;

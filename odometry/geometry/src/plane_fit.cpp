@@ -71,10 +71,13 @@ PlaneFitResult fitPlaneWls(const std::vector<Eigen::Vector3d>& points,
 
   // Eq. 10: E = sum w_i (theta_m P_i + 1)^2 / 2, w_i = 1 / sigma_Zi^2
   //   => A theta_m = b, A = sum w_i P_i P_i^T, b = -sum w_i P_i.
-  auto solve = [&](const std::vector<double>& w, Eigen::Matrix3d* A_out, Eigen::Vector3d* th) {
+  // weigh(i) gives w_i; stored in w (used again below) and accumulated in the same pass.
+  std::vector<double> w(n);
+  auto solve = [&](auto weigh, Eigen::Matrix3d* A_out, Eigen::Vector3d* th) {
     Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
     for (size_t i = 0; i < n; ++i) {
+      w[i] = weigh(i);
       A.noalias() += w[i] * points[i] * points[i].transpose();
       b -= w[i] * points[i];
     }
@@ -85,22 +88,20 @@ PlaneFitResult fitPlaneWls(const std::vector<Eigen::Vector3d>& points,
     *th = A.ldlt().solve(b);
     return th->allFinite();
   };
-  std::vector<double> w(n);
-  for (size_t i = 0; i < n; ++i) w[i] = 1.0 / var_z_m2[i];
   Eigen::Matrix3d A;
   Eigen::Vector3d theta_m;
-  if (!solve(w, &A, &theta_m)) {
+  if (!solve([&](size_t i) { return 1.0 / var_z_m2[i]; }, &A, &theta_m)) {
     res.status = FitStatus::kDegenerate;
     return res;
   }
   // Corrected weights: 1 / Sigma_ri, Sigma_ri = theta_m^T Sigma_Pi theta_m (residual of eq. 10).
-  for (size_t i = 0; i < n; ++i) {
+  const auto corrected = [&](size_t i) {
     const double s = theta_m.dot(covs[i] * theta_m);
-    w[i] = 1.0 / std::max(s, 1e-300);
-  }
+    return 1.0 / std::max(s, 1e-300);
+  };
   Eigen::Vector3d theta_corr;
   Eigen::Matrix3d A_corr;
-  if (!solve(w, &A_corr, &theta_corr)) {
+  if (!solve(corrected, &A_corr, &theta_corr)) {
     res.status = FitStatus::kDegenerate;
     return res;
   }
@@ -118,10 +119,8 @@ PlaneFitResult fitPlaneWls(const std::vector<Eigen::Vector3d>& points,
     }
     if (n_out > 0 && static_cast<int>(n) - n_out >= std::max(3, options.min_points)) {
       // Weights of the kept points from the current estimate.
-      for (size_t i = 0; i < n; ++i) {
-        if (w2[i] > 0) w2[i] = 1.0 / std::max(theta_m.dot(covs[i] * theta_m), 1e-300);
-      }
-      if (solve(w2, &A_corr, &theta_corr)) {
+      if (solve([&](size_t i) { return w2[i] > 0 ? corrected(i) : w2[i]; }, &A_corr,
+                &theta_corr)) {
         theta_m = theta_corr;
         res.n_outliers = n_out;
       }

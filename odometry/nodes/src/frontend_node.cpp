@@ -66,13 +66,14 @@ void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   RgbdFrame frame;
   {
     ScopedStageTimer t(timings_, "decode");
-    frame = msgs::fromMsg(msg);  // MessageError -> counted skip
+    // Only the colour: the frontend takes depth from the depth filter. MessageError ->
+    // counted skip.
+    frame = msgs::fromMsg(msg, 65535, msgs::FrameImages::kColour);
   }
   if (frame.bgr.empty() || frame.bgr.rows != frame.camera.height ||
       frame.bgr.cols != frame.camera.width) {
     throw msgs::MessageError("rgbd_frame_t: colour image size disagrees with camera_info");
   }
-  frame.depth_m.release();  // the frontend takes depth from the depth filter
   frames_.push_back(std::move(frame));
   if (const int64_t n = trim(frames_, options_.max_pending)) {
     counters_.frames_dropped += n;
@@ -233,7 +234,7 @@ void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
   DepthWithVariance fused;
   {
     ScopedStageTimer t(timings_, "decode");
-    fused = msgs::fromMsg(msg);
+    fused = msgs::viewOfMsg(msg);  // used only in this handler: no copy of raw maps
   }
   pipeline::FrontendStats stats;
   frontend_.lift3d(features, fused, &stats);

@@ -37,11 +37,22 @@ pplvo_msgs::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_
 /// CV_8UC3; an 8-bit PNG keeps one or three channels). Throws MessageError when the size
 /// field, dimensions or payload disagree.
 cv::Mat decodeImage(const pplvo_msgs::image_t& msg);
+/// decodeImage() without the copy for raw encodings: the matrix then points into msg.data and
+/// is valid only while `msg` lives unchanged (must not be written). Other encodings decode.
+cv::Mat decodeImageView(const pplvo_msgs::image_t& msg);
 std::string encodingName(int8_t encoding);
 
+/// The images of a frame message a node decodes (the frontend uses only the colour, the
+/// depth filter only the depth).
+enum class FrameImages { kBoth, kColour, kDepth };
+
 /// Frame message -> library frame (depth in metres; depth units above max_depth_units
-/// count as missing). Throws MessageError on inconsistent messages.
-RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units = 65535);
+/// count as missing). Throws MessageError on inconsistent messages. `images` other than kBoth
+/// leaves the other image empty and checks only its header (present, an encoding of the
+/// right type, the same size), not its payload: a payload error then shows in the node that
+/// decodes it.
+RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units = 65535,
+                  FrameImages images = FrameImages::kBoth);
 /// Library frame -> message. Depth is quantised to 1/depth_scale m.
 pplvo_msgs::rgbd_frame_t toMsg(const RgbdFrame& frame, double depth_scale, int8_t rgb_encoding,
                                int8_t depth_encoding, const std::string& source = "");
@@ -50,6 +61,9 @@ pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& depth, const PinholeCamer
                               int64_t utime, int64_t seq, const std::string& stamp, int8_t stage,
                               bool compress = false);
 DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& msg);
+/// fromMsg() with decodeImageView(): raw maps point into `msg` (valid while it lives; for a
+/// handler that uses the map before it returns).
+DepthWithVariance viewOfMsg(const pplvo_msgs::depth_map_t& msg);
 
 /// Counters every node keeps; published as node_status_t.
 struct NodeCounters {

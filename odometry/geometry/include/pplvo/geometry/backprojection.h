@@ -55,14 +55,26 @@ inline Eigen::Matrix3d backprojectionJacobian(const PinholeCamera& cam, double u
 
 /// Eqs. 8-9: the point at depth z_m seen at undistorted pixel (u, v), with
 /// Sigma_P = J diag(var_px2, var_px2, var_z_m2) J^T.
-inline Point3WithCov backprojectWithCov(const PinholeCamera& cam, double u, double v, double z_m,
-                                        double var_z_m2, double var_px2 = kPixelVariancePx2) {
-  const Eigen::Matrix3d J = backprojectionJacobian(cam, u, v, z_m);
+/// backprojectWithCov() of the pixel whose ray is (x, y, 1), x = (u - cx)/fx, y = (v - cy)/fy
+/// (precomputed per column and row by callers that visit many pixels): the same result, bit
+/// for bit.
+inline Point3WithCov backprojectRayWithCov(const PinholeCamera& cam, double x, double y, double z_m,
+                                           double var_z_m2, double var_px2 = kPixelVariancePx2) {
+  Eigen::Matrix3d J;  // backprojectionJacobian()
+  J << z_m / cam.fx, 0.0, x,  //
+      0.0, z_m / cam.fy, y,   //
+      0.0, 0.0, 1.0;
   const Eigen::Vector3d s(var_px2, var_px2, var_z_m2);
   Point3WithCov out;
-  out.p = cam.backproject(u, v, z_m);
+  out.p = {x * z_m, y * z_m, z_m};  // PinholeCamera::backproject()
   out.cov = J * s.asDiagonal() * J.transpose();
   return out;
+}
+
+inline Point3WithCov backprojectWithCov(const PinholeCamera& cam, double u, double v, double z_m,
+                                        double var_z_m2, double var_px2 = kPixelVariancePx2) {
+  return backprojectRayWithCov(cam, (u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, z_m, var_z_m2,
+                               var_px2);
 }
 
 /// Depth (metres) and its variance at integer pixel (u, v) of a depth map with variance.

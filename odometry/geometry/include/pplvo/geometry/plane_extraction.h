@@ -192,19 +192,28 @@ class PlaneExtractor {
                  const std::vector<CellPlane>& planes, cv::Mat& labels, LabelStats* bs) const;
   /// 6) WLS fit of each labelled segment; res->planes in size order, labels renumbered.
   void fitSegments(const DepthWithVariance& depth, const LabelStats& ls, int np,
-                   PlaneExtractionResult* res) const;
+                   PlaneExtractionResult* res);
+  /// The sampled points of one segment fit: kept from frame to frame (capacity only), so that
+  /// the per-point arrays (~0.9 MB for 12,000 points) are neither grown nor faulted in anew.
+  struct FitSamples {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<Eigen::Matrix3d> covs;
+    std::vector<double> var_z;
+  };
   PlaneFitResult fitSegment(const DepthWithVariance& depth, const cv::Mat& labels,
-                            const LabelStats& ls, int i) const;
+                            const LabelStats& ls, int i, FitSamples* samples) const;
 
   PinholeCamera camera_;
   PlaneExtractionOptions options_;
   int cells_x_ = 0, cells_y_ = 0;
   std::vector<float> x_factor_, y_factor_;  // (u - cx)/fx per column, (v - cy)/fy per row
+  std::vector<double> ray_x_, ray_y_;       // the same in double (backprojectRayWithCov)
   std::vector<int> cell_of_col_;
   std::vector<Moments> cell_moments_;
   std::vector<CellPlane> cell_planes_;
   std::vector<char> planar_;
   std::vector<int> cell_segment_, cell_bin_, bin_count_, queue_;
+  std::vector<FitSamples> fit_samples_;  ///< one per segment fit of a frame (they run in parallel)
 };
 
 /// Convenience: extracts planes of `depth` with frame.camera and stores them in frame.planes
