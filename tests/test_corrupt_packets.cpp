@@ -45,7 +45,8 @@ void putInt32(std::vector<uint8_t>& bytes, size_t at, uint32_t value) {
 }
 
 /// Publishes, after each message on a pipeline channel, a corrupted copy of it: the frame's
-/// `stamp` length (offset 24 in every per-frame type: hash, utime, seq) made negative, zero or
+/// `stamp` length (offset 24 after hash, utime and seq; 32 in rgbd_frame_t, which carries
+/// depth_utime too) made negative, zero or
 /// huge, a features_t's n_points made negative or huge, or the packet cut in half. Records the
 /// real poses' bytes.
 class Corrupter {
@@ -66,16 +67,18 @@ class Corrupter {
     if (channel == channels::kPose) poses.push_back(bytes);
     if (!corrupt_ || !kCorrupted.count(channel)) return;
     std::vector<uint8_t> bad = bytes;
+    // rgbd_frame_t carries depth_utime between utime and seq.
+    const size_t stamp_at = channel == channels::kRgbd ? 32 : 24;
     const int kind = static_cast<int>(published_[channel]++ % 5);
     switch (kind) {
       case 0:
-        putInt32(bad, 24, 0xffffffffu);
+        putInt32(bad, stamp_at, 0xffffffffu);
         break;
       case 1:
-        putInt32(bad, 24, 0u);
+        putInt32(bad, stamp_at, 0u);
         break;
       case 2:
-        putInt32(bad, 24, 0x7fffffffu);
+        putInt32(bad, stamp_at, 0x7fffffffu);
         break;
       case 3:
         bad.resize(bad.size() / 2);
@@ -88,7 +91,8 @@ class Corrupter {
           putInt32(bad, 28 + stamp_length + 1 + 80,
                    published_[channel] % 2 ? 0x80000000u : 0x7ffffff0u);
         } else {
-          putInt32(bad, 24, static_cast<uint32_t>(bad.size() - 28 + 1));  // one byte too long
+          // One byte too long.
+          putInt32(bad, stamp_at, static_cast<uint32_t>(bad.size() - (stamp_at + 4) + 1));
         }
         break;
       }
