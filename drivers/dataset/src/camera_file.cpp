@@ -88,6 +88,16 @@ DatasetCamera parseCalibParams(const std::string& text, const std::string& path)
   if (text.find('\0') != std::string::npos) {
     throw DatasetError("calibration file " + path + " is not text (it contains NUL bytes)");
   }
+  // It also reads past the end of an XML document cut right after an attribute's '='
+  // (`<a t=`, found by fuzz_camera_file). A whole XML document ends with its root's closing
+  // tag, so one whose last character is not '>' is refused before the parser sees it.
+  const size_t first = text.find_first_not_of(" \t\r\n");
+  const size_t last = text.find_last_not_of(" \t\r\n");
+  if (first != std::string::npos && text.compare(first, 5, "<?xml") == 0 && text[last] != '>') {
+    throw DatasetError("calibration file " + path +
+                       " is cut short: an XML file ends with its closing tag "
+                       "(</opencv_storage>)");
+  }
   try {
     // From memory: FileStorage picks XML, YAML or JSON from the content, as it does for a file.
     cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);

@@ -523,6 +523,31 @@ TEST(Camera, CalibParamsXmlWithNulBytesIsAnError) {
 // Found by tests/fuzz/fuzz_camera_file: a huge <rows> made `fs[...] >> K` ask cv::Mat::create for
 // ~48 GB before the 3x3 check could run (out of memory under ASan, bad_alloc or the OOM killer
 // without). The reader checks the declared size against the data before converting.
+// fuzz_camera_file: OpenCV 4.6's XML parser reads a null pointer when the document ends right
+// after an attribute's '=' (the 596-byte crash input minimised to the first case).
+TEST(Camera, CalibParamsXmlCutInsideATagIsAnError) {
+  for (const std::string text :
+       {std::string("<?xml version=\"1.0\"?>\n<opencv_storage>\n<RGB_distortionnsic_rows>3"
+                    "<otation t="),
+        std::string("<?xml version=\"1.0\"?>\n<opencv_storage>\n<a t=\"x\" b=  \n"),
+        std::string("  <?xml version=\"1.0\"?>\n<opencv_storage>\n<a")}) {
+    try {
+      parseCalibParams(text, "cut.xml");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find("cut short"), std::string::npos) << e.what();
+    }
+  }
+  // A whole document still parses (and reports what it lacks).
+  try {
+    parseCalibParams("<?xml version=\"1.0\"?>\n<opencv_storage>\n</opencv_storage>\n", "x");
+    ADD_FAILURE() << "a file without intrinsics was accepted";
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing RGB_intrinsic_params"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Camera, CalibParamsXmlWithHugeOrInconsistentMatrixSizesIsAnError) {
   auto matrix = [](const std::string& name, const std::string& rows, const std::string& cols,
                    const std::string& data) {
