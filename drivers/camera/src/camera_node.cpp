@@ -152,10 +152,7 @@ class CameraPublisher {
         limiter_(options.max_fps) {}
 
   void setSource(const std::string& s) { source_ = s; }
-  void resetClock(const DeviceClockOptions& clock) {
-    clock_.emplace(clock);
-    clock_ticks_per_second_ = clock.ticks_per_second;
-  }
+  void resetClock(const DeviceClockOptions& clock) { clock_.emplace(clock); }
 
   void onFrame(const CapturedFrame& f) {
     ++counters_.frames_in;
@@ -177,8 +174,9 @@ class CameraPublisher {
       }
       pplvo_msgs::rgbd_frame_t msg;
       msg.utime = utime;
-      msg.depth_utime = utime + static_cast<int64_t>(std::llround(
-                                    f.depth_minus_colour_ticks * 1e6 / clock_ticks_per_second_));
+      const double ticks_per_us = clock_->options().ticks_per_second * 1e-6;
+      msg.depth_utime =
+          utime + static_cast<int64_t>(std::llround(f.depth_minus_colour_ticks / ticks_per_us));
       msg.seq = seq_;
       msg.stamp = stampText(utime);
       msg.source = source_;
@@ -227,7 +225,6 @@ class CameraPublisher {
   pplvo::PinholeCamera camera_;
   std::string source_;
   std::optional<DeviceClockMapper> clock_;
-  double clock_ticks_per_second_ = 1e6;
   RateLimiter limiter_;
   pm::NodeCounters counters_;
   pplvo::StageTimings timings_;

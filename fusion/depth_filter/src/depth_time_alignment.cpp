@@ -97,7 +97,7 @@ std::optional<Pose3> DepthTimeAligner::colourFromDepth(int64_t seq, int64_t colo
 
 cv::Mat DepthTimeAligner::apply(const PinholeCamera& camera, const cv::Mat& depth_m, int64_t seq,
                                 int64_t colour_utime, int64_t depth_utime) {
-  if (depth_utime == 0 || depth_utime == colour_utime) return depth_m;
+  if (!needed(colour_utime, depth_utime)) return depth_m;
   const double offset_s = (depth_utime - colour_utime) * 1e-6;
   stats_.last_offset_ms = offset_s * 1e3;
   if (std::abs(offset_s) > max_offset_s_) return depth_m;

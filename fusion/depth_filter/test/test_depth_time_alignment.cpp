@@ -118,7 +118,6 @@ TEST(DepthTimeAligner, UsesTheVelocityOfPosesTwoFramesBackAndMovesDepthByIt) {
 }
 
 TEST(DepthTimeAligner, ALossBreaksTheVelocity) {
-  const PinholeCamera cam = smallCamera();
   DepthTimeAligner aligner;
   aligner.observePose(0, 0, translation(0, 0, 0), true);
   aligner.observePose(1, 33333, translation(0, 0, 0.01), false);  // lost

@@ -75,8 +75,8 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
 }
 
 bool DepthFilterNode::waitsForAlignmentPose(const RgbdFrame& frame) const {
-  if (!options_.filter.time_alignment || frame.depth_utime == 0 ||
-      frame.depth_utime == frame.utime) {
+  if (!options_.filter.time_alignment ||
+      !depth_filter::DepthTimeAligner::needed(frame.utime, frame.depth_utime)) {
     return false;
   }
   const int64_t needed = frame.seq - depth_filter::DepthTimeAligner::kPoseLag;
@@ -116,8 +116,8 @@ void DepthFilterNode::processFrame(const RgbdFrame& frame) {
   // Depth in the undistorted pinhole model and at the colour instant, as every later stage
   // reads it.
   cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
-  if (options_.filter.time_alignment && frame.depth_utime != 0 &&
-      frame.depth_utime != frame.utime) {
+  if (options_.filter.time_alignment &&
+      depth_filter::DepthTimeAligner::needed(frame.utime, frame.depth_utime)) {
     ScopedStageTimer t(timings_, "time_align");
     depth_m = time_aligner_.apply(frame.camera, depth_m, frame.seq, frame.utime,
                                   frame.depth_utime);

@@ -22,8 +22,8 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
   PipelineFrameResult r;
   // Stage 1-2 of the depth filter, on depth in the undistorted pinhole model.
   cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
-  if (options_.depth_filter.time_alignment && frame.depth_utime != 0 &&
-      frame.depth_utime != frame.utime) {
+  if (options_.depth_filter.time_alignment &&
+      depth_filter::DepthTimeAligner::needed(frame.utime, frame.depth_utime)) {
     ScopedStageTimer t(depth_timings_, "time_align");
     depth_m = time_aligner_.apply(frame.camera, depth_m, frame.seq, frame.utime, frame.depth_utime);
   }

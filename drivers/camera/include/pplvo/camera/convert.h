@@ -140,6 +140,7 @@ class DeviceClockMapper {
     double offset_us = 0;  ///< current host - device offset (device time from first frame)
   };
   const Stats& stats() const { return stats_; }
+  const DeviceClockOptions& options() const { return options_; }
 
  private:
   DeviceClockOptions options_;

@@ -45,6 +45,12 @@ class DepthTimeAligner {
   /// after the frame), so every layout uses the same motion.
   static constexpr int64_t kPoseLag = 2;
 
+  /// True when a frame's depth was captured at another instant than its colour (depth_utime 0
+  /// means the same instant): the frames this stage moves.
+  static bool needed(int64_t colour_utime, int64_t depth_utime) {
+    return depth_utime != 0 && depth_utime != colour_utime;
+  }
+
   /// Largest |depth - colour| instant corrected; beyond it the frame is left as is (a pair
   /// that far apart is an association problem, not a sensor offset).
   explicit DepthTimeAligner(double max_offset_s = 0.05) : max_offset_s_(max_offset_s) {}
