@@ -29,6 +29,15 @@ Pose3 vectorToMotion(const Vector6d& v) {
 
 }  // namespace
 
+Matrix6d frameErrorCovariance(const OdometryTrackerOptions& o) {
+  const double var_t = o.frame_error_sigma_t_m * o.frame_error_sigma_t_m;
+  const double half_angle = 0.5 * o.frame_error_sigma_rot_deg * M_PI / 180.0;  // q_xyz
+  Matrix6d C = Matrix6d::Zero();
+  C.topLeftCorner<3, 3>().diagonal().setConstant(2 * var_t);
+  C.bottomRightCorner<3, 3>().diagonal().setConstant(2 * half_angle * half_angle);
+  return C;
+}
+
 OdometryTracker::OdometryTracker(OdometryTrackerOptions options)
     : options_(std::move(options)), estimator_(options_.estimator) {}
 
@@ -122,7 +131,10 @@ void OdometryTracker::propagateWindow(int64_t seq, const Pose3& T_curr_prev, con
     e.T_curr_frame = T_curr_prev * e.T_curr_frame;
     e.T_curr_frame.linear() =
         Eigen::Quaterniond(e.T_curr_frame.linear()).normalized().toRotationMatrix();
-    e.max_translation_variance_m2 = maxTranslationVariance(e.covariance);
+    // Isotropic, so it adds to the largest eigenvalue as it is; it does not accumulate
+    // along the chain (each frame's own error enters once).
+    const double var_t = options_.frame_error_sigma_t_m * options_.frame_error_sigma_t_m;
+    e.max_translation_variance_m2 = maxTranslationVariance(e.covariance) + 2 * var_t;
   }
   WindowEntry self;
   self.seq = seq;
@@ -161,6 +173,7 @@ TrackerOutput OdometryTracker::makeOutput(int64_t seq) const {
   out.covariance = last_cov_;
   out.T_prev_curr = last_T_curr_prev_.inverse();
   out.covariance_prev_curr = invertedPoseCovariance(last_T_curr_prev_, last_cov_);
+  if (status_ != TrackingStatus::kFirstFrame) out.covariance_prev_curr += frameErrorCovariance(options_);
   out.max_translation_variance_m2 = maxTranslationVariance(last_cov_);
   out.consecutive_rejections = consecutive_rejections_;
   out.window.assign(window_.begin(), window_.end());

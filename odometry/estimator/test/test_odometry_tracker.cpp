@@ -132,6 +132,43 @@ TEST(OdometryTracker, RelativePoseForMessagesIsPrevCurr) {
               0.2 * out.covariance.trace());
 }
 
+TEST(OdometryTracker, PerFrameSharedErrorEntersThePublishedCovarianceOnce) {
+  // Each frame's pose has its own error (2 mm, 0.06 deg per axis): a relative pose gains it
+  // from both frames (2 Q), and so does every window transform, without accumulating along
+  // the chain; the estimate's own covariance (the EKF's Q) and the pose do not change.
+  OdometryTrackerOptions plain, with_error;
+  with_error.frame_error_sigma_t_m = 2e-3;
+  with_error.frame_error_sigma_rot_deg = 0.06;
+  OdometryTracker a(plain), b(with_error);
+  TrackerOutput out_a = a.initialise(0), out_b = b.initialise(0);
+  EXPECT_EQ(out_b.covariance_prev_curr, Matrix6d::Zero());  // first frame: no relative pose
+  const Pose3 M = testing::typicalMotion();
+  for (int64_t s = 1; s <= 6; ++s) {
+    out_a = a.update(s, goodEstimate(M));
+    out_b = b.update(s, goodEstimate(M));
+  }
+  const Matrix6d added = out_b.covariance_prev_curr - out_a.covariance_prev_curr;
+  const double var_t = 2 * 2e-3 * 2e-3;
+  const double half_angle = 0.5 * 0.06 * M_PI / 180;
+  Vector6d expected;
+  expected << var_t, var_t, var_t, Eigen::Vector3d::Constant(2 * half_angle * half_angle);
+  EXPECT_LT((added - Matrix6d(expected.asDiagonal())).norm(), 1e-15);
+  EXPECT_LT((added - frameErrorCovariance(with_error)).norm(), 1e-18);
+  EXPECT_EQ(out_b.covariance, out_a.covariance);
+  EXPECT_EQ(out_b.T_w_c.matrix(), out_a.T_w_c.matrix());
+  ASSERT_EQ(out_a.window.size(), out_b.window.size());
+  for (size_t i = 0; i + 1 < out_b.window.size(); ++i) {
+    EXPECT_NEAR(out_b.window[i].max_translation_variance_m2 -
+                    out_a.window[i].max_translation_variance_m2,
+                var_t, 1e-15);
+  }
+  EXPECT_EQ(out_b.window.back().max_translation_variance_m2, 0.0);  // the current frame
+  const FramePose published = toFramePose(out_b);
+  EXPECT_EQ(published.rel_covariance, out_b.covariance_prev_curr);
+  EXPECT_NEAR(published.max_translation_variance_m2,
+              toFramePose(out_a).max_translation_variance_m2 + var_t, 1e-15);
+}
+
 // End to end: synthetic correspondences through track(); degenerate frames hand over to the
 // velocity model without NaN, and tracking resumes.
 TEST(OdometryTracker, TrackSyntheticWithDegenerateFrames) {

@@ -197,6 +197,15 @@ double quadratic(const Eigen::VectorXd& e, const Eigen::MatrixXd& C, bool* ok) {
   return e.dot(llt.solve(e));
 }
 
+/// 2 Q of a relative pose whose two frames each carry an independent pose error of per-axis
+/// std sigma_t (m) and sigma_rot (rad, as angle; q_xyz is half of it).
+Matrix6d frameErrorCovariance(double sigma_t_m, double sigma_rot_rad) {
+  Matrix6d C = Matrix6d::Zero();
+  C.topLeftCorner<3, 3>().diagonal().setConstant(2 * sigma_t_m * sigma_t_m);
+  C.bottomRightCorner<3, 3>().diagonal().setConstant(2 * 0.25 * sigma_rot_rad * sigma_rot_rad);
+  return C;
+}
+
 }  // namespace
 
 GtJitter estimateGtJitter(const TumFile& file) {
@@ -257,6 +266,9 @@ NeesResult evaluateNees(const TumFile& gt_file, const std::vector<RelativePoseRe
   }
   NeesResult res;
   res.gt_used = o.gt;
+  res.gt_time_offset_s = o.gt_time_offset_s;
+  res.added_frame_sigma_t_m = o.added_frame_sigma_t_m;
+  res.added_frame_sigma_rot_rad = o.added_frame_sigma_rot_rad;
   res.records = static_cast<int>(records.size());
   const GroundTruth gt(gt_file);
   if (gt.size() < 2) {
@@ -278,7 +290,9 @@ NeesResult evaluateNees(const TumFile& gt_file, const std::vector<RelativePoseRe
     }
     Eigen::Isometry3d G0, G1;
     double f0 = 1.0, f1 = 1.0;
-    if (!gt.at(r.prev_stamp_s, max_gap, &G0, &f0) || !gt.at(r.stamp_s, max_gap, &G1, &f1)) {
+    const double off = o.gt_time_offset_s;
+    if (!gt.at(r.prev_stamp_s + off, max_gap, &G0, &f0) ||
+        !gt.at(r.stamp_s + off, max_gap, &G1, &f1)) {
       ++res.skipped_no_gt;
       continue;
     }
@@ -295,7 +309,7 @@ NeesResult evaluateNees(const TumFile& gt_file, const std::vector<RelativePoseRe
       // d xi_gt / d stamp of each end, central differences on the interpolated ground truth
       // (one-sided at its ends).
       for (int end = 0; end < 2; ++end) {
-        const double s = end == 0 ? r.prev_stamp_s : r.stamp_s;
+        const double s = (end == 0 ? r.prev_stamp_s : r.stamp_s) + off;
         Eigen::Isometry3d Ga, Gb;
         double sa = s - h, sb = s + h;
         if (!gt.at(sa, max_gap, &Ga)) {
@@ -313,7 +327,8 @@ NeesResult evaluateNees(const TumFile& gt_file, const std::vector<RelativePoseRe
         pair.cov_gt += o.gt.sigma_stamp_s * o.gt.sigma_stamp_s * v * v.transpose();
       }
     }
-    const Matrix6d C = pair.cov_est + pair.cov_gt;
+    pair.cov_frame = frameErrorCovariance(o.added_frame_sigma_t_m, o.added_frame_sigma_rot_rad);
+    const Matrix6d C = pair.cov_est + pair.cov_gt + pair.cov_frame;
     bool ok = true;
     pair.nees = quadratic(pair.error, C, &ok);
     pair.nees_t = quadratic(pair.error.head<3>(), C.topLeftCorner<3, 3>(), &ok);
@@ -361,6 +376,79 @@ NeesResult evaluateNees(const TumFile& gt_file, const std::vector<RelativePoseRe
   return res;
 }
 
+GtTimeOffsetEstimate estimateGtTimeOffset(const TumFile& gt,
+                                          const std::vector<RelativePoseRecord>& records,
+                                          const NeesOptions& options, double max_abs_s,
+                                          double step_s) {
+  GtTimeOffsetEstimate best;
+  if (!(step_s > 0) || !(max_abs_s >= 0)) return best;
+  NeesOptions o = options;
+  const int steps = static_cast<int>(std::floor(max_abs_s / step_s + 1e-9));
+  double best_ms = std::numeric_limits<double>::infinity();
+  for (int k = -steps; k <= steps; ++k) {
+    o.gt_time_offset_s = k * step_s;
+    const NeesResult r = evaluateNees(gt, records, o);
+    if (!r.ok) return GtTimeOffsetEstimate{};  // a pair set that changes with the offset
+    double sum = 0;
+    for (const NeesPair& p : r.pairs) sum += 4 * p.error.tail<3>().squaredNorm() / 3;
+    const double ms = sum / r.pairs.size();
+    if (k == 0) best.rms_rot_zero_rad = std::sqrt(ms);
+    if (ms < best_ms) {
+      best_ms = ms;
+      best.offset_s = o.gt_time_offset_s;
+    }
+  }
+  best.rms_rot_rad = std::sqrt(best_ms);
+  best.ok = true;
+  return best;
+}
+
+namespace {
+
+/// Mean over `pairs` of e_b^T (C_b + 2 s^2 scale I)^-1 e_b for the 3x3 block b (0: t, 3: q).
+double meanBlockNees(const std::vector<const NeesPair*>& pairs, int block, double added_var) {
+  double sum = 0;
+  for (const NeesPair* p : pairs) {
+    const Eigen::Matrix3d C = (p->cov_est + p->cov_gt).block<3, 3>(block, block) +
+                              added_var * Eigen::Matrix3d::Identity();
+    const Eigen::Vector3d e = p->error.segment<3>(block);
+    sum += e.dot(C.ldlt().solve(e));
+  }
+  return sum / pairs.size();
+}
+
+/// Smallest per-frame std s >= 0 (in the block's units) with mean block NEES <= 3, where a
+/// pair gains 2 s^2 `unit_factor` on its block's diagonal; bisection on a monotone function.
+double fitBlock(const std::vector<const NeesPair*>& pairs, int block, double unit_factor) {
+  auto meanAt = [&](double s) { return meanBlockNees(pairs, block, 2 * unit_factor * s * s); };
+  if (meanAt(0.0) <= 3.0) return 0.0;
+  double lo = 0.0, hi = 1e-4;
+  while (meanAt(hi) > 3.0 && hi < 10.0) hi *= 2;
+  for (int i = 0; i < 100 && hi - lo > 1e-12; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (meanAt(mid) > 3.0 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+FrameErrorFit fitFrameError(const std::vector<const NeesResult*>& results) {
+  FrameErrorFit fit;
+  std::vector<const NeesPair*> pairs;
+  for (const NeesResult* r : results) {
+    if (r == nullptr || !r->ok) continue;
+    for (const NeesPair& p : r->pairs) pairs.push_back(&p);
+  }
+  fit.pairs = static_cast<int>(pairs.size());
+  if (pairs.empty()) return fit;
+  fit.sigma_t_m = fitBlock(pairs, 0, 1.0);
+  // q_xyz is half the rotation vector: its variance is a quarter of the angle's.
+  fit.sigma_rot_rad = fitBlock(pairs, 3, 0.25);
+  fit.ok = true;
+  return fit;
+}
+
 namespace {
 
 void line(std::ostringstream& out, const char* key, double v) {
@@ -381,6 +469,9 @@ std::string formatNeesText(const NeesResult& r) {
   line(out, "nees.gt_sigma_t_m", r.gt_used.sigma_t_m);
   line(out, "nees.gt_sigma_rot_deg", r.gt_used.sigma_rot_rad * 180 / M_PI);
   line(out, "nees.stamp_sigma_s", r.gt_used.sigma_stamp_s);
+  line(out, "nees.gt_time_offset_s", r.gt_time_offset_s);
+  line(out, "nees.added_frame_sigma_t_m", r.added_frame_sigma_t_m);
+  line(out, "nees.added_frame_sigma_rot_deg", r.added_frame_sigma_rot_rad * 180 / M_PI);
   line(out, "nees.mean", r.all.mean);
   line(out, "nees.median", r.all.median);
   line(out, "nees.share_inside_95", r.all.share_inside);
@@ -430,6 +521,9 @@ std::string formatNeesJson(const NeesResult& r) {
       << ", \"t_share_inside_95\": " << num(r.translation.share_inside)
       << ", \"r_mean\": " << num(r.rotation.mean) << ", \"r_median\": " << num(r.rotation.median)
       << ", \"r_share_inside_95\": " << num(r.rotation.share_inside)
+      << ", \"gt_time_offset_s\": " << num(r.gt_time_offset_s)
+      << ", \"added_frame_sigma_t_m\": " << num(r.added_frame_sigma_t_m)
+      << ", \"added_frame_sigma_rot_deg\": " << num(r.added_frame_sigma_rot_rad * 180 / M_PI)
       << ", \"mean_without_gt_noise\": " << num(r.mean_est_only)
       << ", \"rms_sigma_t_m\": " << num(r.rms_sigma_t_m)
       << ", \"rms_error_t_m\": " << num(r.rms_error_t_m)

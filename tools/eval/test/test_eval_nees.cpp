@@ -254,6 +254,134 @@ TEST(Nees, GroundTruthNoiseAndStampErrorAreAccountedFor) {
   EXPECT_GT(b.mean_est_only, 10.0);
 }
 
+/// Ground truth of truePose at 100 Hz over `seconds`.
+TumFile denseGroundTruth(double seconds) {
+  TumFile gt;
+  gt.name = "gt";
+  for (int i = 0; i <= seconds * 100; ++i) gt.rows.push_back(tumRow(i * 0.01, truePose(i * 0.01)));
+  return gt;
+}
+
+/// Pose perturbed on the right (body frame) by a translation and a rotation vector.
+Eigen::Isometry3d perturbedBy(const Eigen::Isometry3d& T, const Eigen::Vector3d& dt,
+                              const Eigen::Vector3d& dtheta) {
+  Eigen::Isometry3d E = Eigen::Isometry3d::Identity();
+  E.linear() = expSo3(dtheta);
+  E.translation() = dt;
+  return T * E;
+}
+
+/// A hand-held kind of motion: the rotation oscillates at 0.7-1.5 Hz (up to ~1.4 rad/s).
+Eigen::Isometry3d shakyPose(double t) {
+  Eigen::Isometry3d T = truePose(t);
+  T.linear() = expSo3(Eigen::Vector3d(0.1 * std::sin(2 * M_PI * 1.5 * t),
+                                      0.15 * std::sin(2 * M_PI * 1.1 * t + 1),
+                                      0.05 * std::sin(2 * M_PI * 0.7 * t)));
+  return T;
+}
+
+TEST(Nees, GroundTruthClockOffsetIsFoundFromTheRotation) {
+  // Frames stamped 13 ms before their images were taken: the estimator (consistent about its
+  // own noise) measures the motion between stamp + 13 ms instants. A clock offset changes a
+  // relative rotation by the change of the angular rate over the pair times the offset, so
+  // the motion must turn unevenly, as a hand-held camera does.
+  std::mt19937 rng(11);
+  TumFile gt;
+  for (int i = 0; i <= 3000; ++i) gt.rows.push_back(tumRow(i * 0.01, shakyPose(i * 0.01)));
+  std::vector<RelativePoseRecord> records;
+  const double offset = 0.013;
+  for (int k = 1; k <= 600; ++k) {
+    RelativePoseRecord r;
+    r.prev_stamp_s = 1.0 + (k - 1) / 30.0;
+    r.stamp_s = 1.0 + k / 30.0;
+    r.status = 1;
+    r.covariance = randomCovariance(rng, 4e-4, 3e-4);
+    const Eigen::Isometry3d T_true =
+        shakyPose(r.prev_stamp_s + offset).inverse() * shakyPose(r.stamp_s + offset);
+    r.T_prev_curr = xiToPose(poseToXi(T_true) + drawFrom(rng, r.covariance));
+    records.push_back(r);
+  }
+  NeesOptions o;
+  o.gt = {0.0, 0.0, 0.0};
+  const GtTimeOffsetEstimate est = estimateGtTimeOffset(gt, records, o);
+  ASSERT_TRUE(est.ok);
+  EXPECT_NEAR(est.offset_s, offset, 0.0015);
+  EXPECT_LT(est.rms_rot_rad, 0.8 * est.rms_rot_zero_rad);
+  const NeesResult at_zero = evaluateNees(gt, records, o);
+  o.gt_time_offset_s = est.offset_s;
+  const NeesResult at_offset = evaluateNees(gt, records, o);
+  ASSERT_TRUE(at_zero.ok && at_offset.ok);
+  std::printf("clock offset %.1f ms found: mean NEES %.2f at 0 ms, %.2f there\n",
+              est.offset_s * 1e3, at_zero.all.mean, at_offset.all.mean);
+  EXPECT_GT(at_zero.all.mean, 10.0);
+  EXPECT_NEAR(at_offset.all.mean, 6.0, 0.8);
+  EXPECT_DOUBLE_EQ(at_offset.gt_time_offset_s, est.offset_s);
+}
+
+TEST(Nees, FrameErrorFitRecoversThePerFrameSharedError) {
+  // Every frame's pose carries its own error (2 mm, 0.06 deg per axis) shared by all its
+  // measurements; the estimator reports only its per-pair noise (0.3 mm): over-confident.
+  // The fit must find the per-frame error, and with it added the NEES must average 6.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n01;
+  const double sigma_t = 2e-3, sigma_rot = 0.06 * M_PI / 180;
+  const TumFile gt = denseGroundTruth(70);
+  auto frameError = [&] {
+    return std::make_pair(Eigen::Vector3d(sigma_t * n01(rng), sigma_t * n01(rng), sigma_t * n01(rng)),
+                          Eigen::Vector3d(sigma_rot * n01(rng), sigma_rot * n01(rng),
+                                          sigma_rot * n01(rng)));
+  };
+  std::vector<RelativePoseRecord> shared, own_only;
+  auto prev_error = frameError();
+  for (int k = 1; k <= 2000; ++k) {
+    RelativePoseRecord r;
+    r.prev_stamp_s = 0.2 + (k - 1) / 30.0;
+    r.stamp_s = 0.2 + k / 30.0;
+    r.status = 1;
+    r.covariance = randomCovariance(rng, 3e-4, 2e-4);
+    const auto error = frameError();
+    const Eigen::Isometry3d T0 = perturbedBy(truePose(r.prev_stamp_s), prev_error.first,
+                                             prev_error.second);
+    const Eigen::Isometry3d T1 = perturbedBy(truePose(r.stamp_s), error.first, error.second);
+    prev_error = error;
+    RelativePoseRecord own = r;
+    r.T_prev_curr = xiToPose(poseToXi(T0.inverse() * T1) + drawFrom(rng, r.covariance));
+    shared.push_back(r);
+    const Eigen::Isometry3d T_true = truePose(r.prev_stamp_s).inverse() * truePose(r.stamp_s);
+    own.T_prev_curr = xiToPose(poseToXi(T_true) + drawFrom(rng, own.covariance));
+    own_only.push_back(own);
+  }
+  NeesOptions o;
+  o.gt = {0.0, 0.0, 0.0};
+  const NeesResult without = evaluateNees(gt, shared, o);
+  ASSERT_TRUE(without.ok) << without.error;
+  const FrameErrorFit fit = fitFrameError({&without});
+  ASSERT_TRUE(fit.ok);
+  EXPECT_EQ(fit.pairs, 2000);
+  std::printf("per-frame error fitted: %.3f mm, %.4f deg (true 2, 0.06); NEES without %.1f\n",
+              fit.sigma_t_m * 1e3, fit.sigma_rot_rad * 180 / M_PI, without.all.mean);
+  EXPECT_GT(without.all.mean, 30.0);
+  EXPECT_NEAR(fit.sigma_t_m, sigma_t, 0.1 * sigma_t);
+  EXPECT_NEAR(fit.sigma_rot_rad, sigma_rot, 0.1 * sigma_rot);
+  o.added_frame_sigma_t_m = fit.sigma_t_m;
+  o.added_frame_sigma_rot_rad = fit.sigma_rot_rad;
+  const NeesResult with = evaluateNees(gt, shared, o);
+  EXPECT_NEAR(with.translation.mean, 3.0, 0.05);  // fitted to 3 exactly
+  EXPECT_NEAR(with.rotation.mean, 3.0, 0.05);
+  EXPECT_NEAR(with.all.mean, 6.0, 0.5);
+  EXPECT_NEAR(with.all.share_inside, 0.95, 0.03);
+  // A consistent estimator needs no per-frame error: at most a small fraction of the above.
+  const NeesResult consistent = evaluateNees(gt, own_only, NeesOptions{{0.0, 0.0, 0.0}});
+  const FrameErrorFit none = fitFrameError({&consistent});
+  EXPECT_LT(none.sigma_t_m, 0.2 * sigma_t);
+  EXPECT_LT(none.sigma_rot_rad, 0.2 * sigma_rot);
+  // Pooled with the shared-error run, the fit lies between the two.
+  const FrameErrorFit pooled = fitFrameError({&without, &consistent});
+  EXPECT_EQ(pooled.pairs, 4000);
+  EXPECT_GT(pooled.sigma_t_m, none.sigma_t_m);
+  EXPECT_LT(pooled.sigma_t_m, fit.sigma_t_m);
+}
+
 TEST(Nees, SkipsStatusesAndStampsOutsideTheGroundTruth) {
   std::mt19937 rng(5);
   TumFile gt;

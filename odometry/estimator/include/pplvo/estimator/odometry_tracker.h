@@ -32,6 +32,16 @@ struct OdometryTrackerOptions {
   /// threshold drops frames linked to the current one through a guessed motion.
   double velocity_model_sigma_t_m = 0.02;
   double velocity_model_sigma_q = 0.01;
+  /// Per-frame shared error: each frame's pose carries an error common to all of its
+  /// measurements (std per axis), which no number of matches averages away and which does
+  /// not accumulate from frame to frame. A relative pose between two frames gains 2 Q, Q =
+  /// diag(sigma_t^2 I, (sigma_rot / 2)^2 I) in [t; q_xyz]; so do the window's transforms
+  /// (the depth filter's drop rule). The estimate and the keyframe rule do not use it. Fitted
+  /// on real Kinect-class sequences by `pplvo-eval --fit-frame-error` (scripts/fit_frame_error.sh,
+  /// docs/estimator.md "The per-frame shared error"); 0 for rendered images, whose frames
+  /// have exact poses.
+  double frame_error_sigma_t_m = 0.0;
+  double frame_error_sigma_rot_deg = 0.0;
 };
 
 /// Schema of OdometryTrackerOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
@@ -56,13 +66,25 @@ void visit(V& v, OdometryTrackerOptions& o) {
   v.field("velocity_model_sigma_q", o.velocity_model_sigma_q,
           "process noise std of q_xyz of a velocity-model step (~half-angle, rad)",
           config::atLeast(0));
+  v.field("frame_error_sigma_t_m", o.frame_error_sigma_t_m,
+          "per-frame pose error shared by all of a frame's measurements, translation std per "
+          "axis (m); added as 2 Q to the published relative covariance and the window (0 for "
+          "rendered images; fit: scripts/fit_frame_error.sh)",
+          config::atLeast(0));
+  v.field("frame_error_sigma_rot_deg", o.frame_error_sigma_rot_deg,
+          "the same, rotation std per axis (deg)", config::atLeast(0));
 }
+
+/// 2 Q of a relative pose between two frames that each carry the per-frame shared error of
+/// `o` (frame_error_sigma_*), as a covariance of xi = [t; q_xyz].
+Matrix6d frameErrorCovariance(const OdometryTrackerOptions& o);
 
 /// One frame of the window: the transform from that frame to the current one.
 struct WindowEntry {
   int64_t seq = -1;
   Pose3 T_curr_frame = Pose3::Identity();
   Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_frame), eq. 22
+  /// Of `covariance` plus the per-frame shared error of both frames (2 sigma_t^2).
   double max_translation_variance_m2 = 0;
 };
 
@@ -72,7 +94,8 @@ struct TrackerOutput {
   Pose3 T_w_c = Pose3::Identity();         ///< world = first camera frame
   Pose3 T_curr_prev = Pose3::Identity();   ///< the motion applied this frame
   Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_prev) (Q of eq. 22)
-  /// The same motion as T_prev_curr (pose_t.rel_*) and the covariance of its xi.
+  /// The same motion as T_prev_curr (pose_t.rel_*) and the covariance of its xi, the
+  /// per-frame shared error of both frames included (frameErrorCovariance).
   Pose3 T_prev_curr = Pose3::Identity();
   Matrix6d covariance_prev_curr = Matrix6d::Zero();
   double max_translation_variance_m2 = 0;  ///< of `covariance`

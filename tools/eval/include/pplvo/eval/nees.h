@@ -54,6 +54,14 @@ struct NeesOptions {
   /// The two ground-truth samples around a stamp must be at most this far apart (s);
   /// <= 0: 2.5 times the median ground-truth interval.
   double max_gt_interval_s = 0.0;
+  /// The ground truth is read at each frame stamp plus this (s): a clock offset between the
+  /// motion capture and the camera, a property of the recording (TUM's tools take --offset).
+  double gt_time_offset_s = 0.0;
+  /// Added to each pair's covariance as 2 Q, Q = diag(sigma_t^2 I, (sigma_rot / 2)^2 I): a
+  /// per-frame pose error shared by all of a frame's measurements (FrameErrorFit below). 0: the
+  /// published covariance as it is.
+  double added_frame_sigma_t_m = 0.0;
+  double added_frame_sigma_rot_rad = 0.0;
   bool include_velocity_model = true;  ///< evaluate STATUS_VELOCITY_MODEL frames too
   double confidence = 0.95;            ///< of the chi-square bounds
 };
@@ -65,7 +73,8 @@ struct NeesPair {
   Vector6d error = Vector6d::Zero();    ///< xi(T_est) - xi(T_gt)
   Matrix6d cov_est = Matrix6d::Zero();  ///< published covariance
   Matrix6d cov_gt = Matrix6d::Zero();   ///< ground-truth noise + timestamp error
-  double nees = 0.0;                    ///< 6 dof, with cov_est + cov_gt
+  Matrix6d cov_frame = Matrix6d::Zero();  ///< NeesOptions::added_frame_sigma_* as 2 Q
+  double nees = 0.0;                    ///< 6 dof, with cov_est + cov_gt + cov_frame
   double nees_t = 0.0, nees_r = 0.0;    ///< 3 dof, marginal blocks
   double nees_est_only = 0.0;           ///< 6 dof, cov_est alone
 };
@@ -95,11 +104,45 @@ struct NeesResult {
   int skipped_singular = 0;  ///< C not positive definite
   double max_gt_interval_s = 0.0;
   GtNoiseOptions gt_used;  ///< the ground-truth noise actually assumed
+  double gt_time_offset_s = 0.0;
+  double added_frame_sigma_t_m = 0.0, added_frame_sigma_rot_rad = 0.0;
 };
 
 /// Evaluates every record against `gt` (TUM file, T_w_c; stamps in seconds already).
 NeesResult evaluateNees(const TumFile& gt, const std::vector<RelativePoseRecord>& records,
                         const NeesOptions& options = {});
+
+/// Clock offset between ground truth and frames: the gt_time_offset_s in
+/// [-max_abs_s, max_abs_s] (steps of step_s) that minimises the mean squared rotation error
+/// of the pairs. Rotation, because a relative rotation does not depend on where the camera
+/// is, only on when: a shifted clock changes it by the offset times the change of the angular
+/// rate over the pair (large for a hand-held camera), while the translation error of TUM's
+/// sequences does not depend on the offset (docs/estimator.md). ok = false when no pair
+/// could be evaluated at some offset.
+struct GtTimeOffsetEstimate {
+  bool ok = false;
+  double offset_s = 0.0;
+  double rms_rot_rad = 0.0;       ///< per axis, at offset_s (rotation angle, not q)
+  double rms_rot_zero_rad = 0.0;  ///< per axis, at offset 0
+};
+GtTimeOffsetEstimate estimateGtTimeOffset(const TumFile& gt,
+                                          const std::vector<RelativePoseRecord>& records,
+                                          const NeesOptions& options, double max_abs_s = 0.05,
+                                          double step_s = 0.001);
+
+/// The per-frame shared error that makes the published covariances consistent: sigma_t_m
+/// and sigma_rot_rad (per axis, each frame's pose) such that adding 2 Q (as
+/// NeesOptions::added_frame_sigma_*) brings the mean translation and rotation NEES of all
+/// given pairs to 3 each (their degrees of freedom); 0 when the covariance is already
+/// large enough. Pairs of every result are pooled, each pair counting once. The covariances
+/// must be those of a run without a frame error of its own (or the result adds to it in
+/// quadrature). docs/estimator.md, "The per-frame shared error".
+struct FrameErrorFit {
+  bool ok = false;
+  double sigma_t_m = 0.0, sigma_rot_rad = 0.0;
+  int pairs = 0;
+};
+FrameErrorFit fitFrameError(const std::vector<const NeesResult*>& results);
 
 /// `nees.*` key value lines (text) and a JSON object.
 std::string formatNeesText(const NeesResult& result);
