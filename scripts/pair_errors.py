@@ -10,6 +10,7 @@ share"; docs/depth_filter.md, "Depth at the colour instant"). Pure Python, no nu
                                           fit of each pair's error to v (offset_j - offset_i),
                                           offset = depth minus colour stamp (depth.txt)
   pair_errors.py scale GT TRAJ...         per-pair translation of TRAJ relative to the truth's
+  pair_errors.py span GT TRAJ...          RMS error of the relative pose over k = 1..24 frames
 
 Trajectories are TUM files (stamp tx ty tz qx qy qz qw, camera to world); A.cov is pplvo-run's
 --covariance file. Errors are those of the relative pose between consecutive trajectory lines,
@@ -207,8 +208,34 @@ def cmd_scale(gt_path, *paths):
         print(f'{path}: translation per pair = {num / den:.3f} x the truth\'s')
 
 
+def cmd_span(gt_path, *paths):
+    """RMS error (3D translation, mm; rotation angle, deg) of the relative pose over k frames.
+    An error of each frame's own (shared by its matches) gives a flat curve from k = 1 on;
+    an error of each pair accumulates: the variance grows with k."""
+    gt = GroundTruth(gt_path)
+    spans = (1, 2, 3, 4, 6, 8, 12, 16, 24)
+    for path in paths:
+        tr = load_trajectory(path)
+        cells = []
+        for k in spans:
+            et = er = 0.0
+            n = 0
+            for (s0, T0), (s1, T1) in zip(tr, tr[k:]):
+                g0, g1 = gt.at(s0), gt.at(s1)
+                if g0 is None or g1 is None:
+                    continue
+                E = compose(inverse(compose(inverse(g0), g1)), compose(inverse(T0), T1))
+                et += sum(v * v for v in E[0])
+                er += 4 * sum(v * v for v in E[1][:3])
+                n += 1
+            if n:
+                cells.append(f'k={k}: {1e3 * math.sqrt(et / n):.2f} mm '
+                             f'{math.degrees(math.sqrt(er / n)):.3f} deg')
+        print(f'{path}:', ', '.join(cells))
+
+
 COMMANDS = {'shared': cmd_shared, 'clock': cmd_clock, 'depth-offset': cmd_depth_offset,
-            'scale': cmd_scale}
+            'scale': cmd_scale, 'span': cmd_span}
 
 if __name__ == '__main__':
     if len(sys.argv) < 4 or sys.argv[1] not in COMMANDS:

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <random>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -103,6 +104,65 @@ TEST(OgmFusion, WindowNeverExceedsMaxAndEvictsByUncertainty) {
   EXPECT_EQ(ogm.stats().evicted_uncertainty, 2);
   ASSERT_TRUE(ogm.addFrame(9, cam, uniform(cam, 2.0f, 1e-4f)));
   EXPECT_EQ(ogm.fuse(9, Pose3::Identity()).depth.window_length, 3);  // 9, 8, 7
+}
+
+TEST(OgmFusion, VarianceStaysHonestWhenDepthErrorsAreCorrelatedOverTime) {
+  // A still camera in front of a wall at 2 m: each pixel's depth error is partly (rho) the
+  // same in every frame (a sensor's fixed pattern) and partly fresh, each input reported with
+  // its full sensor variance s^2. Ten frames fused as independent measurements would claim
+  // s^2 / 10; with rho = 1 the error of their mean is still s. O-GM's mixture variance
+  // (eq. 7: the spread of the window around its mean plus the inputs' variance) must cover
+  // the actual error at every rho (issue 18).
+  PinholeCamera cam;
+  cam.width = cam.height = 60;
+  cam.fx = cam.fy = 60.0;
+  cam.cx = cam.cy = 29.5;
+  const double z = 2.0, s = 1.425e-3 * z * z;  // eq. 1 at 2 m: 5.7 mm
+  for (const double rho : {1.0, 0.5}) {
+    std::mt19937 rng(rho == 1.0 ? 3 : 4);
+    std::normal_distribution<float> n01;
+    cv::Mat fixed(cam.height, cam.width, CV_32FC1);
+    for (int i = 0; i < fixed.rows * fixed.cols; ++i) {
+      fixed.at<float>(i) = static_cast<float>(s * std::sqrt(rho)) * n01(rng);
+    }
+    OgmFusion ogm;
+    OgmResult res;
+    for (int f = 0; f < 10; ++f) {
+      DepthWithVariance d = uniform(cam, static_cast<float>(z), static_cast<float>(s * s));
+      for (int i = 0; i < fixed.rows * fixed.cols; ++i) {
+        d.depth_m.at<float>(i) +=
+            fixed.at<float>(i) + static_cast<float>(s * std::sqrt(1 - rho)) * n01(rng);
+      }
+      ASSERT_TRUE(ogm.addFrame(f, cam, d));
+      res = ogm.fuse(f, Pose3::Identity());
+      ASSERT_TRUE(res.ok);
+    }
+    ASSERT_EQ(res.depth.window_length, 10);
+    // Centre region (cos(alpha) ~ 1, so range and depth errors are the same).
+    int n = 0, inside = 0, inside_if_independent = 0;
+    double sum_sq = 0, sum_var = 0;
+    for (int v = 15; v < 45; ++v) {
+      for (int u = 15; u < 45; ++u) {
+        const double e = res.depth.depth_m.at<float>(v, u) - z;
+        const double var = res.depth.var_m2.at<float>(v, u);
+        ++n;
+        sum_sq += e * e;
+        sum_var += var;
+        inside += std::abs(e) < 2 * std::sqrt(var);
+        inside_if_independent += std::abs(e) < 2 * s / std::sqrt(10.0);
+      }
+    }
+    std::printf("rho %.1f: RMS error %.2f mm, RMS fused sigma %.2f mm, inside 2 sigma %.3f "
+                "(%.3f with s / sqrt(10))\n",
+                rho, 1e3 * std::sqrt(sum_sq / n), 1e3 * std::sqrt(sum_var / n),
+                static_cast<double>(inside) / n, static_cast<double>(inside_if_independent) / n);
+    EXPECT_GE(sum_var / n, 0.9 * sum_sq / n) << rho;  // not over-confident
+    EXPECT_GT(static_cast<double>(inside) / n, 0.9) << rho;
+    if (rho == 1.0) {
+      EXPECT_LT(static_cast<double>(inside_if_independent) / n, 0.6);  // what 1/N would claim
+      EXPECT_LT(sum_var / n, 1.5 * sum_sq / n);  // and not uselessly large either
+    }
+  }
 }
 
 TEST(OgmFusion, BadInputsAreCountedNotFatal) {

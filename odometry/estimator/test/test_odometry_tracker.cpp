@@ -122,7 +122,9 @@ TEST(OdometryTracker, WindowCovarianceGrowsWithAgeAndMatchesDirectPropagation) {
 }
 
 TEST(OdometryTracker, RelativePoseForMessagesIsPrevCurr) {
-  OdometryTracker tracker;
+  OdometryTrackerOptions opts;
+  opts.frame_error_sigma_t_m = opts.frame_error_sigma_rot_deg = 0;  // the estimate's alone
+  OdometryTracker tracker(opts);
   tracker.initialise(0);
   const Pose3 M = testing::typicalMotion();
   const TrackerOutput out = tracker.update(1, goodEstimate(M));
@@ -137,6 +139,7 @@ TEST(OdometryTracker, PerFrameSharedErrorEntersThePublishedCovarianceOnce) {
   // from both frames (2 Q), and so does every window transform, without accumulating along
   // the chain; the estimate's own covariance (the EKF's Q) and the pose do not change.
   OdometryTrackerOptions plain, with_error;
+  plain.frame_error_sigma_t_m = plain.frame_error_sigma_rot_deg = 0;
   with_error.frame_error_sigma_t_m = 2e-3;
   with_error.frame_error_sigma_rot_deg = 0.06;
   OdometryTracker a(plain), b(with_error);
