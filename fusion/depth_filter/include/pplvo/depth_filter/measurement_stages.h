@@ -4,6 +4,9 @@
 /// camera's undistorted pinhole grid (DepthRectifier), moved to the colour instant
 /// (DepthTimeAligner), then stage 1 (sensor model) or stages 1-2 (C-GM) as options.model
 /// says. Stage 3 (O-GM) needs the frame's pose and stays with the caller. No LCM.
+/// Depth of a separate depth camera (RgbdFrame::depth_camera set) is registered into the
+/// colour camera instead of rectified (DepthRegistration, one warp with the time alignment's
+/// motion), carrying the sensor model's variance, which C-GM then uses.
 #include <cstdint>
 
 #include "pplvo/core/geometry.h"
@@ -12,6 +15,7 @@
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/depth_filter_options.h"
 #include "pplvo/depth_filter/depth_rectification.h"
+#include "pplvo/depth_filter/depth_registration.h"
 #include "pplvo/depth_filter/depth_time_alignment.h"
 #include "pplvo/depth_filter/sensor_model.h"
 
@@ -23,7 +27,8 @@ class MeasurementStages {
 
   /// Depth and variance of `frame` in its colour camera's undistorted pinhole model, at the
   /// colour instant, after stage 1 (model sensor) or stages 1-2 (cgm, ogm). The time of each
-  /// stage that ran is added to `timings` ("time_align", "sensor" or "cgm"). Throws
+  /// stage that ran is added to `timings` ("time_align", "sensor" or "cgm"; "register" for
+  /// unregistered depth, which includes the sensor model and the time alignment). Throws
   /// std::invalid_argument when the depth disagrees with the camera.
   DepthWithVariance apply(const RgbdFrame& frame, StageTimings& timings);
 
@@ -37,13 +42,17 @@ class MeasurementStages {
   }
   const DepthTimeAligner& timeAligner() const { return time_aligner_; }
   const CgmFilter& cgm() const { return cgm_; }
+  const DepthRegistration& registration() const { return registration_; }
 
  private:
+  DepthWithVariance applyUnregistered(const RgbdFrame& frame, StageTimings& timings);
+
   DepthFilterOptions options_;
   DepthRectifier rectifier_;
   DepthTimeAligner time_aligner_;
   QuadraticSensorModel sensor_;
   CgmFilter cgm_;
+  DepthRegistration registration_;
 };
 
 }  // namespace pplvo::depth_filter
