@@ -59,8 +59,10 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
     // guarded().
     frame = msgs::fromMsg(msg, 65535, msgs::FrameImages::kDepth);
   }
-  if (frame.depth_m.empty() || frame.depth_m.rows != frame.camera.height ||
-      frame.depth_m.cols != frame.camera.width) {
+  const PinholeCamera& depth_camera =
+      frame.depth_camera ? frame.depth_camera->camera : frame.camera;
+  if (frame.depth_m.empty() || frame.depth_m.rows != depth_camera.height ||
+      frame.depth_m.cols != depth_camera.width) {
     throw msgs::MessageError("rgbd_frame_t: depth size disagrees with camera_info");
   }
   frame.stamp = msg.stamp;

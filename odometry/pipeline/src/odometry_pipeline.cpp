@@ -12,8 +12,11 @@ OdometryPipeline::OdometryPipeline(const PipelineOptions& options)
       odometry_(options.odometry) {}
 
 PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
+  // Depth has the colour camera's size, or its own camera's when not registered.
+  const PinholeCamera& depth_camera =
+      frame.depth_camera ? frame.depth_camera->camera : frame.camera;
   if (frame.depth_m.empty() || frame.depth_m.type() != CV_32FC1 ||
-      frame.depth_m.rows != frame.camera.height || frame.depth_m.cols != frame.camera.width) {
+      frame.depth_m.rows != depth_camera.height || frame.depth_m.cols != depth_camera.width) {
     throw std::invalid_argument("frame " + std::to_string(frame.seq) +
                                 ": depth size or type disagrees with the camera");
   }
