@@ -8,9 +8,11 @@
 /// every later stage reads, as DepthRectifier's output). Where several points land on one
 /// pixel the nearest surface wins (occlusion: the depth camera sees around a near object
 /// parts of the background the colour camera does not). A depth pixel covers its footprint in
-/// the colour image (its angular size |f_c / f_d| z_d / z_c colour pixels per axis) when that
-/// is larger than one pixel, so a lower-resolution or narrower depth camera leaves no sieve of
-/// holes; one-pixel cracks between two neighbours within 1 % of each other (a surface
+/// the colour image (its angular size |f_c / f_d| z_d / z_c colour pixels per axis, at least
+/// its nearest pixel), so a lower-resolution depth camera leaves no sieve of holes; where a
+/// denser one lands several points of a surface on a pixel, the pixel takes the one whose
+/// footprint holds its centre (the nearest of several noisy samples would be biased towards
+/// the camera); one-pixel cracks between two neighbours within 1 % of each other (a surface
 /// stretched by the parallax) are closed, larger holes and depth steps stay open: no depth is
 /// invented across a discontinuity. The same forward warp moves depth to the colour instant
 /// (depth_time_alignment.h); both are one implementation.
