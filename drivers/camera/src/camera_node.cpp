@@ -184,6 +184,7 @@ class CameraPublisher {
       msg.depth_scale = f.depth_scale;
       msg.rgb = pm::encodeImage(f.bgr, rgbCode(options_.rgb_encoding), options_.jpeg_quality);
       msg.depth = pm::encodeImage(f.depth_u16, depthCode(options_.depth_encoding));
+      pm::setDepthCamera(std::nullopt, &msg);  // registered by the device (docs/cameras.md)
       bus_.publish(options_.channel, &msg);
       ++seq_;
       ++counters_.frames_out;

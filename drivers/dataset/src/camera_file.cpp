@@ -66,6 +66,27 @@ void readSmallMatrix(const cv::FileNode& node, const char* name, int max_element
   node >> *out;
 }
 
+/// Checks of an unregistered depth camera (intrinsics, size, rigid extrinsics), appended to
+/// `errors`.
+void checkDepthCamera(const DepthCamera& d, std::vector<std::string>& errors) {
+  const PinholeCamera& c = d.camera;
+  auto finite_nonzero = [](double v) { return std::isfinite(v) && v != 0.0; };
+  if (!finite_nonzero(c.fx) || !finite_nonzero(c.fy) || !std::isfinite(c.cx) ||
+      !std::isfinite(c.cy)) {
+    errors.push_back("depth camera: fx, fy must be finite and non-zero, cx, cy finite");
+  }
+  for (double v : c.distortion) {
+    if (!std::isfinite(v)) errors.push_back("depth camera: distortion must be finite");
+  }
+  if (c.width < 0 || c.height < 0 || (c.width == 0) != (c.height == 0)) {
+    errors.push_back("depth camera: width and height must both be given (> 0) or both omitted");
+  }
+  if (!d.T_c_d.matrix().allFinite() || !isValidPose(d.T_c_d, 1e-6)) {
+    errors.push_back("depth camera: the rotation must be orthonormal with determinant 1 and the "
+                     "translation finite");
+  }
+}
+
 }  // namespace
 
 DatasetCamera loadCalibParamsXml(const std::string& path) {
@@ -131,12 +152,140 @@ DatasetCamera parseCalibParams(const std::string& text, const std::string& path)
     const cv::FileNode w = fs["width"], h = fs["height"];
     if (!w.empty()) cam.camera.width = static_cast<int>(w);
     if (!h.empty()) cam.camera.height = static_cast<int>(h);
+    // Unregistered depth only when the file says so: the shared datasets carry IR_*, Rotation
+    // and Translation with depth that is registered.
+    const cv::FileNode registered = fs["depth_registered"];
+    if (!registered.empty()) {
+      if (!registered.isInt() || (static_cast<int>(registered) != 0 &&
+                                  static_cast<int>(registered) != 1)) {
+        errors.push_back("depth_registered must be 0 or 1");
+      } else if (static_cast<int>(registered) == 0) {
+        DepthCamera d;
+        cv::Mat Ki, Di, R, t;
+        readSmallMatrix(fs["IR_intrinsic_params"], "IR_intrinsic_params", 9, &Ki, errors);
+        readSmallMatrix(fs["IR_distortion_coefficients"], "IR_distortion_coefficients", 5, &Di,
+                        errors);
+        readSmallMatrix(fs["Rotation"], "Rotation", 9, &R, errors);
+        readSmallMatrix(fs["Translation"], "Translation", 3, &t, errors);
+        if (Ki.empty() || Ki.rows != 3 || Ki.cols != 3) {
+          errors.push_back("depth_registered 0 needs IR_intrinsic_params (3x3)");
+        } else {
+          Ki.convertTo(Ki, CV_64F);
+          d.camera.fx = Ki.at<double>(0, 0);
+          d.camera.fy = Ki.at<double>(1, 1);
+          d.camera.cx = Ki.at<double>(0, 2);
+          d.camera.cy = Ki.at<double>(1, 2);
+        }
+        if (!Di.empty()) {
+          if (Di.total() < 4 || Di.total() > 5) {
+            errors.push_back("IR_distortion_coefficients must have 4 or 5 values");
+          } else {
+            Di.convertTo(Di, CV_64F);
+            Di = Di.reshape(1, 1);
+            for (size_t i = 0; i < Di.total(); ++i) d.camera.distortion[i] = Di.at<double>(0, int(i));
+          }
+        }
+        if (R.empty() || R.rows != 3 || R.cols != 3) {
+          errors.push_back("depth_registered 0 needs Rotation (3x3)");
+        } else if (t.empty() || t.total() != 3) {
+          errors.push_back("depth_registered 0 needs Translation (3 values, metres)");
+        } else {
+          R.convertTo(R, CV_64F);
+          t.convertTo(t, CV_64F);
+          t = t.reshape(1, 3);
+          for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) d.T_c_d.linear()(r, c) = R.at<double>(r, c);
+            d.T_c_d.translation()[r] = t.at<double>(r, 0);
+          }
+        }
+        const cv::FileNode iw = fs["IR_width"], ih = fs["IR_height"];
+        if (!iw.empty()) d.camera.width = static_cast<int>(iw);
+        if (!ih.empty()) d.camera.height = static_cast<int>(ih);
+        checkDepthCamera(d, errors);
+        cam.depth_camera = d;
+      }
+    }
   } catch (const cv::Exception& e) {
     throw DatasetError("cannot parse calibration file " + path + ": " + e.what());
   }
   checkIntrinsics(cam, path, errors);
   return cam;
 }
+
+namespace {
+
+/// The `depth_camera` map of a YAML camera file into cam->depth_camera.
+void parseDepthCameraYaml(const YAML::Node& n, DatasetCamera* cam,
+                          std::vector<std::string>& errors) {
+  if (!n.IsMap()) {
+    errors.push_back("'depth_camera' must be a map");
+    return;
+  }
+  const std::set<std::string> known = {"width", "height",     "fx",    "fy",     "cx",
+                                       "cy",    "distortion", "R_c_d", "t_c_d_m"};
+  for (const auto& kv : n) {
+    const std::string key = kv.first.as<std::string>("?");
+    if (!known.count(key)) errors.push_back("unknown key 'depth_camera." + key + "'");
+  }
+  DepthCamera d;
+  auto numbers = [&](const char* key, size_t min_n, size_t max_n, bool required,
+                     std::vector<double>* out) {
+    const YAML::Node v = n[key];
+    if (!v) {
+      if (required) errors.push_back(std::string("missing key 'depth_camera.") + key + "'");
+      return;
+    }
+    try {
+      if (v.IsScalar()) {
+        out->push_back(v.as<double>());
+      } else if (v.IsSequence()) {
+        for (const auto& x : v) out->push_back(x.as<double>());
+      }
+    } catch (const YAML::Exception&) {
+      out->clear();
+    }
+    if (out->size() < min_n || out->size() > max_n) {
+      errors.push_back(std::string("'depth_camera.") + key + "' must be " +
+                       (min_n == max_n ? std::to_string(min_n) : std::to_string(min_n) + " to " +
+                                                                      std::to_string(max_n)) +
+                       (max_n == 1 ? " number" : " numbers"));
+      out->clear();
+    }
+  };
+  std::vector<double> v;
+  const std::pair<const char*, double*> scalars[] = {
+      {"fx", &d.camera.fx}, {"fy", &d.camera.fy}, {"cx", &d.camera.cx}, {"cy", &d.camera.cy}};
+  for (const auto& [key, dst] : scalars) {
+    v.clear();
+    numbers(key, 1, 1, true, &v);
+    if (!v.empty()) *dst = v[0];
+  }
+  for (const auto& [key, dst] : {std::pair<const char*, int*>{"width", &d.camera.width},
+                                 std::pair<const char*, int*>{"height", &d.camera.height}}) {
+    if (const YAML::Node x = n[key]) {
+      try {
+        *dst = x.as<int>();
+      } catch (const YAML::Exception&) {
+        errors.push_back(std::string("'depth_camera.") + key + "' must be an integer");
+      }
+    }
+  }
+  v.clear();
+  numbers("distortion", 4, 5, false, &v);
+  for (size_t i = 0; i < v.size(); ++i) d.camera.distortion[i] = v[i];
+  v.clear();
+  numbers("R_c_d", 9, 9, true, &v);
+  if (!v.empty()) {
+    for (int i = 0; i < 9; ++i) d.T_c_d.linear()(i / 3, i % 3) = v[static_cast<size_t>(i)];
+  }
+  v.clear();
+  numbers("t_c_d_m", 3, 3, true, &v);
+  if (!v.empty()) d.T_c_d.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+  checkDepthCamera(d, errors);
+  cam->depth_camera = d;
+}
+
+}  // namespace
 
 DatasetCamera loadCameraYaml(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -157,8 +306,10 @@ DatasetCamera parseCameraYaml(const std::string& text, const std::string& path) 
   }
   if (!root.IsMap()) throw DatasetError("camera file " + path + " must be a YAML map");
   std::vector<std::string> errors;
-  const std::set<std::string> known = {"width", "height", "fx",         "fy",
-                                       "cx",    "cy",     "distortion", "depth_scale"};
+  const std::set<std::string> known = {"width",       "height",           "fx",
+                                       "fy",          "cx",               "cy",
+                                       "distortion",  "depth_scale",      "depth_registered",
+                                       "depth_camera"};
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>("?");
     if (!known.count(key)) errors.push_back("unknown key '" + key + "'");
@@ -201,6 +352,23 @@ DatasetCamera parseCameraYaml(const std::string& text, const std::string& path) 
         errors.push_back("'distortion' must hold numbers");
       }
     }
+  }
+  bool registered = true;
+  if (const YAML::Node r = root["depth_registered"]) {
+    try {
+      registered = r.as<bool>();
+    } catch (const YAML::Exception&) {
+      errors.push_back("'depth_registered' must be true or false");
+    }
+  }
+  const YAML::Node dn = root["depth_camera"];
+  if (registered && dn) {
+    errors.push_back("'depth_camera' is given but depth_registered is not false (say "
+                     "'depth_registered: false' to register depth from that camera)");
+  } else if (!registered && !dn) {
+    errors.push_back("'depth_registered: false' needs a 'depth_camera' map");
+  } else if (!registered) {
+    parseDepthCameraYaml(dn, &cam, errors);
   }
   if (!errors.empty()) {
     std::ostringstream s;

@@ -68,17 +68,19 @@ RawFrame loadRawFrame(const DatasetEntry& entry, double depth_scale,
                  options.image_limits);
   if (f.bgr.type() != CV_8UC3) throw FrameLoadError(entry.rgb_path, "colour image is not 8-bit");
   ImageLimits depth_limits;
-  depth_limits.expected = f.bgr.size();
+  depth_limits.expected = options.depth_size.empty() ? f.bgr.size() : options.depth_size;
   f.depth_units =
       decode(readBytes(entry.depth_path), cv::IMREAD_UNCHANGED, entry.depth_path, depth_limits);
   if (f.depth_units.type() != CV_16UC1) {
     throw FrameLoadError(entry.depth_path, "depth image is not a 16-bit single-channel PNG");
   }
-  if (f.depth_units.size() != f.bgr.size()) {
+  if (f.depth_units.size() != depth_limits.expected) {
     throw FrameLoadError(entry.depth_path,
                          "depth size " + std::to_string(f.depth_units.cols) + "x" +
-                             std::to_string(f.depth_units.rows) + " differs from colour size " +
-                             std::to_string(f.bgr.cols) + "x" + std::to_string(f.bgr.rows));
+                             std::to_string(f.depth_units.rows) + " differs from " +
+                             (options.depth_size.empty() ? "colour" : "the depth camera's") +
+                             " size " + std::to_string(depth_limits.expected.width) + "x" +
+                             std::to_string(depth_limits.expected.height));
   }
   // 65535 is the usual invalid marker; a configured max range removes far depth too.
   double max_units = 65534.0;
@@ -110,9 +112,14 @@ Dataset Dataset::open(const std::string& dir, const DatasetOptions& options) {
   }
   // Image size from the first frame that loads.
   std::string first_error;
+  FrameLoadOptions first;
+  if (d.camera_.depth_camera && d.camera_.depth_camera->camera.width > 0) {
+    first.depth_size = cv::Size(d.camera_.depth_camera->camera.width,
+                                d.camera_.depth_camera->camera.height);
+  }
   for (const auto& e : d.index_.entries) {
     try {
-      const RawFrame f = loadRawFrame(e, d.camera_.depth_scale);
+      const RawFrame f = loadRawFrame(e, d.camera_.depth_scale, first);
       auto& cam = d.camera_.camera;
       if ((cam.width > 0 && cam.width != f.bgr.cols) ||
           (cam.height > 0 && cam.height != f.bgr.rows)) {
@@ -123,6 +130,10 @@ Dataset Dataset::open(const std::string& dir, const DatasetOptions& options) {
       }
       cam.width = f.bgr.cols;
       cam.height = f.bgr.rows;
+      if (d.camera_.depth_camera && d.camera_.depth_camera->camera.width == 0) {
+        d.camera_.depth_camera->camera.width = f.depth_units.cols;  // the colour's size
+        d.camera_.depth_camera->camera.height = f.depth_units.rows;
+      }
       return d;
     } catch (const FrameLoadError& err) {
       if (first_error.empty()) first_error = err.what();
@@ -136,6 +147,10 @@ RawFrame Dataset::loadRaw(size_t i, const FrameLoadOptions& options) const {
   FrameLoadOptions bounded = options;
   if (bounded.image_limits.expected.empty())
     bounded.image_limits.expected = cv::Size(camera_.camera.width, camera_.camera.height);
+  if (camera_.depth_camera) {
+    bounded.depth_size =
+        cv::Size(camera_.depth_camera->camera.width, camera_.depth_camera->camera.height);
+  }
   RawFrame f = loadRawFrame(e, camera_.depth_scale, bounded);
   if (f.bgr.cols != camera_.camera.width || f.bgr.rows != camera_.camera.height) {
     throw FrameLoadError(
@@ -157,6 +172,7 @@ RgbdFrame Dataset::loadFrame(size_t i, const FrameLoadOptions& options) const {
   f.camera = camera_.camera;
   f.bgr = std::move(raw.bgr);
   f.depth_m = depthUnitsToMetres(raw.depth_units, camera_.depth_scale);
+  f.depth_camera = camera_.depth_camera;
   return f;
 }
 

@@ -526,7 +526,7 @@ TEST(Camera, CalibParamsXmlWithNulBytesIsAnError) {
 // fuzz_camera_file: OpenCV 4.6's XML parser reads a null pointer when the document ends right
 // after an attribute's '=' (the 596-byte crash input minimised to the first case).
 TEST(Camera, CalibParamsXmlCutInsideATagIsAnError) {
-  for (const std::string text :
+  for (const std::string& text :
        {std::string("<?xml version=\"1.0\"?>\n<opencv_storage>\n<RGB_distortionnsic_rows>3"
                     "<otation t="),
         std::string("<?xml version=\"1.0\"?>\n<opencv_storage>\n<a t=\"x\" b=  \n"),
@@ -622,6 +622,104 @@ TEST(Camera, YamlCameraFile) {
   writeText(t.path / "wrong_size.yaml", "width: 9\nheight: 6\nfx: 1\nfy: 1\ncx: 1\ncy: 1\n");
   opt.camera_file = (t.path / "wrong_size.yaml").string();
   EXPECT_THROW(Dataset::open(t.str(), opt), DatasetError);
+}
+
+// The shared datasets' calib_params.xml carry IR_*, Rotation and Translation with registered
+// depth: unregistered depth only with an explicit depth_registered 0.
+TEST(Camera, UnregisteredDepthOnlyWhenTheFileSaysSo) {
+  for (const char* folder : {"icl_living_room_kt0_short", "tum_fr3_sitting_static_short",
+                             "tum_fr1_xyz_short"}) {
+    const DatasetCamera c = loadCalibParamsXml(sharedData() + "/" + folder + "/calib_params.xml");
+    EXPECT_FALSE(c.depth_camera.has_value()) << folder;
+  }
+  const std::string rgb =
+      "<RGB_intrinsic_params type_id=\"opencv-matrix\"><rows>3</rows><cols>3</cols><dt>d</dt>"
+      "<data>10. 0 4. 0 11. 3. 0 0 1</data></RGB_intrinsic_params>\n";
+  const std::string ir =
+      "<IR_intrinsic_params type_id=\"opencv-matrix\"><rows>3</rows><cols>3</cols><dt>d</dt>"
+      "<data>5. 0 2. 0 5.5 1.5 0 0 1</data></IR_intrinsic_params>\n"
+      "<IR_distortion_coefficients type_id=\"opencv-matrix\"><rows>1</rows><cols>5</cols>"
+      "<dt>d</dt><data>0.1 0 0 0 0</data></IR_distortion_coefficients>\n"
+      "<Rotation type_id=\"opencv-matrix\"><rows>3</rows><cols>3</cols><dt>d</dt>"
+      "<data>0 -1 0 1 0 0 0 0 1</data></Rotation>\n"
+      "<Translation type_id=\"opencv-matrix\"><rows>3</rows><cols>1</cols><dt>d</dt>"
+      "<data>-0.025 0.001 0.002</data></Translation>\n";
+  const auto xml = [](const std::string& body) {
+    return "<?xml version=\"1.0\"?>\n<opencv_storage>\n" + body + "</opencv_storage>\n";
+  };
+  EXPECT_FALSE(parseCalibParams(xml(rgb + ir), "a.xml").depth_camera.has_value());
+  EXPECT_FALSE(parseCalibParams(xml(rgb + ir + "<depth_registered>1</depth_registered>\n"),
+                                "b.xml")
+                   .depth_camera.has_value());
+  const DatasetCamera u = parseCalibParams(
+      xml(rgb + ir + "<depth_registered>0</depth_registered><IR_width>4</IR_width>"
+                     "<IR_height>3</IR_height>\n"),
+      "c.xml");
+  ASSERT_TRUE(u.depth_camera.has_value());
+  EXPECT_DOUBLE_EQ(u.depth_camera->camera.fx, 5.0);
+  EXPECT_DOUBLE_EQ(u.depth_camera->camera.fy, 5.5);
+  EXPECT_DOUBLE_EQ(u.depth_camera->camera.cx, 2.0);
+  EXPECT_DOUBLE_EQ(u.depth_camera->camera.distortion[0], 0.1);
+  EXPECT_EQ(u.depth_camera->camera.width, 4);
+  EXPECT_EQ(u.depth_camera->camera.height, 3);
+  EXPECT_DOUBLE_EQ(u.depth_camera->T_c_d.linear()(0, 1), -1.0);
+  EXPECT_DOUBLE_EQ(u.depth_camera->T_c_d.linear()(1, 0), 1.0);
+  EXPECT_DOUBLE_EQ(u.depth_camera->T_c_d.translation().x(), -0.025);
+  // Missing extrinsics, a non-rigid rotation and another value are errors.
+  try {
+    parseCalibParams(xml(rgb + "<depth_registered>0</depth_registered>\n"), "d.xml");
+    FAIL();
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("IR_intrinsic_params"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Rotation"), std::string::npos) << e.what();
+  }
+  std::string scaled = ir;
+  scaled.replace(scaled.find("0 -1 0 1 0 0 0 0 1"), 18, "0 -2 0 1 0 0 0 0 1");
+  EXPECT_THROW(parseCalibParams(xml(rgb + scaled + "<depth_registered>0</depth_registered>\n"),
+                                "e.xml"),
+               DatasetError);
+  EXPECT_THROW(parseCalibParams(xml(rgb + ir + "<depth_registered>2</depth_registered>\n"),
+                                "f.xml"),
+               DatasetError);
+
+  // The YAML camera file: depth_registered false and a depth_camera map, together.
+  const std::string base = "fx: 10\nfy: 11\ncx: 4\ncy: 3\n";
+  const std::string dc =
+      "depth_camera:\n  width: 4\n  height: 3\n  fx: 5\n  fy: 5.5\n  cx: 2\n  cy: 1.5\n"
+      "  R_c_d: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n  t_c_d_m: [0.05, 0, 0]\n";
+  const DatasetCamera y = parseCameraYaml(base + "depth_registered: false\n" + dc, "a.yaml");
+  ASSERT_TRUE(y.depth_camera.has_value());
+  EXPECT_DOUBLE_EQ(y.depth_camera->camera.fy, 5.5);
+  EXPECT_DOUBLE_EQ(y.depth_camera->T_c_d.translation().x(), 0.05);
+  EXPECT_FALSE(parseCameraYaml(base, "b.yaml").depth_camera.has_value());
+  EXPECT_THROW(parseCameraYaml(base + dc, "c.yaml"), DatasetError);  // not opted in
+  EXPECT_THROW(parseCameraYaml(base + "depth_registered: false\n", "d.yaml"), DatasetError);
+  try {
+    parseCameraYaml(base + "depth_registered: false\n" + dc + "  baseline: 3\n", "e.yaml");
+    FAIL();
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("depth_camera.baseline"), std::string::npos) << e.what();
+  }
+
+  // A dataset with a 4x3 depth camera beside the 8x6 colour camera.
+  TempDir t("unregistered");
+  writeImages(t.path, "rgb/0.png", "", 1);
+  ASSERT_TRUE(cv::imwrite((t.path / "depth/0.png").string(),
+                          cv::Mat(3, 4, CV_16UC1, cv::Scalar(2000))));
+  writeText(t.path / "associations.txt", "1.5 rgb/0.png 1.5 depth/0.png\n");
+  writeText(t.path / "calib_params.xml",
+            xml(rgb + ir + "<depth_registered>0</depth_registered><IR_width>4</IR_width>"
+                           "<IR_height>3</IR_height>\n"));
+  const Dataset ds = Dataset::open(t.str());
+  const pplvo::RgbdFrame f = ds.loadFrame(0);
+  EXPECT_EQ(f.depth_m.size(), cv::Size(4, 3));
+  EXPECT_EQ(f.bgr.size(), cv::Size(8, 6));
+  ASSERT_TRUE(f.depth_camera.has_value());
+  EXPECT_DOUBLE_EQ(f.depth_camera->camera.fx, 5.0);
+  // Without IR_width / IR_height the depth camera has the colour's size: 4x3 is refused.
+  writeText(t.path / "calib_params.xml",
+            xml(rgb + ir + "<depth_registered>0</depth_registered>\n"));
+  EXPECT_THROW(Dataset::open(t.str()), DatasetError);
 }
 
 TEST(Frames, CorruptAndMissingFilesNameTheFileAndCanBeSkipped) {

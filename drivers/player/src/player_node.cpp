@@ -517,6 +517,7 @@ bool PlayerNode::encodeFrame(const dataset::DatasetReader::Item& item,
     msg->depth_scale = dataset_.camera().depth_scale;
     msg->rgb = msgs::encodeImage(item.frame.bgr, options_.rgb_encoding, options_.jpeg_quality);
     msg->depth = msgs::encodeImage(item.frame.depth_units, options_.depth_encoding);
+    msgs::setDepthCamera(dataset_.camera().depth_camera, msg);
   });
 }
 

@@ -37,8 +37,8 @@ void CgmFilter::resize(int rows, int cols) {
   ++stats_.resizes;
 }
 
-void CgmFilter::horizontalRow(const cv::Mat& depth_m, int r, RowBuffers& b, int64_t* invalid,
-                              int64_t* valid) const {
+void CgmFilter::horizontalRow(const cv::Mat& depth_m, const cv::Mat* var_m2, int r,
+                              RowBuffers& b, int64_t* invalid, int64_t* valid) const {
   const int cols = cols_;
   const size_t slot = static_cast<size_t>(r % 3) * cols;
   const float* in = depth_m.ptr<float>(r);
@@ -53,7 +53,12 @@ void CgmFilter::horizontalRow(const cv::Mat& depth_m, int r, RowBuffers& b, int6
   }
   *invalid += bad;
   *valid += good;
-  model_->varianceRow(z, b.var.data(), cols);
+  if (var_m2 != nullptr) {  // measured variances (registered depth): 0 where depth is missing
+    const float* vin = var_m2->ptr<float>(r);
+    for (int c = 0; c < cols; ++c) b.var[c] = z[c] > 0.f && vin[c] >= 0.f ? vin[c] : 0.f;
+  } else {
+    model_->varianceRow(z, b.var.data(), cols);
+  }
   double* py = b.pad_y.data() + 1;
   double* pz = b.pad_z.data() + 1;
   double* pq = b.pad_q.data() + 1;
@@ -82,8 +87,8 @@ DepthWithVariance CgmFilter::apply(const cv::Mat& depth_m) {
   return out;
 }
 
-void CgmFilter::applyRows(const cv::Mat& depth_m, int r0, int r1, RowBuffers& b,
-                          DepthWithVariance& out, BandCounts* counts) const {
+void CgmFilter::applyRows(const cv::Mat& depth_m, const cv::Mat* var_m2, int r0, int r1,
+                          RowBuffers& b, DepthWithVariance& out, BandCounts* counts) const {
   const int rows = rows_, cols = cols_;
   const bool keep_holes = options_.missing_centre_stays_missing;
   int64_t not_counted = 0;
@@ -91,12 +96,12 @@ void CgmFilter::applyRows(const cv::Mat& depth_m, int r0, int r1, RowBuffers& b,
   // pixels carry z = sigma^2 = 0, so y multiplies out), kept in a ring of three rows; then the
   // vertical [1 2 1] sums give S, S z_bar, and the second moment (eqs. 4, 5). The rows just
   // outside the band are computed here too but counted by their own band.
-  if (r0 > 0) horizontalRow(depth_m, r0 - 1, b, &not_counted, &not_counted);
-  horizontalRow(depth_m, r0, b, &counts->invalid, &counts->valid_in);
+  if (r0 > 0) horizontalRow(depth_m, var_m2, r0 - 1, b, &not_counted, &not_counted);
+  horizontalRow(depth_m, var_m2, r0, b, &counts->invalid, &counts->valid_in);
   for (int r = r0; r < r1; ++r) {
     if (r + 1 < rows) {
       const bool own = r + 1 < r1;
-      horizontalRow(depth_m, r + 1, b, own ? &counts->invalid : &not_counted,
+      horizontalRow(depth_m, var_m2, r + 1, b, own ? &counts->invalid : &not_counted,
                     own ? &counts->valid_in : &not_counted);
     }
     const size_t mid = static_cast<size_t>(r % 3) * cols;
@@ -132,7 +137,20 @@ void CgmFilter::applyRows(const cv::Mat& depth_m, int r0, int r1, RowBuffers& b,
   }
 }
 
+DepthWithVariance CgmFilter::apply(const DepthWithVariance& measured) {
+  if (measured.var_m2.type() != CV_32FC1 || measured.var_m2.size() != measured.depth_m.size()) {
+    throw std::invalid_argument("CgmFilter::apply: variance must be CV_32FC1 of the depth's size");
+  }
+  DepthWithVariance out;
+  run(measured.depth_m, &measured.var_m2, &out);
+  return out;
+}
+
 void CgmFilter::apply(const cv::Mat& depth_m, DepthWithVariance* out_ptr) {
+  run(depth_m, nullptr, out_ptr);
+}
+
+void CgmFilter::run(const cv::Mat& depth_m, const cv::Mat* var_m2, DepthWithVariance* out_ptr) {
   if (depth_m.empty() || depth_m.type() != CV_32FC1) {
     throw std::invalid_argument("CgmFilter::apply: depth must be a non-empty CV_32FC1 matrix");
   }
@@ -147,7 +165,7 @@ void CgmFilter::apply(const cv::Mat& depth_m, DepthWithVariance* out_ptr) {
   BandCounts counts[kBands];
   auto band = [&](int k) {
     const int r0 = k * rows / kBands, r1 = (k + 1) * rows / kBands;
-    if (r1 > r0) applyRows(depth_m, r0, r1, bands_[k], out, &counts[k]);
+    if (r1 > r0) applyRows(depth_m, var_m2, r0, r1, bands_[k], out, &counts[k]);
   };
   forEachTask(kBands, options_.threads, band);
   int64_t invalid = 0, valid_in = 0, valid_out = 0;

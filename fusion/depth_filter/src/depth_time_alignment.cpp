@@ -1,5 +1,7 @@
 #include "pplvo/depth_filter/depth_time_alignment.h"
 
+#include "forward_warp.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -11,44 +13,15 @@ cv::Mat warpDepth(const PinholeCamera& camera, const cv::Mat& depth_m, const Pos
   if (depth_m.type() != CV_32FC1 || depth_m.rows != camera.height || depth_m.cols != camera.width) {
     throw std::invalid_argument("warpDepth: depth must be CV_32FC1 of the camera's size");
   }
-  const int w = camera.width, h = camera.height;
-  cv::Mat out(h, w, CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
-  const Eigen::Matrix3d R = T_target_source.linear();
-  const Eigen::Vector3d t = T_target_source.translation();
-  for (int v = 0; v < h; ++v) {
-    const float* src = depth_m.ptr<float>(v);
-    for (int u = 0; u < w; ++u) {
-      const double z = src[u];
-      if (!(z > 0) || !std::isfinite(z)) continue;
-      const Eigen::Vector3d p = R * camera.backproject(u, v, z) + t;
-      if (!(p.z() > 0)) continue;
-      const Eigen::Vector2d px = camera.project(p);
-      const long ut = std::lround(px.x()), vt = std::lround(px.y());
-      if (ut < 0 || vt < 0 || ut >= w || vt >= h) continue;
-      float& d = out.at<float>(static_cast<int>(vt), static_cast<int>(ut));
-      d = std::min(d, static_cast<float>(p.z()));  // the nearest surface wins
-    }
-  }
-  // Close one-pixel cracks of a stretched surface: both neighbours on a line present and
-  // within 1 % of each other (a depth step is left open).
-  cv::Mat closed = out.clone();
-  const auto near = [](float a, float b) {
-    return std::isfinite(a) && std::isfinite(b) && std::abs(a - b) <= 0.01f * std::min(a, b);
+  const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+  const auto ray = [&](int u, int v, double* x, double* y) {
+    *x = (u - cx) / fx;
+    *y = (v - cy) / fy;
+    return true;
   };
-  for (int v = 1; v + 1 < h; ++v) {
-    for (int u = 1; u + 1 < w; ++u) {
-      if (std::isfinite(out.at<float>(v, u))) continue;
-      const float l = out.at<float>(v, u - 1), r = out.at<float>(v, u + 1);
-      const float a = out.at<float>(v - 1, u), b = out.at<float>(v + 1, u);
-      if (near(l, r)) {
-        closed.at<float>(v, u) = 0.5f * (l + r);
-      } else if (near(a, b)) {
-        closed.at<float>(v, u) = 0.5f * (a + b);
-      }
-    }
-  }
-  closed.setTo(0.0f, closed == std::numeric_limits<float>::infinity());
-  return closed;
+  cv::Mat out;
+  detail::forwardWarp(depth_m, nullptr, ray, camera, T_target_source, {}, &out, nullptr);
+  return out;
 }
 
 void DepthTimeAligner::observePose(int64_t seq, int64_t colour_utime, const Pose3& T_w_c,
@@ -95,19 +68,25 @@ std::optional<Pose3> DepthTimeAligner::colourFromDepth(int64_t seq, int64_t colo
   return std::nullopt;
 }
 
-cv::Mat DepthTimeAligner::apply(const PinholeCamera& camera, const cv::Mat& depth_m, int64_t seq,
-                                int64_t colour_utime, int64_t depth_utime) {
-  if (!needed(colour_utime, depth_utime)) return depth_m;
+std::optional<Pose3> DepthTimeAligner::motion(int64_t seq, int64_t colour_utime,
+                                              int64_t depth_utime) {
+  if (!needed(colour_utime, depth_utime)) return std::nullopt;
   const double offset_s = (depth_utime - colour_utime) * 1e-6;
   stats_.last_offset_ms = offset_s * 1e3;
-  if (std::abs(offset_s) > max_offset_s_) return depth_m;
+  if (std::abs(offset_s) > max_offset_s_) return std::nullopt;
   const std::optional<Pose3> T = colourFromDepth(seq, colour_utime, depth_utime);
   if (!T) {
     ++stats_.frames_without_velocity;
-    return depth_m;
+    return std::nullopt;
   }
   ++stats_.frames_aligned;
-  return warpDepth(camera, depth_m, *T);
+  return T;
+}
+
+cv::Mat DepthTimeAligner::apply(const PinholeCamera& camera, const cv::Mat& depth_m, int64_t seq,
+                                int64_t colour_utime, int64_t depth_utime) {
+  const std::optional<Pose3> T = motion(seq, colour_utime, depth_utime);
+  return T ? warpDepth(camera, depth_m, *T) : depth_m;
 }
 
 }  // namespace pplvo::depth_filter

@@ -14,9 +14,7 @@ namespace pplvo::nodes {
 DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, msgs::Bus bus)
     : options_(options),
       bus_(std::move(bus)),
-      sensor_(options.filter.sensor),
-      cgm_(options.filter.cgm,
-           std::make_shared<depth_filter::QuadraticSensorModel>(options.filter.sensor)),
+      measurement_(options.filter),
       ogm_(options.filter.ogm) {
   if (options_.max_pending < 1) options_.max_pending = 1;
   subscriptions_.push_back(
@@ -61,8 +59,10 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
     // guarded().
     frame = msgs::fromMsg(msg, 65535, msgs::FrameImages::kDepth);
   }
-  if (frame.depth_m.empty() || frame.depth_m.rows != frame.camera.height ||
-      frame.depth_m.cols != frame.camera.width) {
+  const PinholeCamera& depth_camera =
+      frame.depth_camera ? frame.depth_camera->camera : frame.camera;
+  if (frame.depth_m.empty() || frame.depth_m.rows != depth_camera.height ||
+      frame.depth_m.cols != depth_camera.width) {
     throw msgs::MessageError("rgbd_frame_t: depth size disagrees with camera_info");
   }
   frame.stamp = msg.stamp;
@@ -75,12 +75,9 @@ void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
 }
 
 bool DepthFilterNode::waitsForAlignmentPose(const RgbdFrame& frame) const {
-  if (!options_.filter.time_alignment ||
-      !depth_filter::DepthTimeAligner::needed(frame.utime, frame.depth_utime)) {
-    return false;
-  }
+  if (!measurement_.timeAligns(frame)) return false;
   const int64_t needed = frame.seq - depth_filter::DepthTimeAligner::kPoseLag;
-  if (time_aligner_.hasPose(needed)) return false;
+  if (measurement_.timeAligner().hasPose(needed)) return false;
   // Only a frame still waiting for its own pose will bring it.
   return std::any_of(pending_.begin(), pending_.end(),
                      [needed](const Pending& p) { return p.seq == needed; });
@@ -113,24 +110,9 @@ void DepthFilterNode::processFrame(const RgbdFrame& frame) {
   p.utime = frame.utime;
   p.stamp = frame.stamp;
   p.camera = frame.camera;
-  // Depth in the undistorted pinhole model and at the colour instant, as every later stage
-  // reads it.
-  cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
-  if (options_.filter.time_alignment &&
-      depth_filter::DepthTimeAligner::needed(frame.utime, frame.depth_utime)) {
-    ScopedStageTimer t(timings_, "time_align");
-    depth_m = time_aligner_.apply(frame.camera, depth_m, frame.seq, frame.utime,
-                                  frame.depth_utime);
-  }
-  if (options_.filter.model == DepthModel::kSensor) {
-    ScopedStageTimer t(timings_, "sensor");
-    p.depth = depth_filter::applySensorModel(sensor_, depth_m);
-    p.stage = pplvo_msgs::depth_map_t::STAGE_SENSOR;
-  } else {
-    ScopedStageTimer t(timings_, "cgm");
-    p.depth = cgm_.apply(depth_m);
-    p.stage = pplvo_msgs::depth_map_t::STAGE_CGM;
-  }
+  p.depth = measurement_.apply(frame, timings_);
+  p.stage = options_.filter.model == DepthModel::kSensor ? pplvo_msgs::depth_map_t::STAGE_SENSOR
+                                                         : pplvo_msgs::depth_map_t::STAGE_CGM;
   publishDepth(options_.cgm_channel, p, p.depth, p.stage);
   pending_.push_back(std::move(p));
   while (static_cast<int>(pending_.size()) > options_.max_pending) {
@@ -175,7 +157,7 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     }
     throw;
   }
-  time_aligner_.observePose(pose.seq, pose.utime, pose.T_w_c,
+  measurement_.observePose(pose.seq, pose.utime, pose.T_w_c,
                             pose.status == TrackingStatus::kTracking);
   std::optional<Pending> taken = takePending(pose.seq);
   if (!taken) {

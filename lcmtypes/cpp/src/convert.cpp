@@ -349,13 +349,21 @@ RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units, Fram
       throw MessageError("depth must be a 16-bit encoding");
     }
   }
-  if (depth_size != colour_size || colour_size.width != f.camera.width ||
+  f.depth_camera = depthCameraFromMsg(msg);
+  const cv::Size expected_depth =
+      f.depth_camera ? cv::Size(f.depth_camera->camera.width, f.depth_camera->camera.height)
+                     : colour_size;
+  if (depth_size != expected_depth || colour_size.width != f.camera.width ||
       colour_size.height != f.camera.height) {
     throw MessageError("colour " + std::to_string(colour_size.width) + "x" +
                        std::to_string(colour_size.height) + ", depth " +
                        std::to_string(depth_size.width) + "x" + std::to_string(depth_size.height) +
                        " and camera " + std::to_string(f.camera.width) + "x" +
-                       std::to_string(f.camera.height) + " sizes disagree");
+                       std::to_string(f.camera.height) +
+                       (f.depth_camera ? " (depth camera " + std::to_string(expected_depth.width) +
+                                             "x" + std::to_string(expected_depth.height) + ")"
+                                       : std::string()) +
+                       " sizes disagree");
   }
   if (depth_too) f.depth_m = depthUnitsToMetres(depth, msg.depth_scale, max_depth_units);
   return f;
@@ -373,7 +381,39 @@ pplvo_msgs::rgbd_frame_t toMsg(const RgbdFrame& f, double depth_scale, int8_t rg
   m.depth_scale = depth_scale;
   m.rgb = encodeImage(f.bgr, rgb_encoding);
   m.depth = encodeImage(depthMetresToUnits(f.depth_m, depth_scale), depth_encoding);
+  setDepthCamera(f.depth_camera, &m);
   return m;
+}
+
+void setDepthCamera(const std::optional<DepthCamera>& depth, pplvo_msgs::rgbd_frame_t* m) {
+  m->depth_frame = depth ? pplvo_msgs::rgbd_frame_t::DEPTH_OWN_CAMERA
+                         : pplvo_msgs::rgbd_frame_t::DEPTH_REGISTERED;
+  const DepthCamera d = depth.value_or(DepthCamera{});
+  m->depth_camera = toMsg(d.camera);
+  const Eigen::Matrix3d R = d.T_c_d.linear();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m->R_c_d[3 * r + c] = R(r, c);
+    m->t_c_d_m[r] = d.T_c_d.translation()[r];
+  }
+}
+
+std::optional<DepthCamera> depthCameraFromMsg(const pplvo_msgs::rgbd_frame_t& m) {
+  if (m.depth_frame == pplvo_msgs::rgbd_frame_t::DEPTH_REGISTERED) return std::nullopt;
+  if (m.depth_frame != pplvo_msgs::rgbd_frame_t::DEPTH_OWN_CAMERA) {
+    throw MessageError("unknown depth_frame " + std::to_string(m.depth_frame));
+  }
+  DepthCamera d;
+  d.camera = fromMsg(m.depth_camera);  // MessageError on invalid intrinsics
+  Eigen::Matrix3d R;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R(r, c) = m.R_c_d[3 * r + c];
+    d.T_c_d.translation()[r] = m.t_c_d_m[r];
+  }
+  d.T_c_d.linear() = R;
+  if (!isValidPose(d.T_c_d)) {
+    throw MessageError("depth camera extrinsics R_c_d / t_c_d_m are not a rigid transform");
+  }
+  return d;
 }
 
 pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& d, const PinholeCamera& camera,

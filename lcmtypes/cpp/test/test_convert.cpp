@@ -206,6 +206,40 @@ TEST(Convert, FrameWithMismatchedDepthSizeThrows) {
   EXPECT_THROW(fromMsg(m), MessageError);
 }
 
+TEST(Convert, FrameWithADepthCameraOfItsOwnRoundTrips) {
+  RgbdFrame f = makeFrame();
+  EXPECT_EQ(toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_RAW_U16).depth_frame,
+            pplvo_msgs::rgbd_frame_t::DEPTH_REGISTERED);
+  DepthCamera d;
+  d.camera = vga();
+  d.camera.width = 32;
+  d.camera.height = 24;
+  d.camera.fx = 30;
+  d.T_c_d.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  d.T_c_d.translation() = Eigen::Vector3d(0.025, -0.001, 0.003);
+  f.depth_camera = d;
+  f.depth_m = cv::Mat(24, 32, CV_32FC1, cv::Scalar(1.5f));
+  const auto m = roundTripBytes(toMsg(f, 5000.0, Img::ENCODING_RAW_BGR8, Img::ENCODING_PNG_U16));
+  EXPECT_EQ(m.depth_frame, pplvo_msgs::rgbd_frame_t::DEPTH_OWN_CAMERA);
+  const RgbdFrame back = fromMsg(m);
+  ASSERT_TRUE(back.depth_camera.has_value());
+  EXPECT_EQ(back.depth_camera->camera, d.camera);
+  EXPECT_TRUE(back.depth_camera->T_c_d.isApprox(d.T_c_d, 0.0));
+  EXPECT_EQ(back.depth_m.size(), cv::Size(32, 24));
+  EXPECT_EQ(back.camera, f.camera);
+  // The depth image must have the depth camera's size; unknown frames and a non-rigid
+  // rotation are refused.
+  auto bad = m;
+  bad.depth_camera.width = 64;
+  EXPECT_THROW(fromMsg(bad), MessageError);
+  bad = m;
+  bad.depth_frame = 2;
+  EXPECT_THROW(fromMsg(bad), MessageError);
+  bad = m;
+  bad.R_c_d[0] = 2.0;
+  EXPECT_THROW(fromMsg(bad), MessageError);
+}
+
 TEST(Convert, DepthMapRoundTrip) {
   DepthWithVariance d;
   d.depth_m = cv::Mat(48, 64, CV_32FC1);

@@ -197,6 +197,17 @@ TEST(DecodeMessage, NamesAnOlderLogVersion) {
   EXPECT_NE(error.find("older log version"), std::string::npos) << error;
   EXPECT_NE(error.find("depth_utime"), std::string::npos) << error;
 
+  // The layout before depth_frame / depth_camera / R_c_d / t_c_d_m (1 + 80 + 72 + 24 bytes at
+  // the end).
+  std::vector<uint8_t> before_rig = encode(frame());
+  ASSERT_GT(before_rig.size(), 177u);
+  before_rig.resize(before_rig.size() - 177);
+  const uint64_t rig_fingerprint = 0xfb99a9fa90b73068ULL;
+  for (int i = 0; i < 8; ++i) before_rig[i] = static_cast<uint8_t>(rig_fingerprint >> (56 - 8 * i));
+  const std::string rig_error = decodeMessage(before_rig.data(), before_rig.size(), &out);
+  EXPECT_NE(rig_error.find("older log version"), std::string::npos) << rig_error;
+  EXPECT_NE(rig_error.find("depth_camera"), std::string::npos) << rig_error;
+
   // Today's layout still decodes, and carries the depth instant.
   pplvo_msgs::rgbd_frame_t now = frame();
   now.depth_utime = now.utime - 13000;

@@ -6,35 +6,23 @@ namespace pplvo::pipeline {
 
 OdometryPipeline::OdometryPipeline(const PipelineOptions& options)
     : options_(options),
-      sensor_(options.depth_filter.sensor),
-      cgm_(options.depth_filter.cgm,
-           std::make_shared<depth_filter::QuadraticSensorModel>(options.depth_filter.sensor)),
+      measurement_(options.depth_filter),
       ogm_(options.depth_filter.ogm),
       frontend_(options.frontend),
       odometry_(options.odometry) {}
 
 PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
+  // Depth has the colour camera's size, or its own camera's when not registered.
+  const PinholeCamera& depth_camera =
+      frame.depth_camera ? frame.depth_camera->camera : frame.camera;
   if (frame.depth_m.empty() || frame.depth_m.type() != CV_32FC1 ||
-      frame.depth_m.rows != frame.camera.height || frame.depth_m.cols != frame.camera.width) {
+      frame.depth_m.rows != depth_camera.height || frame.depth_m.cols != depth_camera.width) {
     throw std::invalid_argument("frame " + std::to_string(frame.seq) +
                                 ": depth size or type disagrees with the camera");
   }
   PipelineFrameResult r;
-  // Stage 1-2 of the depth filter, on depth in the undistorted pinhole model.
-  cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
-  if (options_.depth_filter.time_alignment &&
-      depth_filter::DepthTimeAligner::needed(frame.utime, frame.depth_utime)) {
-    ScopedStageTimer t(depth_timings_, "time_align");
-    depth_m = time_aligner_.apply(frame.camera, depth_m, frame.seq, frame.utime, frame.depth_utime);
-  }
-  DepthWithVariance depth;
-  if (options_.depth_filter.model == depth_filter::DepthModel::kSensor) {
-    ScopedStageTimer t(depth_timings_, "sensor");
-    depth = depth_filter::applySensorModel(sensor_, depth_m);
-  } else {
-    ScopedStageTimer t(depth_timings_, "cgm");
-    depth = cgm_.apply(depth_m);
-  }
+  // Stages 0-2 of the depth filter, on depth in the undistorted pinhole model.
+  DepthWithVariance depth = measurement_.apply(frame, depth_timings_);
   // Frontend, 2D stage; then the pose against the last frame's 3D features.
   FrameFeatures features = frontend_.extract2d(frame, depth, &r.frontend);
   r.tracking = reference_ ? odometry_.track(*reference_, features, &r.odometry)
@@ -43,7 +31,7 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
   r.pose.utime = frame.utime;
   r.pose.seq = frame.seq;
   r.pose.stamp = frame.stamp;
-  time_aligner_.observePose(frame.seq, frame.utime, r.pose.T_w_c,
+  measurement_.observePose(frame.seq, frame.utime, r.pose.T_w_c,
                             r.pose.status == TrackingStatus::kTracking);
   // O-GM on the new pose (as the depth filter process does on pose_t).
   const DepthWithVariance* fused = &depth;

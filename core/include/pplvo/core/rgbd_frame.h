@@ -1,15 +1,25 @@
 #pragma once
 /// In-memory RGB-D frame and depth maps as the libraries see them (no LCM here).
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/geometry.h"
 
 namespace pplvo {
 
-/// One registered RGB-D frame.
+/// A depth camera of its own beside the colour camera, whose depth is not registered to the
+/// colour image (docs/cameras.md, "Unregistered depth"): the depth filter registers it
+/// (depth_filter::DepthRegistration).
+struct DepthCamera {
+  PinholeCamera camera;             ///< intrinsics, distortion and image size of the depth images
+  Pose3 T_c_d = Pose3::Identity();  ///< maps depth-camera points into the colour camera (m)
+};
+
+/// One RGB-D frame: depth registered to the colour camera, or in a depth camera of its own.
 struct RgbdFrame {
   int64_t utime = 0;    ///< capture time of the colour image, microseconds
   /// Capture time of the depth image, same clock; 0 = the same instant as `utime`. Free-running
@@ -20,6 +30,9 @@ struct RgbdFrame {
   PinholeCamera camera;
   cv::Mat bgr;          ///< CV_8UC3 colour (or CV_8UC1 grey)
   cv::Mat depth_m;      ///< CV_32FC1 depth in metres; 0 = no measurement
+  /// Unset (the default): depth_m is registered to `camera` (same size and pixels). Set:
+  /// depth_m holds this depth camera's image (its size, its raw pixels, z along its axis).
+  std::optional<DepthCamera> depth_camera;
 };
 
 /// Depth with per-pixel variance (depth filter output).

@@ -124,15 +124,24 @@ struct DatasetIndex {
 /// Throws DatasetError when the folder or both index sources are missing.
 DatasetIndex buildIndex(const std::string& dir, const DatasetOptions& options = {});
 
-/// Colour camera and depth scale.
+/// Colour camera, depth scale and, for unregistered depth, the depth camera.
 struct DatasetCamera {
   PinholeCamera camera;         ///< width/height 0 until known (set from the first frame)
   double depth_scale = 5000.0;  ///< depth units per metre (TUM/ICL PNG: 5000)
   std::string source;           ///< file it was read from
+  /// Unset (the default, every shared dataset): depth images are registered to the colour
+  /// camera. Set only when the calibration says `depth_registered` 0 / false: depth images are
+  /// in this depth camera (its width/height 0 until known: the colour image's size).
+  std::optional<DepthCamera> depth_camera;
 };
 
 /// Reads an OpenCV FileStorage calibration (`RGB_intrinsic_params` 3x3,
 /// `RGB_distortion_coefficients` 1x5 or 5x1, optional `depth_scale`, optional `width`/`height`).
+/// Depth is registered to colour unless `depth_registered` is 0: then `IR_intrinsic_params`,
+/// `Rotation` (3x3) and `Translation` (3x1, metres; p_rgb = Rotation p_ir + Translation) are
+/// required and `IR_distortion_coefficients`, `IR_width`, `IR_height` optional (docs/player.md).
+/// The IR_* / Rotation / Translation entries are ignored without `depth_registered: 0` (the
+/// shared datasets carry them, with registered depth).
 /// Throws DatasetError naming the file when it cannot be read or lacks the intrinsics.
 DatasetCamera loadCalibParamsXml(const std::string& path);
 
@@ -140,9 +149,12 @@ DatasetCamera loadCalibParamsXml(const std::string& path);
 DatasetCamera parseCalibParams(const std::string& text, const std::string& source);
 
 /// Reads a YAML camera file with keys `width height fx fy cx cy distortion [k1 k2 p1 p2 k3]
-/// depth_scale`. fx fy cx cy are required; width/height default to 0 (taken from the first
-/// frame); distortion defaults to zeros; depth_scale to 5000. Unknown keys are errors. All
-/// problems are reported together in one DatasetError.
+/// depth_scale depth_registered depth_camera`. fx fy cx cy are required; width/height default to
+/// 0 (taken from the first frame); distortion defaults to zeros; depth_scale to 5000;
+/// depth_registered to true. With `depth_registered: false` the map `depth_camera` (width,
+/// height, fx, fy, cx, cy, distortion as above; R_c_d: 9 numbers row-major; t_c_d_m: 3, with
+/// p_colour = R_c_d p_depth + t_c_d_m) is required, and refused otherwise. Unknown keys are
+/// errors. All problems are reported together in one DatasetError.
 DatasetCamera loadCameraYaml(const std::string& path);
 
 /// The same from the file's text (`source` names it in errors and DatasetCamera::source).
@@ -155,8 +167,10 @@ struct FrameLoadOptions {
   /// Size bounds checked on each image's header before it is decoded (docs/fuzzing.md): a
   /// colour image must have image_limits.expected when given (Dataset::loadRaw sets the
   /// camera's size when it is empty), else at most image_limits.max_pixels; the depth image
-  /// must have the colour image's size.
+  /// must have the colour image's size (or depth_size).
   ImageLimits image_limits;
+  /// Size of the depth images when they are not registered to colour; empty: the colour's.
+  cv::Size depth_size;
 };
 
 /// A frame as stored: colour image and depth in integer units (0 = missing).

@@ -62,6 +62,9 @@ class CgmFilter {
   /// Same, writing into `out`, whose matrices are reused when they already have the size and
   /// type (no allocation in steady state). They must not share data with anything still in use.
   void apply(const cv::Mat& depth_m, DepthWithVariance* out);
+  /// Same on depth whose stage-1 variance is already known (registered depth,
+  /// depth_registration.h): sigma_i^2 = measured.var_m2 instead of the sensor model's.
+  DepthWithVariance apply(const DepthWithVariance& measured);
 
   const CgmStats& stats() const { return stats_; }
   const Options& options() const { return options_; }
@@ -79,11 +82,13 @@ class CgmFilter {
   };
 
   void resize(int rows, int cols);
-  void horizontalRow(const cv::Mat& depth_m, int r, RowBuffers& b, int64_t* invalid,
-                     int64_t* valid) const;
+  /// Stage 1 and horizontal sums of row r; variances from `var_m2` when given, else the model.
+  void horizontalRow(const cv::Mat& depth_m, const cv::Mat* var_m2, int r, RowBuffers& b,
+                     int64_t* invalid, int64_t* valid) const;
   /// Output rows [r0, r1) (inputs r0 - 1 .. r1 read, counted only within the band).
-  void applyRows(const cv::Mat& depth_m, int r0, int r1, RowBuffers& b, DepthWithVariance& out,
-                 BandCounts* counts) const;
+  void applyRows(const cv::Mat& depth_m, const cv::Mat* var_m2, int r0, int r1, RowBuffers& b,
+                 DepthWithVariance& out, BandCounts* counts) const;
+  void run(const cv::Mat& depth_m, const cv::Mat* var_m2, DepthWithVariance* out);
 
   Options options_;
   std::shared_ptr<const SensorModel> model_;

@@ -63,6 +63,12 @@ class DepthTimeAligner {
   std::optional<Pose3> colourFromDepth(int64_t seq, int64_t colour_utime,
                                        int64_t depth_utime) const;
 
+  /// The motion that moves frame `seq`'s depth to its colour instant (T_colour_depth, counted
+  /// in the stats as apply() counts it); nullopt when there is nothing to correct (no offset,
+  /// an offset beyond max_offset_s, or no velocity yet). DepthRegistration composes it with
+  /// the rig's extrinsics, so unregistered depth is moved once.
+  std::optional<Pose3> motion(int64_t seq, int64_t colour_utime, int64_t depth_utime);
+
   /// `depth_m` of frame `seq` moved to the colour instant (itself when nothing to correct).
   cv::Mat apply(const PinholeCamera& camera, const cv::Mat& depth_m, int64_t seq,
                 int64_t colour_utime, int64_t depth_utime);

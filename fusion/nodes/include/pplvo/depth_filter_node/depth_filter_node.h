@@ -22,8 +22,8 @@
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/depth_filter_options.h"
 #include "pplvo/depth_filter/depth_model.h"
-#include "pplvo/depth_filter/depth_rectification.h"
 #include "pplvo/depth_filter/depth_time_alignment.h"
+#include "pplvo/depth_filter/measurement_stages.h"
 #include "pplvo/depth_filter/ogm_fusion.h"
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
@@ -129,10 +129,7 @@ class DepthFilterNode {
   DepthFilterNodeOptions options_;
   msgs::Bus bus_;
   std::vector<msgs::BusSubscription> subscriptions_;
-  depth_filter::DepthRectifier rectifier_;
-  depth_filter::DepthTimeAligner time_aligner_;
-  depth_filter::QuadraticSensorModel sensor_;
-  depth_filter::CgmFilter cgm_;
+  depth_filter::MeasurementStages measurement_;  ///< stages 0-2
   depth_filter::OgmFusion ogm_;
   depth_filter::OgmResult fused_;  ///< reused output buffers of the fusion
   std::deque<Pending> pending_;

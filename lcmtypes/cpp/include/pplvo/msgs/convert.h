@@ -1,6 +1,7 @@
 #pragma once
 /// Conversions between LCM messages and library types. The only place where image encodings
 /// are known; every function validates sizes and throws MessageError on inconsistent input.
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -54,6 +55,13 @@ enum class FrameImages { kBoth, kColour, kDepth };
 RgbdFrame fromMsg(const pplvo_msgs::rgbd_frame_t& msg, int max_depth_units = 65535,
                   FrameImages images = FrameImages::kBoth);
 /// Library frame -> message. Depth is quantised to 1/depth_scale m.
+/// rgbd_frame_t's depth_frame, depth_camera, R_c_d, t_c_d_m from a frame's depth camera
+/// (DEPTH_REGISTERED when unset).
+void setDepthCamera(const std::optional<DepthCamera>& depth, pplvo_msgs::rgbd_frame_t* msg);
+/// The depth camera of a DEPTH_OWN_CAMERA frame, nullopt for DEPTH_REGISTERED. MessageError on
+/// another depth_frame, invalid intrinsics or extrinsics that are not a rigid transform.
+std::optional<DepthCamera> depthCameraFromMsg(const pplvo_msgs::rgbd_frame_t& msg);
+
 pplvo_msgs::rgbd_frame_t toMsg(const RgbdFrame& frame, double depth_scale, int8_t rgb_encoding,
                                int8_t depth_encoding, const std::string& source = "");
 

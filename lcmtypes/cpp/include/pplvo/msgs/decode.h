@@ -22,6 +22,9 @@ struct OlderMessageVersion {
 inline constexpr OlderMessageVersion kOlderMessageVersions[] = {
     {"rgbd_frame_t", static_cast<int64_t>(0x91c3a57269ce5245ULL),
      "rgbd_frame_t without depth_utime (pplvo before 2026-12-02)"},
+    {"rgbd_frame_t", static_cast<int64_t>(0xfb99a9fa90b73068ULL),
+     "rgbd_frame_t without depth_frame / depth_camera (pplvo before unregistered depth, "
+     "2026-12-02)"},
 };
 
 /// Why `size` bytes whose fingerprint is not MessageT's are not one: an older pplvo layout, or

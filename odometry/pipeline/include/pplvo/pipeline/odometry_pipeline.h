@@ -9,8 +9,7 @@
 #include "pplvo/core/frame_pose.h"
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/core/stage_timer.h"
-#include "pplvo/depth_filter/depth_rectification.h"
-#include "pplvo/depth_filter/depth_time_alignment.h"
+#include "pplvo/depth_filter/measurement_stages.h"
 #include "pplvo/pipeline/pipeline_options.h"
 
 namespace pplvo::pipeline {
@@ -39,10 +38,7 @@ class OdometryPipeline {
 
  private:
   PipelineOptions options_;
-  depth_filter::DepthRectifier rectifier_;
-  depth_filter::DepthTimeAligner time_aligner_;
-  depth_filter::QuadraticSensorModel sensor_;
-  depth_filter::CgmFilter cgm_;
+  depth_filter::MeasurementStages measurement_;  ///< stages 0-2
   depth_filter::OgmFusion ogm_;
   depth_filter::OgmResult fused_;
   Frontend frontend_;
