@@ -219,6 +219,10 @@ class JointProblem {
   std::vector<PointTerm> points;
   std::vector<LineTerm> lines;
   std::vector<PlaneTerm> planes;
+  /// Set by reweight: the planes' residual scale k (1: Sigma_r right) and their weight
+  /// min(alpha, 1/k) in the cost and the information.
+  double plane_scale = 1.0;
+  double plane_weight = 0.0;
 
   struct ReweightResult {
     int rows = 0;  // rows with non-zero weight
@@ -259,15 +263,27 @@ class JointProblem {
       abs_w.push_back(std::abs(rw(1)));
       norm_l[i] = rw.norm();
     }
+    std::vector<double> plane_chi2;
+    plane_chi2.reserve(planes.size());
     for (PlaneTerm& T : planes) {
       Eigen::Vector3d r;
       Eigen::Matrix3d Sig;
       planeResidual(T, pose, r, nullptr, &Sig);
       T.active = whitening<3>(Sig, o_.full_whitening, T.S);
       if (!T.active) continue;
+      plane_chi2.push_back((T.S * r).squaredNorm());
       out.rows += 3;
       ++out.n_planes;
     }
+    plane_scale = 1.0;
+    if (o_.plane_weight_from_residuals && !plane_chi2.empty()) {
+      auto mid = plane_chi2.begin() + plane_chi2.size() / 2;
+      std::nth_element(plane_chi2.begin(), mid, plane_chi2.end());
+      constexpr double kChi2Dof3Median = 2.366;
+      if (std::isfinite(*mid)) plane_scale = std::max(1.0, *mid / kChi2Dof3Median);
+    }
+    plane_weight = o_.plane_weight_from_residuals ? std::min(o_.plane_scale_alpha, 1.0 / plane_scale)
+                                                  : o_.plane_scale_alpha;
     if (o_.tukey_mad_scale && !abs_w.empty()) {
       auto mid = abs_w.begin() + abs_w.size() / 2;
       std::nth_element(abs_w.begin(), mid, abs_w.end());
@@ -322,7 +338,7 @@ class JointProblem {
     }
     Eigen::Vector3d r3;
     Matrix36 J3;
-    const double sqrt_alpha = std::sqrt(o_.plane_scale_alpha);
+    const double sqrt_alpha = std::sqrt(plane_weight);
     for (const PlaneTerm& T : planes) {
       if (!T.active) continue;
       planeResidual(T, pose, r3, jacobian ? &J3 : nullptr, nullptr);
@@ -371,8 +387,8 @@ class JointProblem {
       planeResidual(T, pose, r3, &J3, nullptr);
       const Matrix36 A = T.S * J3;
       const Matrix6d AtA = A.transpose() * A;
-      H.noalias() += o_.plane_scale_alpha * AtA;
-      M.noalias() += o_.plane_scale_alpha * o_.plane_scale_alpha * AtA;
+      H.noalias() += plane_weight * AtA;
+      M.noalias() += plane_weight * plane_weight * plane_scale * AtA;
     }
     H = 0.5 * (H + H.transpose());
     M = 0.5 * (M + M.transpose());
@@ -501,6 +517,8 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
   JointProblem::ReweightResult& rw = out.rw;
   rw = problem.reweight(xi.data());
   est.robust_scale = rw.scale;
+  est.plane_scale = problem.plane_scale;
+  est.plane_weight = problem.plane_weight;
   for (int it = 0; it < o.max_irls_iterations; ++it) {
     if (rw.rows < std::max(6, o.min_residuals)) break;
     const Vector6d xi_before = xi;
@@ -534,6 +552,8 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
     xi = poseToXi(xiToPose(xi));  // keep q_w >= 0
     rw = problem.reweight(xi.data());
     est.robust_scale = rw.scale;
+    est.plane_scale = problem.plane_scale;
+    est.plane_weight = problem.plane_weight;
     if (it > 0 && poseChangeSmall(xi, xi_before, o)) break;
   }
   return out;

@@ -172,6 +172,83 @@ TEST(PoseEstimator, PaperCovarianceIsConservativeWithSmallAlpha) {
               rs.mean_nees);
 }
 
+// Planes whose errors are 100x their stated std (as on a real depth camera, whose errors are
+// correlated over a plane while its WLS covariance shrinks with the pixel count): their
+// residuals measure the scale k (~10^4), they weigh 1/k instead of alpha, and the covariance
+// stays consistent; with alpha alone (the paper) the pose is worse and over-confident.
+TEST(PoseEstimator, OverconfidentPlanesAreWeightedByTheirResiduals) {
+  SceneConfig cfg;
+  cfg.n_points = 30;
+  cfg.n_lines = 0;
+  cfg.n_planes = 5;
+  const double factor = 100.0;
+  cfg.plane_sigma_normal_rad *= factor;
+  cfg.plane_sigma_d_m *= factor;
+  const PinholeCamera cam = testing::testCamera();
+  const Pose3 T_true = testing::typicalMotion();
+  const Vector6d xi_true = poseToXi(T_true);
+  PoseEstimatorOptions measured, paper;
+  paper.plane_weight_from_residuals = false;
+  ASSERT_TRUE(measured.plane_weight_from_residuals);  // the default
+  struct Sum {
+    double nees = 0, err2 = 0, scale = 0, weight = 0;
+  } on, off;
+  SceneGenerator gen(cam, cfg, 21);
+  const int trials = 200;
+  for (int i = 0; i < trials; ++i) {
+    Correspondences c = gen.generate(T_true);
+    for (PlaneMatch3D3D& m : c.planes) {  // the stated covariance: 100x too small in std
+      m.prev.cov /= factor * factor;
+      m.curr.cov /= factor * factor;
+    }
+    for (auto [opts, sum] : {std::pair{&measured, &on}, std::pair{&paper, &off}}) {
+      const PoseEstimate e = PoseEstimator(*opts).estimate(c, cam, Pose3::Identity());
+      ASSERT_TRUE(e.accepted());
+      const Vector6d err = poseToXi(e.T_curr_prev) - xi_true;
+      sum->nees += err.dot(e.covariance.ldlt().solve(err)) / trials;
+      sum->err2 += err.head<3>().squaredNorm() / trials;
+      sum->scale += e.plane_scale / trials;
+      sum->weight += e.plane_weight / trials;
+    }
+  }
+  std::printf("planes 100x over-confident: measured k %.0f, weight %.2g, NEES %.2f, rms t %.2f mm; "
+              "alpha alone: NEES %.2f, rms t %.2f mm\n",
+              on.scale, on.weight, on.nees, 1e3 * std::sqrt(on.err2), off.nees,
+              1e3 * std::sqrt(off.err2));
+  EXPECT_GT(on.scale, 3000.0);
+  EXPECT_LT(on.weight, 0.001);
+  EXPECT_NEAR(off.scale, 1.0, 1e-9);
+  EXPECT_NEAR(off.weight, paper.plane_scale_alpha, 1e-9);
+  EXPECT_GT(on.nees, 3.0);
+  EXPECT_LT(on.nees, 9.0);
+  EXPECT_GT(off.nees, 2.0 * on.nees);
+  EXPECT_LT(on.err2, off.err2);
+}
+
+// Planes as good as stated: at the solution k stays below 1/alpha, so they weigh alpha and
+// the estimate is the paper's (to the solver's tolerance: the first IRLS step, at the initial
+// guess, sees the motion in the plane residuals and weighs them less).
+TEST(PoseEstimator, HonestPlanesKeepThePapersWeight) {
+  SceneConfig cfg;
+  cfg.n_points = 60;
+  cfg.n_lines = 10;
+  cfg.n_planes = 4;
+  const PinholeCamera cam = testing::testCamera();
+  SceneGenerator gen(cam, cfg, 22);
+  PoseEstimatorOptions paper;
+  paper.plane_weight_from_residuals = false;
+  for (int i = 0; i < 50; ++i) {
+    const Correspondences c = gen.generate(testing::typicalMotion());
+    const PoseEstimate a = PoseEstimator(PoseEstimatorOptions{}).estimate(c, cam, Pose3::Identity());
+    const PoseEstimate b = PoseEstimator(paper).estimate(c, cam, Pose3::Identity());
+    ASSERT_LT(a.plane_scale, 1.0 / paper.plane_scale_alpha);
+    EXPECT_EQ(a.plane_weight, paper.plane_scale_alpha);
+    EXPECT_LT((a.T_curr_prev.translation() - b.T_curr_prev.translation()).norm(), 1e-7)
+        << "trial " << i;
+    EXPECT_LT(rotationErrorDeg(a.T_curr_prev, b.T_curr_prev), 1e-5) << "trial " << i;
+  }
+}
+
 struct FamilyCase {
   const char* name;
   bool points, lines, planes;

@@ -77,6 +77,14 @@ struct PoseEstimatorOptions {
   double line_sigma_px = std::sqrt(1.0 / 12.0);
   /// alpha of the joint cost E: scale of the plane terms (paper: 0.02, "coarse tuning").
   double plane_scale_alpha = 0.02;
+  /// Planes' weight from their residuals: at each IRLS step k = max(1, median over planes of
+  /// r^T Sigma_r^-1 r / 2.366) (the median of chi-square(3) is 2.366: k = 1 when Sigma_r is
+  /// right), the plane terms weigh min(alpha, 1/k), and the sandwich covariance takes their
+  /// residual covariance as k Sigma_r. Real depth errors are correlated over a plane, so its
+  /// WLS covariance (which shrinks with the pixel count) is far too small: median k 2,100 on
+  /// TUM fr1, 430 on fr3, 8 on ICL-NUIM, under 1 on the synthetic room (docs/estimator.md,
+  /// "Plane weights from their residuals"). false: alpha alone (the paper).
+  bool plane_weight_from_residuals = true;
   /// Pose covariance. true: sandwich H^-1 M H^-1 with H = J^T W J (alpha in W) and M the same
   /// with alpha^2: the first-order covariance of the estimate for any alpha (equal to the
   /// paper's (J^T W J)^-1 when alpha = 1, and independent of alpha for planes alone).
@@ -138,6 +146,9 @@ void visit(V& v, PoseEstimatorOptions& o) {
   v.field("plane_scale_alpha", o.plane_scale_alpha,
           "alpha, scale of the plane terms in the joint cost E (eq. 22: 0.02, coarse tuning)",
           config::atLeast(0));
+  v.field("plane_weight_from_residuals", o.plane_weight_from_residuals,
+          "plane terms weigh min(alpha, 1/k), k = max(1, median plane chi-square / 2.366) at "
+          "each IRLS step; the covariance takes k Sigma_r (false: alpha alone, the paper)");
   v.field("covariance_sandwich", o.covariance_sandwich,
           "pose covariance H^-1 M H^-1 (true) or the paper's eq. 23 (J^T W J)^-1 (false)");
   v.field("full_whitening", o.full_whitening,
@@ -203,6 +214,9 @@ struct PoseEstimate {
   int lm_iterations = 0;
   double initial_cost = 0, final_cost = 0;  ///< 0.5 * sum of squared weighted residuals
   double robust_scale = 1;                  ///< MAD scale of the whitened residuals
+  /// The planes' residual scale k (1 = their covariance is right) and weight (alpha or less).
+  double plane_scale = 1;
+  double plane_weight = 0;
 };
 
 /// Variance put on unobservable directions of a singular information matrix.
