@@ -221,6 +221,7 @@ void ViewerNode::convertPending() {
   }
   if (depth_fused_pending_ && raw_fused_) {
     shown_fused_is_raw_ = false;
+    fusion_only_compared_ = false;
     msgs::guarded(counters_, name, [&] {
       data_.fused_depth = msgs::fromMsg(*raw_fused_);
       data_.fused_title = "fused depth (seq " + std::to_string(raw_fused_->seq) + ")";
@@ -240,7 +241,7 @@ void ViewerNode::convertPending() {
     });
     data_.fusion_only_mask = cv::Mat();
     data_.status.fusion_only_px.reset();
-  } else if (depth_cgm_pending_ && raw_fused_ && !data_.status.fusion_only_px) {
+  } else if (depth_cgm_pending_ && raw_fused_ && !fusion_only_compared_) {
     updateFusionOnly();  // the fused map came before its frame's C-GM map (other routes)
   }
   depth_cgm_pending_ = false;
@@ -258,6 +259,7 @@ void ViewerNode::updateFusionOnly() {
     if (m.seq == raw_fused_->seq && m.utime == raw_fused_->utime) cgm = &m;
   }
   if (!cgm) return;  // its frame's C-GM map was not received (or fell out of the ring)
+  fusion_only_compared_ = true;  // once per fused map: a bad pair is counted once
   msgs::guarded(counters_, options_.node_name.c_str(), [&] {
     const DepthWithVariance cgm_depth = msgs::viewOfMsg(*cgm);
     FusionOnlyDepth f = fusionOnlyPixels(data_.fused_depth->depth_m, cgm_depth.depth_m);

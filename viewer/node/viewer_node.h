@@ -126,6 +126,7 @@ class ViewerNode {
   bool new_data_ = false;
   bool depth_cgm_pending_ = false, depth_fused_pending_ = false;
   bool shown_fused_is_raw_ = false;  ///< data_.fused_depth was converted from raw_fused_
+  bool fusion_only_compared_ = false;  ///< raw_fused_ was compared with its frame's C-GM map
 
   // Converted state used for drawing.
   ViewerFrameData data_;

@@ -136,6 +136,10 @@ TEST(ViewerNode, CountsDepthOnlyThroughFusionAgainstTheSameFramesCgm) {
                   pplvo_msgs::depth_map_t::STAGE_OGM);
   node.spinOnce(0.0);
   EXPECT_FALSE(node.frameData().status.fusion_only_px);
+  // Another C-GM map arriving (the next frame's) does not count the bad pair again.
+  publishDepthMap(lcm, channels::kDepthCgm, cgm, seq + 4, f.utime + 133332,
+                  pplvo_msgs::depth_map_t::STAGE_CGM);
+  node.spinOnce(0.0);
   EXPECT_EQ(node.counters().frames_skipped, 1);
   EXPECT_EQ(node.counters().errors, 0);
   EXPECT_NE(node.counters().last_warning.find("sizes differ"), std::string::npos)
