@@ -90,7 +90,8 @@ void ViewerNode::onRgbd(const lcm::ReceiveBuffer*, const std::string&,
 void ViewerNode::onDepthCgm(const lcm::ReceiveBuffer*, const std::string&,
                             const pplvo_msgs::depth_map_t* m) {
   msgs::guarded(counters_, options_.node_name.c_str(), [&] {
-    raw_cgm_ = *m;
+    cgm_ring_.push_back(*m);
+    while (static_cast<int>(cgm_ring_.size()) > options_.frame_ring) cgm_ring_.pop_front();
     depth_cgm_pending_ = true;
     new_data_ = true;
   });
@@ -219,27 +220,63 @@ void ViewerNode::convertPending() {
     data_.feature_frame.reset();
   }
   if (depth_fused_pending_ && raw_fused_) {
+    shown_fused_is_raw_ = false;
+    fusion_only_compared_ = false;
     msgs::guarded(counters_, name, [&] {
       data_.fused_depth = msgs::fromMsg(*raw_fused_);
       data_.fused_title = "fused depth (seq " + std::to_string(raw_fused_->seq) + ")";
+      shown_fused_is_raw_ = true;
     });
+    updateFusionOnly();
     depth_fused_pending_ = false;
-  } else if (depth_cgm_pending_ && raw_cgm_ && !raw_fused_) {
+  } else if (depth_cgm_pending_ && !cgm_ring_.empty() && !raw_fused_) {
     // No fused map yet: show the C-GM (or sensor-model) map in its place.
+    const pplvo_msgs::depth_map_t& cgm = cgm_ring_.back();
     msgs::guarded(counters_, name, [&] {
-      data_.fused_depth = msgs::fromMsg(*raw_cgm_);
-      data_.fused_title = std::string(raw_cgm_->stage == pplvo_msgs::depth_map_t::STAGE_SENSOR
+      data_.fused_depth = msgs::fromMsg(cgm);
+      data_.fused_title = std::string(cgm.stage == pplvo_msgs::depth_map_t::STAGE_SENSOR
                                           ? "sensor-model depth"
                                           : "C-GM depth") +
-                          " (seq " + std::to_string(raw_cgm_->seq) + ")";
+                          " (seq " + std::to_string(cgm.seq) + ")";
     });
+    data_.fusion_only_mask = cv::Mat();
+    data_.status.fusion_only_px.reset();
+  } else if (depth_cgm_pending_ && raw_fused_ && !fusion_only_compared_) {
+    updateFusionOnly();  // the fused map came before its frame's C-GM map (other routes)
   }
   depth_cgm_pending_ = false;
+}
+
+void ViewerNode::updateFusionOnly() {
+  data_.fusion_only_mask = cv::Mat();
+  data_.status.fusion_only_px.reset();
+  if (!raw_fused_ || !data_.fused_depth || !shown_fused_is_raw_) return;
+  // Only an O-GM map can hold depth from other frames (the depth filter publishes its C-GM
+  // map as the fused one when O-GM is off or fails).
+  if (raw_fused_->stage != pplvo_msgs::depth_map_t::STAGE_OGM) return;
+  const pplvo_msgs::depth_map_t* cgm = nullptr;
+  for (const auto& m : cgm_ring_) {
+    if (m.seq == raw_fused_->seq && m.utime == raw_fused_->utime) cgm = &m;
+  }
+  if (!cgm) return;  // its frame's C-GM map was not received (or fell out of the ring)
+  fusion_only_compared_ = true;  // once per fused map: a bad pair is counted once
+  msgs::guarded(counters_, options_.node_name.c_str(), [&] {
+    const DepthWithVariance cgm_depth = msgs::viewOfMsg(*cgm);
+    FusionOnlyDepth f = fusionOnlyPixels(data_.fused_depth->depth_m, cgm_depth.depth_m);
+    if (!f.error.empty()) throw msgs::MessageError("fusion-only depth: " + f.error);
+    data_.fusion_only_mask = std::move(f.mask);
+    data_.status.fusion_only_px = f.n_fusion_only;
+    data_.status.fusion_only_share = f.share();
+  });
 }
 
 void ViewerNode::pollKeys(int wait_ms) {
   const int key = cv::waitKey(wait_ms);
   if (key == 27 || key == 'q' || key == 'Q') msgs::requestShutdown();  // Esc or q closes
+  if (key == 'f' || key == 'F') {  // toggles the tint of depth only through fusion
+    options_.canvas.show_fusion_only = !options_.canvas.show_fusion_only;
+    new_data_ = true;
+  }
 }
 
 bool ViewerNode::drawIfNew() {

@@ -85,6 +85,8 @@ class ViewerNode {
   bool outputFailed() const { return output_failed_; }
   /// The last canvas drawn (empty before the first).
   const cv::Mat& lastCanvas() const { return last_canvas_; }
+  /// What the last canvas was drawn from.
+  const ViewerFrameData& frameData() const { return data_; }
 
   void onRgbd(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::rgbd_frame_t* m);
   void onDepthCgm(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::depth_map_t* m);
@@ -102,7 +104,9 @@ class ViewerNode {
   void convertPending();
   void writeOutputs(const cv::Mat& canvas);
   void publishStatus();
-  /// GUI events of the window; Esc or q requests shutdown.
+  /// The fused map's pixels with depth only through fusion, against its frame's C-GM map.
+  void updateFusionOnly();
+  /// GUI events of the window; Esc or q requests shutdown, f toggles the fusion-only tint.
   void pollKeys(int wait_ms);
   double stampSeconds(const std::string& stamp, int64_t utime) const;
 
@@ -114,10 +118,15 @@ class ViewerNode {
   // Raw messages copied by the handlers (newest only, plus a small ring of frames).
   std::deque<pplvo_msgs::rgbd_frame_t> frame_ring_;
   bool frame_pending_ = false;
-  std::optional<pplvo_msgs::depth_map_t> raw_cgm_, raw_fused_;
+  /// Recent C-GM maps (newest last, frame_ring of them): a fused map is compared with the
+  /// C-GM map of its own frame (same seq and utime), which arrived before it.
+  std::deque<pplvo_msgs::depth_map_t> cgm_ring_;
+  std::optional<pplvo_msgs::depth_map_t> raw_fused_;
   std::optional<pplvo_msgs::features_t> raw_features_, raw_features_3d_;
   bool new_data_ = false;
   bool depth_cgm_pending_ = false, depth_fused_pending_ = false;
+  bool shown_fused_is_raw_ = false;  ///< data_.fused_depth was converted from raw_fused_
+  bool fusion_only_compared_ = false;  ///< raw_fused_ was compared with its frame's C-GM map
 
   // Converted state used for drawing.
   ViewerFrameData data_;

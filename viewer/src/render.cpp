@@ -126,6 +126,54 @@ cv::Mat colorizeScalar(const cv::Mat& value_m, const ValueRange& range,
   return colour;
 }
 
+FusionOnlyDepth fusionOnlyPixels(const cv::Mat& fused_depth_m, const cv::Mat& cgm_depth_m) {
+  FusionOnlyDepth r;
+  if (fused_depth_m.type() != CV_32FC1 || cgm_depth_m.type() != CV_32FC1 ||
+      fused_depth_m.empty() || cgm_depth_m.empty()) {
+    r.error = "fused and C-GM depth must be non-empty CV_32FC1 maps";
+    return r;
+  }
+  if (fused_depth_m.size() != cgm_depth_m.size()) {
+    r.error = "fused depth " + std::to_string(fused_depth_m.cols) + "x" +
+              std::to_string(fused_depth_m.rows) + " and C-GM depth " +
+              std::to_string(cgm_depth_m.cols) + "x" + std::to_string(cgm_depth_m.rows) +
+              " sizes differ";
+    return r;
+  }
+  auto valid = [](float v) { return std::isfinite(v) && v > 0.f; };
+  r.mask = cv::Mat(fused_depth_m.size(), CV_8UC1, cv::Scalar(0));
+  for (int y = 0; y < fused_depth_m.rows; ++y) {
+    const float* f = fused_depth_m.ptr<float>(y);
+    const float* c = cgm_depth_m.ptr<float>(y);
+    uint8_t* m = r.mask.ptr<uint8_t>(y);
+    for (int x = 0; x < fused_depth_m.cols; ++x) {
+      const bool fv = valid(f[x]), cv_ = valid(c[x]);
+      r.n_fused_valid += fv ? 1 : 0;
+      r.n_cgm_valid += cv_ ? 1 : 0;
+      if (fv && !cv_) {
+        m[x] = 255;
+        ++r.n_fusion_only;
+      }
+    }
+  }
+  return r;
+}
+
+void tintPixels(cv::Mat& bgr, const cv::Mat& mask, const cv::Scalar& tint_bgr, double alpha) {
+  if (bgr.type() != CV_8UC3 || mask.type() != CV_8UC1 || mask.size() != bgr.size()) return;
+  const double a = std::clamp(alpha, 0.0, 1.0);
+  for (int y = 0; y < bgr.rows; ++y) {
+    cv::Vec3b* p = bgr.ptr<cv::Vec3b>(y);
+    const uint8_t* m = mask.ptr<uint8_t>(y);
+    for (int x = 0; x < bgr.cols; ++x) {
+      if (!m[x]) continue;
+      for (int k = 0; k < 3; ++k) {
+        p[x][k] = cv::saturate_cast<uint8_t>((1.0 - a) * p[x][k] + a * tint_bgr[k]);
+      }
+    }
+  }
+}
+
 cv::Mat sqrtVariance(const cv::Mat& var_m2) {
   if (var_m2.empty()) return {};
   CV_Assert(var_m2.type() == CV_32FC1);
@@ -141,7 +189,8 @@ cv::Mat sqrtVariance(const cv::Mat& var_m2) {
 }
 
 cv::Mat renderScalarPanel(const cv::Mat& value_m, const std::string& title, cv::Size size,
-                          const ScalarPanelOptions& options, const std::string& unit) {
+                          const ScalarPanelOptions& options, const std::string& unit,
+                          const cv::Mat& highlight, const std::string& highlight_legend) {
   cv::Mat panel = blankPanel(size);
   drawTitle(panel, title);
   if (value_m.empty() || value_m.type() != CV_32FC1) {
@@ -160,6 +209,9 @@ cv::Mat renderScalarPanel(const cv::Mat& value_m, const std::string& title, cv::
   const cv::Rect dst = fitRect(value_m.size(), image_area);
   if (dst.area() > 0) {
     cv::Mat colour = colorizeScalar(value_m, range, options);
+    if (!highlight.empty()) {
+      tintPixels(colour, highlight, options.highlight_bgr, options.highlight_alpha);
+    }
     cv::Mat scaled;
     cv::resize(colour, scaled, dst.size(), 0, 0, cv::INTER_NEAREST);
     scaled.copyTo(panel(dst));
@@ -195,6 +247,11 @@ cv::Mat renderScalarPanel(const cv::Mat& value_m, const std::string& title, cv::
   }
   putLabel(panel, fmt("valid %.0f%%", 100.0 * range.n_valid / double(value_m.total())),
            cv::Point(size.width - 95, 17), 0.4, kDimText);
+  if (!highlight.empty() && !highlight_legend.empty()) {
+    const cv::Point org(margin, size.height - 5);
+    cv::rectangle(panel, cv::Rect(org.x, org.y - 9, 10, 10), options.highlight_bgr, cv::FILLED);
+    putLabel(panel, highlight_legend, cv::Point(org.x + 14, org.y), 0.38);
+  }
   return panel;
 }
 
@@ -452,6 +509,11 @@ cv::Mat renderStatusPanel(const StatusPanelData& d, cv::Size size) {
   std::snprintf(buf, sizeof buf, "depth window length %d   pose window %zu", d.window_length,
                 d.pose ? d.pose->window.size() : size_t{0});
   line(buf);
+  if (d.fusion_only_px) {
+    std::snprintf(buf, sizeof buf, "depth only through fusion: %d px (%.1f%% of fused; magenta, "
+                  "key f)", *d.fusion_only_px, 100.0 * d.fusion_only_share);
+    line(buf, cv::Scalar(255, 120, 255));
+  }
   std::snprintf(buf, sizeof buf, "viewer: frames %lld  drawn %lld  dropped %lld  %.1f fps %s",
                 static_cast<long long>(d.frames_received), static_cast<long long>(d.frames_drawn),
                 static_cast<long long>(d.frames_dropped), d.draw_fps,
@@ -528,8 +590,12 @@ cv::Mat renderCanvas(const ViewerFrameData& d, const CanvasOptions& o) {
   std::string fused_title = d.fused_title;
   if (d.fused_depth)
     fused_title += " (window " + std::to_string(d.fused_depth->window_length) + ")";
+  // Depth only through fusion: tinted when known (same-frame C-GM map received) and wanted.
+  const bool tint = o.show_fusion_only && d.fused_depth && !d.fusion_only_mask.empty() &&
+                    d.fusion_only_mask.size() == d.fused_depth->depth_m.size();
   put(renderScalarPanel(d.fused_depth ? d.fused_depth->depth_m : cv::Mat(), fused_title, o.cell,
-                        o.depth),
+                        o.depth, "m", tint ? d.fusion_only_mask : cv::Mat(),
+                        "depth only through fusion"),
       2);
   put(renderScalarPanel(d.fused_depth ? sqrtVariance(d.fused_depth->var_m2) : cv::Mat(),
                         "depth uncertainty sigma", o.cell, o.sigma),

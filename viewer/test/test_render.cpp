@@ -56,6 +56,103 @@ TEST(ViewerRender, ColorizeMarksMissingAndSpansTheMap) {
   EXPECT_NE(c.at<cv::Vec3b>(1), cv::Vec3b(0, 0, 0));
 }
 
+/// A 4x3 map from rows of values (0 = missing).
+cv::Mat map4x3(std::initializer_list<float> v) {
+  cv::Mat m(3, 4, CV_32FC1);
+  int i = 0;
+  for (float x : v) m.at<float>(i++) = x;
+  return m;
+}
+
+TEST(ViewerRender, FusionOnlyPixelsAreFusedButNotCgm) {
+  // A narrow depth camera's view: the C-GM map has depth in the middle two columns only; O-GM
+  // filled the left column from the window, and lost one C-GM pixel (an outlier it rejected).
+  const cv::Mat cgm = map4x3({0, 1.0f, 1.1f, 0,   //
+                              0, 1.2f, NAN, 0,    //
+                              0, 1.3f, 1.4f, 0});
+  const cv::Mat fused = map4x3({2.0f, 1.0f, 1.1f, 0,  //
+                                2.1f, 1.2f, 1.5f, 0,  //
+                                -1.0f, 0, 1.4f, NAN});
+  const FusionOnlyDepth f = fusionOnlyPixels(fused, cgm);
+  ASSERT_TRUE(f.error.empty()) << f.error;
+  ASSERT_EQ(f.mask.type(), CV_8UC1);
+  ASSERT_EQ(f.mask.size(), cv::Size(4, 3));
+  // By hand: (0,0) and (1,0) fused only (row, col); (1,2) C-GM NaN but fused 1.5: fused only;
+  // (2,0) fused -1 is not valid; (2,1) lost by fusion is not fusion-only; NaN and 0 are missing.
+  const cv::Mat want = (cv::Mat_<uint8_t>(3, 4) << 255, 0, 0, 0,  //
+                        255, 0, 255, 0,                           //
+                        0, 0, 0, 0);
+  EXPECT_EQ(cv::countNonZero(f.mask != want), 0) << f.mask;
+  EXPECT_EQ(f.n_fusion_only, 3);
+  EXPECT_EQ(f.n_fused_valid, 7);
+  EXPECT_EQ(f.n_cgm_valid, 5);
+  EXPECT_DOUBLE_EQ(f.share(), 3.0 / 7.0);
+  // The same map twice: nothing is fusion-only.
+  const FusionOnlyDepth same = fusionOnlyPixels(cgm, cgm);
+  EXPECT_EQ(same.n_fusion_only, 0);
+  EXPECT_EQ(cv::countNonZero(same.mask), 0);
+}
+
+TEST(ViewerRender, FusionOnlyPixelsRefuseMapsThatDoNotMatch) {
+  const cv::Mat a = map4x3({1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1});
+  const FusionOnlyDepth size = fusionOnlyPixels(a, cv::Mat(4, 3, CV_32FC1, cv::Scalar(1)));
+  EXPECT_TRUE(size.mask.empty());
+  EXPECT_NE(size.error.find("sizes differ"), std::string::npos) << size.error;
+  const FusionOnlyDepth type = fusionOnlyPixels(a, cv::Mat(3, 4, CV_16UC1, cv::Scalar(1)));
+  EXPECT_FALSE(type.error.empty());
+  EXPECT_FALSE(fusionOnlyPixels(cv::Mat(), a).error.empty());
+  EXPECT_EQ(type.share(), 0.0);
+}
+
+TEST(ViewerRender, FusionOnlyPixelsAreTintedInTheFusedPanel) {
+  cv::Mat bgr(1, 2, CV_8UC3, cv::Scalar(100, 50, 10));
+  const cv::Mat mask = (cv::Mat_<uint8_t>(1, 2) << 0, 255);
+  tintPixels(bgr, mask, cv::Scalar(255, 0, 255), 0.6);
+  EXPECT_EQ(bgr.at<cv::Vec3b>(0), cv::Vec3b(100, 50, 10));
+  EXPECT_EQ(bgr.at<cv::Vec3b>(1), cv::Vec3b(193, 20, 157));  // 0.4 * (100, 50, 10) + 0.6 * tint
+  tintPixels(bgr, cv::Mat(2, 2, CV_8UC1, cv::Scalar(255)), cv::Scalar(0, 0, 0), 1.0);  // ignored
+  EXPECT_EQ(bgr.at<cv::Vec3b>(0), cv::Vec3b(100, 50, 10));
+
+  // In the canvas: the fused panel's left half (fusion-only) turns magenta-ish, only with
+  // show_fusion_only.
+  ViewerFrameData d;
+  DepthWithVariance fused;
+  fused.depth_m = cv::Mat(60, 80, CV_32FC1, cv::Scalar(1.5f));
+  fused.var_m2 = cv::Mat(60, 80, CV_32FC1, cv::Scalar(1e-4f));
+  d.fused_depth = fused;
+  d.fusion_only_mask = cv::Mat(60, 80, CV_8UC1, cv::Scalar(0));
+  d.fusion_only_mask(cv::Rect(0, 0, 40, 60)).setTo(255);
+  d.status.fusion_only_px = 2400;
+  d.status.fusion_only_share = 0.5;
+  CanvasOptions o;
+  const cv::Mat tinted = renderCanvas(d, o)(canvasLayout(o)[2]);
+  o.show_fusion_only = false;
+  const cv::Mat plain = renderCanvas(d, o)(canvasLayout(o)[2]);
+  const cv::Rect img = featureImageRect(cv::Size(80, 60), o.cell);
+  // The panel's image is about img's size (fitted beside the colour bar); half of it tinted.
+  cv::Mat diff;
+  cv::absdiff(tinted, plain, diff);
+  cv::cvtColor(diff, diff, cv::COLOR_BGR2GRAY);
+  EXPECT_GT(cv::countNonZero(diff > 30), img.area() / 6);
+  // Magenta dominates where tinted: blue and red above green.
+  int magenta = 0;
+  for (int y = 0; y < tinted.rows; ++y) {
+    for (int x = 0; x < tinted.cols; ++x) {
+      const cv::Vec3b p = tinted.at<cv::Vec3b>(y, x);
+      if (diff.at<uint8_t>(y, x) > 30 && p[0] > p[1] + 60 && p[2] > p[1] + 60) ++magenta;
+    }
+  }
+  EXPECT_GT(magenta, img.area() / 6);
+  EXPECT_LT(magenta, img.area() / 2);  // the other half is not tinted
+  // The status text mentions it (rendered text differs from the text without the line).
+  StatusPanelData without = d.status;
+  without.fusion_only_px.reset();
+  cv::Mat sdiff;
+  cv::absdiff(renderStatusPanel(d.status, cv::Size(800, 450)),
+              renderStatusPanel(without, cv::Size(800, 450)), sdiff);
+  EXPECT_GT(cv::countNonZero(sdiff.reshape(1) > 0), 100);
+}
+
 TEST(ViewerRender, SqrtVariance) {
   cv::Mat var(1, 4, CV_32FC1);
   var.at<float>(0) = 4e-4f;

@@ -69,6 +69,84 @@ ViewerOptions headless(const std::string& dir) {
   return o;
 }
 
+void publishDepthMap(lcm::LCM& lcm, const std::string& channel, const DepthWithVariance& d,
+                     int64_t seq, int64_t utime, int8_t stage) {
+  const RgbdFrame f = testdata::frame(seq);
+  const pplvo_msgs::depth_map_t m = msgs::toMsg(d, f.camera, utime, seq, f.stamp, stage, true);
+  lcm.publish(channel, &m);
+}
+
+TEST(ViewerNode, CountsDepthOnlyThroughFusionAgainstTheSameFramesCgm) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  ViewerNode node(headless(""), lcm);
+  const int64_t seq = 3;
+  const RgbdFrame f = testdata::frame(seq);
+  const DepthWithVariance fused = testdata::fused(seq);
+  // The frame's own (C-GM) depth misses the left quarter: a narrower depth camera.
+  DepthWithVariance cgm = testdata::fused(seq);
+  const int quarter = cgm.depth_m.cols / 4;
+  cgm.depth_m(cv::Rect(0, 0, quarter, cgm.depth_m.rows)).setTo(0);
+  cgm.var_m2(cv::Rect(0, 0, quarter, cgm.depth_m.rows)).setTo(0);
+  const FusionOnlyDepth want = fusionOnlyPixels(fused.depth_m, cgm.depth_m);
+  ASSERT_GT(want.n_fusion_only, 0);
+
+  publishFrame(lcm, seq);
+  publishDepthMap(lcm, channels::kDepthCgm, cgm, seq, f.utime, pplvo_msgs::depth_map_t::STAGE_CGM);
+  publishDepthMap(lcm, channels::kDepthFused, fused, seq, f.utime,
+                  pplvo_msgs::depth_map_t::STAGE_OGM);
+  node.spinOnce(0.0);
+  ASSERT_TRUE(node.frameData().status.fusion_only_px);
+  EXPECT_EQ(*node.frameData().status.fusion_only_px, want.n_fusion_only);
+  EXPECT_DOUBLE_EQ(node.frameData().status.fusion_only_share, want.share());
+  EXPECT_EQ(cv::countNonZero(node.frameData().fusion_only_mask != want.mask), 0);
+  EXPECT_EQ(node.counters().errors, 0);
+
+  // The next fused map without its frame's C-GM map (other seq): unknown, no tint.
+  publishDepthMap(lcm, channels::kDepthFused, fused, seq + 1, f.utime + 33333,
+                  pplvo_msgs::depth_map_t::STAGE_OGM);
+  node.spinOnce(0.0);
+  EXPECT_FALSE(node.frameData().status.fusion_only_px);
+  EXPECT_TRUE(node.frameData().fusion_only_mask.empty());
+  // Its C-GM map arriving late (frames on other routes) fills it in.
+  publishDepthMap(lcm, channels::kDepthCgm, cgm, seq + 1, f.utime + 33333,
+                  pplvo_msgs::depth_map_t::STAGE_CGM);
+  node.spinOnce(0.0);
+  ASSERT_TRUE(node.frameData().status.fusion_only_px);
+  EXPECT_EQ(*node.frameData().status.fusion_only_px, want.n_fusion_only);
+
+  // A C-GM map published as the fused one (O-GM off or failed): nothing is fusion-only.
+  publishDepthMap(lcm, channels::kDepthCgm, cgm, seq + 2, f.utime + 66666,
+                  pplvo_msgs::depth_map_t::STAGE_CGM);
+  publishDepthMap(lcm, channels::kDepthFused, cgm, seq + 2, f.utime + 66666,
+                  pplvo_msgs::depth_map_t::STAGE_CGM);
+  node.spinOnce(0.0);
+  EXPECT_FALSE(node.frameData().status.fusion_only_px);
+
+  // A C-GM map of another size than its fused map: counted as a skipped message, no crash.
+  DepthWithVariance small;
+  small.depth_m = cv::Mat(8, 8, CV_32FC1, cv::Scalar(1.0f));
+  small.var_m2 = cv::Mat(8, 8, CV_32FC1, cv::Scalar(1e-4f));
+  PinholeCamera small_camera = f.camera;  // a consistent message: only the sizes differ
+  small_camera.width = small_camera.height = 8;
+  const pplvo_msgs::depth_map_t small_msg = msgs::toMsg(
+      small, small_camera, f.utime + 99999, seq + 3, f.stamp, pplvo_msgs::depth_map_t::STAGE_CGM);
+  lcm.publish(channels::kDepthCgm, &small_msg);
+  publishDepthMap(lcm, channels::kDepthFused, fused, seq + 3, f.utime + 99999,
+                  pplvo_msgs::depth_map_t::STAGE_OGM);
+  node.spinOnce(0.0);
+  EXPECT_FALSE(node.frameData().status.fusion_only_px);
+  // Another C-GM map arriving (the next frame's) does not count the bad pair again.
+  publishDepthMap(lcm, channels::kDepthCgm, cgm, seq + 4, f.utime + 133332,
+                  pplvo_msgs::depth_map_t::STAGE_CGM);
+  node.spinOnce(0.0);
+  EXPECT_EQ(node.counters().frames_skipped, 1);
+  EXPECT_EQ(node.counters().errors, 0);
+  EXPECT_NE(node.counters().last_warning.find("sizes differ"), std::string::npos)
+      << node.counters().last_warning;
+  EXPECT_FALSE(node.lastCanvas().empty());
+}
+
 TEST(ViewerNode, CreatesItsSnapshotFolder) {
   const std::string root = tempDir();
   const std::string dir = root + "/not/yet/there";

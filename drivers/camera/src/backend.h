@@ -17,7 +17,10 @@ struct BackendOptions {
   int width = 640;
   int height = 480;
   int fps = 30;
-  bool registration = true;  ///< hardware depth-to-colour registration when available
+  /// Hardware depth-to-colour registration when available; false (or a device without it):
+  /// depth in the depth camera's own frame (OpenNI2 IMAGE_REGISTRATION_OFF, libfreenect
+  /// FREENECT_DEPTH_MM), published as DEPTH_OWN_CAMERA (docs/cameras.md).
+  bool registration = true;
   /// Under fakenect, treat the end of the dump as an unplugged device (exercises the
   /// reconnect loop without hardware) instead of the end of the stream.
   bool fakenect_end_is_unplug = false;
@@ -47,6 +50,9 @@ class Backend {
   virtual std::string source() const = 0;
   /// Intrinsics the device reports for the current colour mode, if any.
   virtual std::optional<PinholeCamera> deviceIntrinsics() const = 0;
+  /// Intrinsics the device reports for its depth stream (OpenNI2: field of view, (F1)), used
+  /// for unregistered depth when no calibration file gives the depth camera.
+  virtual std::optional<PinholeCamera> deviceDepthIntrinsics() const { return std::nullopt; }
   virtual DeviceClockOptions clockOptions() const = 0;
   /// Registration actually in effect after open().
   virtual RegistrationDecision registration() const = 0;

@@ -30,8 +30,11 @@ std::string nodeUsage() {
       "  --stream-channel NAME        stream events (default PPLVO_STREAM)\n"
       "  --status-channel NAME        node status (default PPLVO_STATUS)\n"
       "  --width W --height H --fps F colour and depth mode (default 640 480 30)\n"
-      "  --registration on|off        hardware depth-to-colour registration (default on)\n"
+      "  --registration on|off        hardware depth-to-colour registration (default on,\n"
+      "                               off with a --calib file saying depth_registered: false);\n"
+      "                               off: depth published in the depth camera's own frame\n"
       "  --calib FILE                 calib_params.xml / OpenCV YAML with colour intrinsics\n"
+      "                               (and the depth camera + extrinsic for unregistered depth)\n"
       "  --rgb-encoding raw|jpeg|png  (default raw)   --jpeg-quality Q (default 90)\n"
       "  --depth-encoding raw|zlib|png (default raw)\n"
       "  --max-fps F                  publish at most F frames per second (default: all)\n"
@@ -70,6 +73,7 @@ bool parseNodeArgs(int argc, const char* const* argv, NodeOptions* o, std::strin
                                        [o](const std::string& v) {
                                          if (v != "on" && v != "off") return false;
                                          o->device.registration = v == "on";
+                                         o->registration_given = true;
                                          return true;
                                        }))
       .option("--rgb-encoding", choice("--rgb-encoding takes raw, jpeg or png",
@@ -144,10 +148,11 @@ int8_t depthCode(DepthEncoding e) {
 class CameraPublisher {
  public:
   CameraPublisher(const NodeOptions& options, pplvo::msgs::Bus bus, pplvo::PinholeCamera camera,
-                  std::string source)
+                  std::optional<DepthCamera> depth_camera, std::string source)
       : options_(options),
         bus_(std::move(bus)),
         camera_(camera),
+        depth_camera_(std::move(depth_camera)),
         source_(std::move(source)),
         limiter_(options.max_fps) {}
 
@@ -163,11 +168,19 @@ class CameraPublisher {
         ++counters_.frames_dropped;
         return;
       }
-      if (f.bgr.size() != f.depth_u16.size()) {
+      // Depth has the colour's size when registered, the depth camera's otherwise.
+      const cv::Size depth_size =
+          depth_camera_ ? cv::Size(depth_camera_->camera.width, depth_camera_->camera.height)
+                        : f.bgr.size();
+      if (f.depth_u16.size() != depth_size) {
         throw pm::MessageError("colour " + std::to_string(f.bgr.cols) + "x" +
                                std::to_string(f.bgr.rows) + " and depth " +
                                std::to_string(f.depth_u16.cols) + "x" +
-                               std::to_string(f.depth_u16.rows) + " sizes differ");
+                               std::to_string(f.depth_u16.rows) + " sizes differ" +
+                               (depth_camera_ ? " (depth camera " +
+                                                    std::to_string(depth_size.width) + "x" +
+                                                    std::to_string(depth_size.height) + ")"
+                                              : std::string()));
       }
       if (f.bgr.cols != camera_.width || f.bgr.rows != camera_.height) {
         throw pm::MessageError("frame size differs from the camera model");
@@ -184,7 +197,8 @@ class CameraPublisher {
       msg.depth_scale = f.depth_scale;
       msg.rgb = pm::encodeImage(f.bgr, rgbCode(options_.rgb_encoding), options_.jpeg_quality);
       msg.depth = pm::encodeImage(f.depth_u16, depthCode(options_.depth_encoding));
-      pm::setDepthCamera(std::nullopt, &msg);  // registered by the device (docs/cameras.md)
+      // DEPTH_REGISTERED when the device registers, else DEPTH_OWN_CAMERA (docs/cameras.md).
+      pm::setDepthCamera(depth_camera_, &msg);
       bus_.publish(options_.channel, &msg);
       ++seq_;
       ++counters_.frames_out;
@@ -224,6 +238,7 @@ class CameraPublisher {
   const NodeOptions& options_;
   pplvo::msgs::Bus bus_;
   pplvo::PinholeCamera camera_;
+  std::optional<DepthCamera> depth_camera_;  ///< unset: depth registered to colour
   std::string source_;
   std::optional<DeviceClockMapper> clock_;
   RateLimiter limiter_;
@@ -235,15 +250,37 @@ class CameraPublisher {
 }  // namespace
 
 NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, pplvo::msgs::Bus bus,
-                            const PinholeCamera& camera, const std::string& camera_origin) {
+                            const PinholeCamera& camera, const std::string& camera_origin,
+                            const std::optional<DepthCamera>& calib_depth_camera) {
   std::string error;
-  CameraPublisher publisher(options, bus, camera, backend.source());
-  publisher.resetClock(backend.clockOptions());
+  NodeRunResult result;
   const auto reg = backend.registration();
+  const DepthFramePlan plan = planDepthFrame(reg, calib_depth_camera,
+                                             backend.deviceDepthIntrinsics(), camera.width,
+                                             camera.height);
+  if (!plan.error.empty()) {
+    result.error = plan.error;
+    std::fprintf(stderr, "[%s] %s\n", kNodeName, plan.error.c_str());
+    backend.close();
+    return result;
+  }
+  result.depth_camera = plan.depth_camera;
+  CameraPublisher publisher(options, bus, camera, plan.depth_camera, backend.source());
+  publisher.resetClock(backend.clockOptions());
   if (!reg.warning.empty()) publisher.warn(reg.warning);
+  if (!plan.warning.empty()) publisher.warn(plan.warning);
   std::fprintf(stderr, "[%s] streaming from %s, %dx%d, fx %.2f fy %.2f cx %.2f cy %.2f (%s)\n",
                kNodeName, backend.source().c_str(), camera.width, camera.height, camera.fx,
                camera.fy, camera.cx, camera.cy, camera_origin.c_str());
+  if (plan.depth_camera) {
+    const PinholeCamera& d = plan.depth_camera->camera;
+    const Eigen::Vector3d t = plan.depth_camera->T_c_d.translation();
+    std::fprintf(stderr,
+                 "[%s] depth in its own camera (DEPTH_OWN_CAMERA): %dx%d, fx %.2f fy %.2f cx "
+                 "%.2f cy %.2f, t_c_d [m] %.4f %.4f %.4f (%s)\n",
+                 kNodeName, d.width, d.height, d.fx, d.fy, d.cx, d.cy, t.x(), t.y(), t.z(),
+                 plan.origin.c_str());
+  }
   publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_START);
 
   // Main loop. A lost device (error from the library, or no frame for --lost-after seconds)
@@ -254,7 +291,6 @@ NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, pplvo:
   bool end_of_stream = false;
   bool in_outage = false;
   int attempts = 0;
-  NodeRunResult result;
   bool device_open = true;
   auto sleepUntil = [](int64_t until) {
     while (!pm::shutdownRequested() && pplvo::hostUtime() < until) {

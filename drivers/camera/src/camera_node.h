@@ -5,6 +5,7 @@
 /// PPLVO_STATUS (node_status_t, about once a second). See docs/cameras.md.
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
+#include <optional>
 #include <string>
 
 #include "backend.h"
@@ -31,6 +32,9 @@ struct NodeOptions {
   std::string stream_channel = pplvo::channels::kStream;
   std::string status_channel = pplvo::channels::kStatus;
   std::string calib;
+  /// --registration was given: a calibration file with `depth_registered: false` then does
+  /// not switch the device's registration off.
+  bool registration_given = false;
   RgbEncoding rgb_encoding = RgbEncoding::Raw;
   DepthEncoding depth_encoding = DepthEncoding::Raw;
   int jpeg_quality = 90;
@@ -51,12 +55,22 @@ struct NodeRunResult {
   int64_t outages = 0;             ///< times the device was lost
   int64_t reconnect_attempts = 0;  ///< open() calls after losses
   bool end_of_stream = false;      ///< stopped because the source ended (fakenect)
+  /// Non-empty: nothing was published because the frames' depth camera could not be
+  /// described (unregistered depth without depth intrinsics; planDepthFrame).
+  std::string error;
+  /// The depth camera published frames carry (unset: DEPTH_REGISTERED).
+  std::optional<DepthCamera> depth_camera;
 };
 
 /// Publishes from an opened backend until shutdown is requested, --max-frames is reached or
 /// the source ends; reconnects after losses. Publishes START first and END (plus a final
 /// status) last. Never throws for per-frame problems (they are counted).
+/// Frames carry depth_frame DEPTH_REGISTERED when the backend registers depth to colour, else
+/// DEPTH_OWN_CAMERA with the depth camera of planDepthFrame (`calib_depth_camera` from the
+/// calibration file, else the backend's depth intrinsics); when there is none, returns at once
+/// with NodeRunResult::error set and publishes nothing.
 NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, pplvo::msgs::Bus bus,
-                            const PinholeCamera& camera, const std::string& camera_origin);
+                            const PinholeCamera& camera, const std::string& camera_origin,
+                            const std::optional<DepthCamera>& calib_depth_camera = std::nullopt);
 
 }  // namespace pplvo::camera

@@ -132,6 +132,33 @@ PinholeCamera kinectV1DefaultIntrinsics(int width, int height) {
   return s;
 }
 
+namespace {
+/// `cam` fitted to (width, height): a camera without a size is used as it is; one with another
+/// size is scaled uniformly (pixel-centre convention u' + 0.5 = s (u + 0.5)) or refused.
+std::optional<PinholeCamera> scaledToSize(PinholeCamera cam, int width, int height,
+                                          const std::string& path, const std::string& what,
+                                          std::string* error) {
+  const int file_w = cam.width, file_h = cam.height;
+  if (file_w > 0 && file_h > 0 && (file_w != width || file_h != height)) {
+    const double sx = static_cast<double>(width) / file_w;
+    const double sy = static_cast<double>(height) / file_h;
+    if (std::abs(sx - sy) > 1e-3 * sx) {
+      *error = path + ": " + what + "calibrated at " + std::to_string(file_w) + "x" +
+               std::to_string(file_h) + ", which does not scale to " + std::to_string(width) +
+               "x" + std::to_string(height);
+      return std::nullopt;
+    }
+    cam.fx *= sx;
+    cam.fy *= sy;
+    cam.cx = (cam.cx + 0.5) * sx - 0.5;
+    cam.cy = (cam.cy + 0.5) * sy - 0.5;
+  }
+  cam.width = width;
+  cam.height = height;
+  return cam;
+}
+}  // namespace
+
 CalibrationLoad loadCalibration(const std::string& path, int width, int height) {
   // The player's loaders (pplvo_dataset) read the files; this only picks the loader and fits
   // the intrinsics to the stream size.
@@ -167,27 +194,61 @@ CalibrationLoad loadCalibration(const std::string& path, int width, int height) 
     out.error = e.what();
     return out;
   }
-  PinholeCamera cam = loaded.camera;
-  const int file_w = cam.width, file_h = cam.height;
-  if (file_w > 0 && file_h > 0 && (file_w != width || file_h != height)) {
-    const double sx = static_cast<double>(width) / file_w;
-    const double sy = static_cast<double>(height) / file_h;
-    if (std::abs(sx - sy) > 1e-3 * sx) {
-      out.error = path + ": calibrated at " + std::to_string(file_w) + "x" +
-                  std::to_string(file_h) + ", which does not scale to " + std::to_string(width) +
-                  "x" + std::to_string(height);
-      return out;
-    }
-    // Pixel-centre convention: u' + 0.5 = s (u + 0.5).
-    cam.fx *= sx;
-    cam.fy *= sy;
-    cam.cx = (cam.cx + 0.5) * sx - 0.5;
-    cam.cy = (cam.cy + 0.5) * sy - 0.5;
+  const auto colour = scaledToSize(loaded.camera, width, height, path, "", &out.error);
+  if (!colour) return out;
+  if (loaded.depth_camera) {
+    const auto depth =
+        scaledToSize(loaded.depth_camera->camera, width, height, path, "depth camera ", &out.error);
+    if (!depth) return out;
+    out.depth_camera = DepthCamera{*depth, loaded.depth_camera->T_c_d};
   }
-  cam.width = width;
-  cam.height = height;
-  out.camera = cam;
+  out.camera = colour;
   return out;
+}
+
+DepthFramePlan planDepthFrame(const RegistrationDecision& registration,
+                              const std::optional<DepthCamera>& calib_depth_camera,
+                              const std::optional<PinholeCamera>& device_depth_intrinsics,
+                              int depth_width, int depth_height) {
+  DepthFramePlan plan;
+  if (registration.depth_in_colour_frame) {
+    plan.origin = "registered to colour";
+    return plan;
+  }
+  const std::string size = std::to_string(depth_width) + "x" + std::to_string(depth_height);
+  auto sizeOk = [&](const PinholeCamera& c, const std::string& what) {
+    if (c.width == depth_width && c.height == depth_height) return true;
+    plan.error = what + " is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+                 " but the depth images are " + size;
+    return false;
+  };
+  if (calib_depth_camera) {
+    DepthCamera d = *calib_depth_camera;
+    if (d.camera.width <= 0 && d.camera.height <= 0) {
+      d.camera.width = depth_width;
+      d.camera.height = depth_height;
+    }
+    if (!sizeOk(d.camera, "the calibration's depth camera")) return plan;
+    plan.depth_camera = d;
+    plan.origin = "depth camera and extrinsic from the calibration file";
+    return plan;
+  }
+  if (device_depth_intrinsics) {
+    if (!sizeOk(*device_depth_intrinsics, "the device's depth camera")) return plan;
+    plan.depth_camera = DepthCamera{*device_depth_intrinsics, Pose3::Identity()};
+    plan.origin = "depth camera from the device's field of view, identity extrinsic";
+    plan.warning =
+        "unregistered depth without a calibrated extrinsic: identity assumed (the depth and "
+        "colour cameras of a Kinect / Xtion are ~2.5 cm apart); give --calib with "
+        "depth_registered: false and depth_camera R_c_d / t_c_d_m";
+    return plan;
+  }
+  plan.error =
+      "depth is not registered to colour and neither the device nor a calibration file gives "
+      "the depth camera's intrinsics: give --calib FILE with depth_registered: false and a "
+      "depth_camera (docs/cameras.md, \"Unregistered depth\"), or --registration on with a "
+      "device that registers";
+  return plan;
 }
 
 // ----------------------------------------------------------------------------- time
@@ -368,20 +429,15 @@ std::optional<DepthEncoding> parseDepthEncoding(const std::string& s) {
 
 RegistrationDecision decideRegistration(bool requested, bool hardware_supported) {
   RegistrationDecision d;
-  if (!requested) {
-    d.warning =
-        "registration off: depth stays in the depth camera's frame although frames "
-        "carry the colour camera's intrinsics";
-    return d;
-  }
+  if (!requested) return d;  // depth in the depth camera's own frame, as asked
   if (hardware_supported) {
     d.use_hardware = true;
     d.depth_in_colour_frame = true;
     return d;
   }
   d.warning =
-      "device has no hardware depth-to-colour registration: publishing depth as the "
-      "device delivers it (not registered)";
+      "device has no hardware depth-to-colour registration: publishing depth in the depth "
+      "camera's own frame (DEPTH_OWN_CAMERA; the depth filter registers it)";
   return d;
 }
 

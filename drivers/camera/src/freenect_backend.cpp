@@ -77,8 +77,10 @@ class FreenectBackend final : public Backend {
     // Registered depth (mm, aligned to colour) when the library offers it; libfreenect 0.5.3
     // does on real hardware, Debian's fakenect 0.5.3 offers only the 11-bit mode (and aborts
     // when asked for another one), so enumerate instead of calling find_depth_mode.
-    bool have_registered = false, have_11bit = false;
-    freenect_frame_mode registered_mode{}, raw_mode{};
+    // Without registration: millimetres in the depth camera's frame (FREENECT_DEPTH_MM) when
+    // offered, else 11-bit disparity converted with (K1).
+    bool have_registered = false, have_11bit = false, have_mm = false;
+    freenect_frame_mode registered_mode{}, raw_mode{}, mm_mode{};
     for (int i = 0; i < freenect_get_depth_mode_count(); ++i) {
       const freenect_frame_mode m = freenect_get_depth_mode(i);
       if (!m.is_valid || m.resolution != FREENECT_RESOLUTION_MEDIUM) continue;
@@ -88,18 +90,28 @@ class FreenectBackend final : public Backend {
       } else if (m.depth_format == FREENECT_DEPTH_11BIT) {
         have_11bit = true;
         raw_mode = m;
+      } else if (m.depth_format == FREENECT_DEPTH_MM) {
+        have_mm = true;
+        mm_mode = m;
       }
     }
     registration_ = decideRegistration(options_.registration, have_registered);
     if (registration_.use_hardware) {
-      depth_registered_ = true;
+      depth_in_mm_ = true;
       if (freenect_set_depth_mode(dev_, registered_mode) < 0) {
         *error = "cannot set registered depth mode";
         close();
         return false;
       }
+    } else if (have_mm && !under_fakenect_) {
+      depth_in_mm_ = true;
+      if (freenect_set_depth_mode(dev_, mm_mode) < 0) {
+        *error = "cannot set unregistered millimetre depth mode";
+        close();
+        return false;
+      }
     } else {
-      depth_registered_ = false;
+      depth_in_mm_ = false;
       if (!have_11bit || freenect_set_depth_mode(dev_, raw_mode) < 0) {
         *error = "cannot set 11-bit depth mode";
         close();
@@ -137,7 +149,7 @@ class FreenectBackend final : public Backend {
     while (true) {
       if (auto pair = pairer_.pop()) {
         out->bgr = pair->bgr;
-        if (depth_registered_) {
+        if (depth_in_mm_) {
           out->depth_u16 = pair->depth;  // already millimetres, 0 = no data
         } else {
           out->depth_u16 = raw_to_mm_.convert(pair->depth);
@@ -227,7 +239,7 @@ class FreenectBackend final : public Backend {
   freenect_context* ctx_ = nullptr;
   freenect_device* dev_ = nullptr;
   bool streaming_ = false;
-  bool depth_registered_ = false;
+  bool depth_in_mm_ = false;  ///< FREENECT_DEPTH_REGISTERED or _MM: no (K1) conversion
   RegistrationDecision registration_;
   std::string source_ = "freenect";
   int64_t arrival_utime_ = 0;

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   pm::installShutdownHandlers();
 
   std::optional<pplvo::PinholeCamera> calib_camera;
+  std::optional<pplvo::DepthCamera> calib_depth_camera;
   if (!options.calib.empty()) {
     const auto loaded =
         pc::loadCalibration(options.calib, options.device.width, options.device.height);
@@ -38,6 +39,10 @@ int main(int argc, char** argv) {
       return pc::kExitUsage;
     }
     calib_camera = loaded.camera;
+    calib_depth_camera = loaded.depth_camera;
+    // A file describing unregistered depth asks for it, unless --registration says otherwise
+    // (with --registration on its depth camera is used only if the device cannot register).
+    if (calib_depth_camera && !options.registration_given) options.device.registration = false;
   }
 
   std::unique_ptr<pc::Backend> backend = options.backend == "freenect"
@@ -70,6 +75,11 @@ int main(int argc, char** argv) {
     camera = pc::kinectV1DefaultIntrinsics(options.device.width, options.device.height);
     origin = "nominal Kinect v1 intrinsics";
   }
-  pc::runCameraNode(options, *backend, lcm->bus(), camera, origin);
+  const pc::NodeRunResult result =
+      pc::runCameraNode(options, *backend, lcm->bus(), camera, origin, calib_depth_camera);
+  if (!result.error.empty()) {
+    std::fprintf(stderr, "%s: %s\n", pc::kNodeName, result.error.c_str());
+    return pc::kExitUsage;
+  }
   return pc::kExitOk;
 }

@@ -92,6 +92,10 @@ class Openni2Backend final : public Backend {
     intrinsics_ =
         intrinsicsFromFov(options_.width, options_.height, colour_.getHorizontalFieldOfView(),
                           colour_.getVerticalFieldOfView());
+    // Depth stream's own intrinsics: used when depth is not registered (docs/cameras.md).
+    depth_intrinsics_ =
+        intrinsicsFromFov(options_.width, options_.height, depth_.getHorizontalFieldOfView(),
+                          depth_.getVerticalFieldOfView());
     pairer_.clear();
     return true;
   }
@@ -154,6 +158,9 @@ class Openni2Backend final : public Backend {
 
   std::string source() const override { return source_; }
   std::optional<PinholeCamera> deviceIntrinsics() const override { return intrinsics_; }
+  std::optional<PinholeCamera> deviceDepthIntrinsics() const override {
+    return depth_intrinsics_;
+  }
   DeviceClockOptions clockOptions() const override { return DeviceClockOptions{}; }  // us, 64 bit
   RegistrationDecision registration() const override {
     RegistrationDecision d = registration_;
@@ -210,7 +217,7 @@ class Openni2Backend final : public Backend {
   RegistrationDecision registration_;
   std::string sync_warning_;
   std::string source_ = "openni2";
-  std::optional<PinholeCamera> intrinsics_;
+  std::optional<PinholeCamera> intrinsics_, depth_intrinsics_;
   double depth_scale_ = 1000.0;
   int64_t arrival_utime_ = 0;
 };

@@ -416,11 +416,87 @@ TEST(Options, EncodingsAndRegistration) {
   const auto none = pc::decideRegistration(true, false);
   EXPECT_FALSE(none.use_hardware);
   EXPECT_FALSE(none.warning.empty());
+  EXPECT_NE(none.warning.find("DEPTH_OWN_CAMERA"), std::string::npos) << none.warning;
   const auto off = pc::decideRegistration(false, true);
   EXPECT_FALSE(off.use_hardware);
   EXPECT_FALSE(off.depth_in_colour_frame);
+  EXPECT_TRUE(off.warning.empty());  // asked for: published as DEPTH_OWN_CAMERA
   EXPECT_EQ(pc::stampText(1341845688561749), "1341845688.561749");
   EXPECT_EQ(pc::stampText(5), "0.000005");
+}
+
+TEST(Calibration, ReadsTheDepthCameraOfUnregisteredDepthAndScalesIt) {
+  // The player's camera YAML with a depth camera of its own, calibrated at 1280x960.
+  const std::string path = tempPath("unregistered.yaml");
+  {
+    std::ofstream f(path);
+    f << "width: 1280\nheight: 960\nfx: 1000\nfy: 1000\ncx: 639.5\ncy: 479.5\n"
+         "depth_registered: false\n"
+         "depth_camera:\n  width: 1280\n  height: 960\n  fx: 1160\n  fy: 1162\n"
+         "  cx: 641.5\n  cy: 481.5\n  R_c_d: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+         "  t_c_d_m: [0.025, 0, 0.001]\n";
+  }
+  const auto c = pc::loadCalibration(path, 640, 480);
+  ASSERT_TRUE(c.camera) << c.error;
+  ASSERT_TRUE(c.depth_camera);
+  EXPECT_EQ(c.depth_camera->camera.width, 640);
+  EXPECT_EQ(c.depth_camera->camera.height, 480);
+  EXPECT_NEAR(c.depth_camera->camera.fx, 580.0, 1e-9);
+  EXPECT_NEAR(c.depth_camera->camera.fy, 581.0, 1e-9);
+  EXPECT_NEAR(c.depth_camera->camera.cx, 320.5, 1e-9);  // (641.5 + 0.5) / 2 - 0.5
+  EXPECT_NEAR(c.depth_camera->camera.cy, 240.5, 1e-9);
+  EXPECT_NEAR(c.depth_camera->T_c_d.translation().x(), 0.025, 1e-15);
+  EXPECT_NEAR(c.depth_camera->T_c_d.translation().z(), 0.001, 1e-15);
+  // Registered files give none (the shared datasets' IR_* entries are ignored).
+  const auto tum = pc::loadCalibration(
+      sharedData() + "/tum_fr3_sitting_static_short/calib_params.xml", 640, 480);
+  ASSERT_TRUE(tum.camera) << tum.error;
+  EXPECT_FALSE(tum.depth_camera);
+  std::remove(path.c_str());
+}
+
+TEST(Options, PlanDepthFrame) {
+  pc::RegistrationDecision registered;
+  registered.use_hardware = registered.depth_in_colour_frame = true;
+  pc::RegistrationDecision own;  // registration off or not supported
+  pplvo::DepthCamera calib;
+  calib.camera = pplvo::PinholeCamera{};
+  calib.camera.width = 640;
+  calib.camera.height = 480;
+  calib.camera.fx = calib.camera.fy = 580;
+  calib.T_c_d.translation() = Eigen::Vector3d(-0.025, 0, 0);
+  const auto fov = pc::intrinsicsFromFov(640, 480, 58.0 * M_PI / 180, 45.0 * M_PI / 180);
+  ASSERT_TRUE(fov);
+
+  // Registered: nothing, whatever else is known (the default stays DEPTH_REGISTERED).
+  const auto reg = pc::planDepthFrame(registered, calib, fov, 640, 480);
+  EXPECT_FALSE(reg.depth_camera);
+  EXPECT_TRUE(reg.error.empty() && reg.warning.empty());
+  // The calibration's depth camera and extrinsic win over the device's field of view.
+  const auto from_file = pc::planDepthFrame(own, calib, fov, 640, 480);
+  ASSERT_TRUE(from_file.depth_camera) << from_file.error;
+  EXPECT_DOUBLE_EQ(from_file.depth_camera->camera.fx, 580);
+  EXPECT_DOUBLE_EQ(from_file.depth_camera->T_c_d.translation().x(), -0.025);
+  EXPECT_TRUE(from_file.warning.empty());
+  // A calibration without a size takes the depth images'.
+  pplvo::DepthCamera sizeless = calib;
+  sizeless.camera.width = sizeless.camera.height = 0;
+  const auto taken = pc::planDepthFrame(own, sizeless, std::nullopt, 640, 480);
+  ASSERT_TRUE(taken.depth_camera) << taken.error;
+  EXPECT_EQ(taken.depth_camera->camera.width, 640);
+  // The device's field of view with an identity extrinsic, and a warning saying so.
+  const auto from_device = pc::planDepthFrame(own, std::nullopt, fov, 640, 480);
+  ASSERT_TRUE(from_device.depth_camera) << from_device.error;
+  EXPECT_NEAR(from_device.depth_camera->camera.fx, 320.0 / std::tan(29.0 * M_PI / 180), 1e-9);
+  EXPECT_TRUE(from_device.depth_camera->T_c_d.isApprox(pplvo::Pose3::Identity()));
+  EXPECT_NE(from_device.warning.find("extrinsic"), std::string::npos);
+  // Neither: a clear error. A size that is not the depth images' : an error.
+  const auto none = pc::planDepthFrame(own, std::nullopt, std::nullopt, 640, 480);
+  EXPECT_FALSE(none.depth_camera);
+  EXPECT_NE(none.error.find("--calib"), std::string::npos) << none.error;
+  const auto wrong = pc::planDepthFrame(own, calib, std::nullopt, 320, 240);
+  EXPECT_FALSE(wrong.depth_camera);
+  EXPECT_NE(wrong.error.find("320x240"), std::string::npos) << wrong.error;
 }
 
 TEST(Options, ChooseDeviceMode) {

@@ -389,3 +389,40 @@ TEST_F(CameraFakenect, ToolHandlesIclAndBadInput) {
 }
 
 }  // namespace
+
+TEST_F(CameraFakenect, CalibrationWithUnregisteredDepthPublishesDepthOwnCamera) {
+  // A camera YAML saying depth_registered: false switches registration off (no --registration
+  // given) and its depth camera and extrinsic go out with every frame.
+  const std::string calib = dir_ + "/unregistered.yaml";
+  {
+    std::ofstream f(calib);
+    f << "width: 640\nheight: 480\nfx: 535.4\nfy: 539.2\ncx: 320.1\ncy: 247.6\n"
+         "depth_registered: false\n"
+         "depth_camera:\n  width: 640\n  height: 480\n  fx: 577.6\n  fy: 578.7\n"
+         "  cx: 318.9\n  cy: 238.4\n  R_c_d: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+         "  t_c_d_m: [-0.025, 0.001, 0.002]\n";
+  }
+  const Published p = runCamera("unregistered", "--max-frames 3 --calib " + calib);
+  ASSERT_EQ(p.exit_code, 0) << p.log;
+  EXPECT_NE(p.log.find("DEPTH_OWN_CAMERA"), std::string::npos) << p.log;
+  ASSERT_EQ(p.frames.size(), 3u) << p.log;
+  for (const auto& m : p.frames) {
+    EXPECT_EQ(m.depth_frame, pplvo_msgs::rgbd_frame_t::DEPTH_OWN_CAMERA);
+    EXPECT_DOUBLE_EQ(m.camera.fx, 535.4);
+    EXPECT_DOUBLE_EQ(m.depth_camera.fx, 577.6);
+    EXPECT_DOUBLE_EQ(m.depth_camera.cy, 238.4);
+    EXPECT_DOUBLE_EQ(m.t_c_d_m[0], -0.025);
+    EXPECT_DOUBLE_EQ(m.t_c_d_m[2], 0.002);
+    const pplvo::RgbdFrame f = pplvo::msgs::fromMsg(m, 65535, pplvo::msgs::FrameImages::kDepth);
+    ASSERT_TRUE(f.depth_camera);
+    EXPECT_EQ(f.depth_camera->camera.width, 640);
+    EXPECT_NEAR(f.depth_camera->T_c_d.translation().y(), 0.001, 1e-15);
+    EXPECT_GT(cv::countNonZero(f.depth_m > 0), 640 * 480 / 2);
+  }
+  // --registration off without a depth camera (libfreenect reports no depth intrinsics): a
+  // clear refusal, exit 1, nothing published.
+  const Published none = runCamera("unregistered_none", "--registration off --max-frames 3");
+  EXPECT_EQ(none.exit_code, 1) << none.log;  // kExitUsage
+  EXPECT_NE(none.log.find("--calib"), std::string::npos) << none.log;
+  EXPECT_TRUE(none.frames.empty());
+}

@@ -31,6 +31,8 @@ class ScriptedBackend : public pc::Backend {
   double stall_s = 0.3;
   int frame_sleep_us = 2000;  // real devices pace frames: 33333 at 30 Hz
   uint64_t tick0 = 5'000'000;
+  bool registers = true;  // false: depth in the depth camera's own frame
+  std::optional<pplvo::PinholeCamera> depth_intrinsics;  // deviceDepthIntrinsics()
   int opens = 0;
   int closes = 0;
 
@@ -87,10 +89,13 @@ class ScriptedBackend : public pc::Backend {
   void close() override { ++closes; }
   std::string source() const override { return "scripted"; }
   std::optional<pplvo::PinholeCamera> deviceIntrinsics() const override { return std::nullopt; }
+  std::optional<pplvo::PinholeCamera> deviceDepthIntrinsics() const override {
+    return depth_intrinsics;
+  }
   pc::DeviceClockOptions clockOptions() const override { return {}; }
   pc::RegistrationDecision registration() const override {
     pc::RegistrationDecision d;
-    d.use_hardware = d.depth_in_colour_frame = true;
+    d.use_hardware = d.depth_in_colour_frame = registers;
     return d;
   }
 
@@ -120,7 +125,8 @@ struct ScriptRun {
   Collector got;
 };
 
-ScriptRun runScript(ScriptedBackend& backend, pc::NodeOptions options) {
+ScriptRun runScript(ScriptedBackend& backend, pc::NodeOptions options,
+                    const std::optional<pplvo::DepthCamera>& calib_depth = std::nullopt) {
   lcm::LCM lcm("memq://");
   ScriptRun run;
   lcm.subscribe(options.channel, &Collector::onFrame, &run.got);
@@ -134,7 +140,7 @@ ScriptRun runScript(ScriptedBackend& backend, pc::NodeOptions options) {
   camera.fx = camera.fy = 3;
   camera.cx = 1.5;
   camera.cy = 1;
-  run.result = pc::runCameraNode(options, backend, lcm, camera, "test");
+  run.result = pc::runCameraNode(options, backend, lcm, camera, "test", calib_depth);
   while (lcm.handleTimeout(0) > 0) {
   }
   return run;
@@ -173,6 +179,9 @@ TEST(CameraNode, ReconnectsAfterUnplugAndKeepsCounting) {
     const cv::Mat depth = pplvo::msgs::decodeImage(m.depth);
     EXPECT_EQ(bgr.at<cv::Vec3b>(2, 3)[0], k);
     EXPECT_EQ(depth.at<uint16_t>(2, 3), 1000 + k);
+    // The registered default: as before this option existed.
+    EXPECT_EQ(m.depth_frame, pplvo_msgs::rgbd_frame_t::DEPTH_REGISTERED);
+    EXPECT_FALSE(pplvo::msgs::fromMsg(m).depth_camera);
     if (k > 0) {
       EXPECT_GT(m.utime, r.got.frames[k - 1].utime);  // even though the device clock restarted
     }
@@ -267,4 +276,153 @@ TEST(CameraNode, ParsesOptions) {
   const char* h[] = {"pplvo-camera", "--help"};
   EXPECT_TRUE(pc::parseNodeArgs(2, h, &o, &err, &help));
   EXPECT_TRUE(help);
+}
+
+// ------------------------------------------------------------------ unregistered depth
+
+namespace {
+
+/// A depth camera unlike the colour camera (4x3, fx 3): other intrinsics, distortion, a
+/// rotation of 3 deg about y and 2.5 cm of baseline.
+pplvo::DepthCamera calibratedDepthCamera() {
+  pplvo::DepthCamera d;
+  d.camera.width = 4;
+  d.camera.height = 3;
+  d.camera.fx = 2.5;
+  d.camera.fy = 2.6;
+  d.camera.cx = 1.4;
+  d.camera.cy = 1.1;
+  d.camera.distortion[0] = 0.05;
+  d.T_c_d.linear() =
+      Eigen::AngleAxisd(3.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  d.T_c_d.translation() = Eigen::Vector3d(0.025, -0.001, 0.002);
+  return d;
+}
+
+void expectSameDepthCamera(const pplvo::DepthCamera& got, const pplvo::DepthCamera& want) {
+  EXPECT_EQ(got.camera.width, want.camera.width);
+  EXPECT_EQ(got.camera.height, want.camera.height);
+  EXPECT_DOUBLE_EQ(got.camera.fx, want.camera.fx);
+  EXPECT_DOUBLE_EQ(got.camera.fy, want.camera.fy);
+  EXPECT_DOUBLE_EQ(got.camera.cx, want.camera.cx);
+  EXPECT_DOUBLE_EQ(got.camera.cy, want.camera.cy);
+  for (int i = 0; i < 5; ++i) EXPECT_DOUBLE_EQ(got.camera.distortion[i], want.camera.distortion[i]);
+  EXPECT_LT((got.T_c_d.matrix() - want.T_c_d.matrix()).cwiseAbs().maxCoeff(), 1e-15);
+}
+
+}  // namespace
+
+TEST(CameraNode, UnregisteredDepthCarriesTheCalibratedDepthCamera) {
+  ScriptedBackend b;
+  b.registers = false;
+  b.depth_intrinsics = pplvo::PinholeCamera{};  // ignored: the calibration wins
+  b.steps = {Step::Frame, Step::Frame, Step::Frame, Step::End};
+  const pplvo::DepthCamera want = calibratedDepthCamera();
+  const ScriptRun r = runScript(b, fastOptions(), want);
+  EXPECT_TRUE(r.result.error.empty()) << r.result.error;
+  ASSERT_TRUE(r.result.depth_camera);
+  ASSERT_EQ(r.got.frames.size(), 3u);
+  for (const auto& m : r.got.frames) {
+    EXPECT_EQ(m.depth_frame, pplvo_msgs::rgbd_frame_t::DEPTH_OWN_CAMERA);
+    EXPECT_EQ(m.depth_camera.width, 4);
+    EXPECT_EQ(m.depth_camera.height, 3);
+    EXPECT_DOUBLE_EQ(m.depth_camera.fx, 2.5);
+    EXPECT_DOUBLE_EQ(m.depth_camera.fy, 2.6);
+    EXPECT_DOUBLE_EQ(m.depth_camera.cx, 1.4);
+    EXPECT_DOUBLE_EQ(m.depth_camera.cy, 1.1);
+    EXPECT_DOUBLE_EQ(m.camera.fx, 3.0);  // the colour camera stays the colour camera
+    const Eigen::Matrix3d R = want.T_c_d.linear();
+    for (int i = 0; i < 9; ++i) EXPECT_DOUBLE_EQ(m.R_c_d[i], R(i / 3, i % 3)) << i;
+    EXPECT_DOUBLE_EQ(m.t_c_d_m[0], 0.025);
+    EXPECT_DOUBLE_EQ(m.t_c_d_m[1], -0.001);
+    EXPECT_DOUBLE_EQ(m.t_c_d_m[2], 0.002);
+    // What the depth filter decodes (pplvo-depth-filter: fromMsg(msg, 65535, kDepth)).
+    const pplvo::RgbdFrame depth_only =
+        pplvo::msgs::fromMsg(m, 65535, pplvo::msgs::FrameImages::kDepth);
+    ASSERT_TRUE(depth_only.depth_camera);
+    expectSameDepthCamera(*depth_only.depth_camera, want);
+    EXPECT_EQ(depth_only.depth_m.size(), cv::Size(4, 3));
+    EXPECT_FLOAT_EQ(depth_only.depth_m.at<float>(1, 1), (1000.0f + m.seq) / 1000.0f);
+    const pplvo::RgbdFrame both = pplvo::msgs::fromMsg(m);
+    ASSERT_TRUE(both.depth_camera);
+    expectSameDepthCamera(*both.depth_camera, want);
+  }
+}
+
+TEST(CameraNode, UnregisteredDepthFallsBackToTheDevicesDepthIntrinsics) {
+  ScriptedBackend b;
+  b.registers = false;
+  pplvo::PinholeCamera fov = *pc::intrinsicsFromFov(4, 3, 1.0, 0.8);
+  b.depth_intrinsics = fov;
+  b.steps = {Step::Frame, Step::Frame, Step::End};
+  const ScriptRun r = runScript(b, fastOptions());
+  EXPECT_TRUE(r.result.error.empty()) << r.result.error;
+  ASSERT_EQ(r.got.frames.size(), 2u);
+  const pplvo::RgbdFrame f = pplvo::msgs::fromMsg(r.got.frames[0], 65535,
+                                                  pplvo::msgs::FrameImages::kDepth);
+  ASSERT_TRUE(f.depth_camera);
+  expectSameDepthCamera(*f.depth_camera, pplvo::DepthCamera{fov, pplvo::Pose3::Identity()});
+  // The assumed extrinsic is reported.
+  ASSERT_FALSE(r.got.status.empty());
+  EXPECT_NE(r.got.status.back().last_warning.find("identity"), std::string::npos)
+      << r.got.status.back().last_warning;
+}
+
+TEST(CameraNode, RegisteringDeviceIgnoresTheCalibratedDepthCamera) {
+  // --registration on with a file describing a depth camera: the device registers, so frames
+  // stay DEPTH_REGISTERED (the file's depth camera is only the fallback).
+  ScriptedBackend b;
+  b.steps = {Step::Frame, Step::End};
+  const ScriptRun r = runScript(b, fastOptions(), calibratedDepthCamera());
+  ASSERT_EQ(r.got.frames.size(), 1u);
+  EXPECT_EQ(r.got.frames[0].depth_frame, pplvo_msgs::rgbd_frame_t::DEPTH_REGISTERED);
+  EXPECT_FALSE(r.result.depth_camera);
+}
+
+TEST(CameraNode, UnregisteredDepthWithoutIntrinsicsIsRefusedClearly) {
+  ScriptedBackend b;
+  b.registers = false;  // and neither a calibration nor device depth intrinsics
+  b.steps = {Step::Frame, Step::End};
+  const ScriptRun r = runScript(b, fastOptions());
+  EXPECT_NE(r.result.error.find("depth camera's intrinsics"), std::string::npos)
+      << r.result.error;
+  EXPECT_TRUE(r.got.frames.empty());
+  EXPECT_TRUE(r.got.events.empty());
+  EXPECT_EQ(r.result.published, 0);
+
+  // A calibrated depth camera of another size than the depth images is refused too.
+  ScriptedBackend b2;
+  b2.registers = false;
+  b2.steps = {Step::Frame, Step::End};
+  pplvo::DepthCamera wrong = calibratedDepthCamera();
+  wrong.camera.width = 8;
+  wrong.camera.height = 6;
+  const ScriptRun r2 = runScript(b2, fastOptions(), wrong);
+  EXPECT_NE(r2.result.error.find("8x6"), std::string::npos) << r2.result.error;
+  EXPECT_TRUE(r2.got.frames.empty());
+}
+
+TEST(CameraNode, UnregisteredDepthOfTheWrongSizeIsCountedNotFatal) {
+  ScriptedBackend b;
+  b.registers = false;
+  b.steps = {Step::Frame, Step::BadFrame, Step::Frame, Step::End};
+  const ScriptRun r = runScript(b, fastOptions(), calibratedDepthCamera());
+  EXPECT_EQ(r.result.published, 2);
+  ASSERT_FALSE(r.got.status.empty());
+  EXPECT_EQ(r.got.status.back().frames_skipped, 1);
+}
+
+TEST(CameraNode, RegistrationFlagIsRemembered) {
+  pc::NodeOptions o;
+  std::string err;
+  bool help = false;
+  const char* none[] = {"pplvo-camera", "--calib", "cam.yaml"};
+  ASSERT_TRUE(pc::parseNodeArgs(3, none, &o, &err, &help)) << err;
+  EXPECT_FALSE(o.registration_given);  // a file with depth_registered: false may switch it off
+  EXPECT_TRUE(o.device.registration);
+  const char* on[] = {"pplvo-camera", "--registration", "on"};
+  pc::NodeOptions o2;
+  ASSERT_TRUE(pc::parseNodeArgs(3, on, &o2, &err, &help)) << err;
+  EXPECT_TRUE(o2.registration_given);
+  EXPECT_TRUE(o2.device.registration);
 }

@@ -25,6 +25,10 @@ struct ScalarPanelOptions {
   double max_value_m = 0.0;
   double percentile_low = 0.02, percentile_high = 0.98;
   cv::Scalar missing_bgr = cv::Scalar(0, 0, 0);  ///< colour of missing (0 or NaN) pixels
+  /// Tint of highlighted pixels (depth only through fusion): magenta, which the turbo map
+  /// does not contain, blended at highlight_alpha so that the depth colour still shows.
+  cv::Scalar highlight_bgr = cv::Scalar(255, 0, 255);
+  double highlight_alpha = 0.6;
 };
 
 /// Range actually used for a scalar panel (after the automatic choice).
@@ -43,9 +47,36 @@ cv::Mat colorizeScalar(const cv::Mat& value_m, const ValueRange& range,
 
 /// A panel of `size`: title, the colour-mapped image fitted to the left and a vertical colour
 /// bar on the right with ticks labelled in metres (`unit` is printed under the bar, "[m]").
-/// An empty `value_m` gives a grey panel saying "no data".
+/// An empty `value_m` gives a grey panel saying "no data". A non-empty `highlight`
+/// (CV_8UC1 of value_m's size) tints its pixels with options.highlight_bgr and writes
+/// `highlight_legend` at the bottom left (used for depth only through fusion).
 cv::Mat renderScalarPanel(const cv::Mat& value_m, const std::string& title, cv::Size size,
-                          const ScalarPanelOptions& options = {}, const std::string& unit = "m");
+                          const ScalarPanelOptions& options = {}, const std::string& unit = "m",
+                          const cv::Mat& highlight = cv::Mat(),
+                          const std::string& highlight_legend = "");
+
+/// Pixels of a frame that have depth only through fusion (docs/viewer.md, "Depth only through
+/// fusion"): valid (> 0, finite) in the frame's fused map (PPLVO_DEPTH_FUSED, O-GM) but not in
+/// the same frame's C-GM map (PPLVO_DEPTH_CGM, the frame's own depth): their depth came from
+/// the window's past frames, e.g. outside a narrow depth camera's view.
+struct FusionOnlyDepth {
+  cv::Mat mask;           ///< CV_8UC1, 255 at fusion-only pixels, else 0; empty on error
+  int n_fusion_only = 0;  ///< pixels set in `mask`
+  int n_fused_valid = 0;  ///< valid pixels of the fused map
+  int n_cgm_valid = 0;    ///< valid pixels of the C-GM map
+  std::string error;      ///< non-empty when the maps cannot be compared (nothing computed)
+  /// Share of the fused map's valid pixels that are fusion-only (0 when it has none).
+  double share() const {
+    return n_fused_valid > 0 ? static_cast<double>(n_fusion_only) / n_fused_valid : 0.0;
+  }
+};
+/// Compares a frame's fused and C-GM depth maps (CV_32FC1, metres, 0 / NaN = missing; the
+/// same size). Maps of another type or size give `error` and no mask, never an exception.
+FusionOnlyDepth fusionOnlyPixels(const cv::Mat& fused_depth_m, const cv::Mat& cgm_depth_m);
+
+/// Tints the pixels set in `mask` (CV_8UC1, size of `bgr`) of a CV_8UC3 image:
+/// out = (1 - alpha) bgr + alpha tint. A mask of another size or type leaves `bgr` unchanged.
+void tintPixels(cv::Mat& bgr, const cv::Mat& mask, const cv::Scalar& tint_bgr, double alpha);
 
 /// Standard deviation sqrt(var) of a variance image (m^2 -> m); 0 where var <= 0 or NaN.
 cv::Mat sqrtVariance(const cv::Mat& var_m2);
@@ -116,6 +147,10 @@ struct StatusPanelData {
   int n_points = 0, n_lines = 0, n_planes = 0;  ///< newest features (2D)
   int n_points_3d = 0, n_lines_3d = 0;          ///< newest 3D features with has_3d
   int window_length = 0;                        ///< of the newest fused depth map (0: none)
+  /// Depth only through fusion in the newest fused map (fusionOnlyPixels), when its frame's
+  /// C-GM map was received; unset otherwise.
+  std::optional<int> fusion_only_px;
+  double fusion_only_share = 0.0;  ///< of the fused map's valid pixels
   int64_t frames_received = 0, frames_drawn = 0, frames_dropped = 0;
   double draw_fps = 0.0;
   std::string stream_state;  ///< "", "started", "ended"
@@ -134,6 +169,9 @@ struct ViewerFrameData {
   std::optional<FrameFeatures> features;         ///< to overlay on feature_frame
   std::optional<DepthWithVariance> fused_depth;  ///< PPLVO_DEPTH_FUSED (or C-GM as fallback)
   std::string fused_title = "fused depth";
+  /// Pixels of fused_depth with depth only through fusion (CV_8UC1 mask, fusionOnlyPixels);
+  /// empty when unknown (no C-GM map of the same frame) or not an O-GM map.
+  cv::Mat fusion_only_mask;
   Positions trajectory;    ///< in the world frame shown
   Positions ground_truth;  ///< same frame, empty if unknown
   StatusPanelData status;
@@ -144,6 +182,8 @@ struct CanvasOptions {
   ScalarPanelOptions depth;  ///< raw and fused depth
   ScalarPanelOptions sigma;  ///< depth standard deviation
   FeatureOverlayOptions overlay;
+  /// Tint the fused depth panel's pixels that have depth only through fusion (key f).
+  bool show_fusion_only = true;
 };
 
 /// The whole canvas, a 4 x 2 grid of cells:

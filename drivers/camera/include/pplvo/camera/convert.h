@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/rgbd_frame.h"
 
 namespace pplvo::camera {
 
@@ -91,6 +92,11 @@ PinholeCamera kinectV1DefaultIntrinsics(int width = 640, int height = 480);
 /// Result of loading a calibration file.
 struct CalibrationLoad {
   std::optional<PinholeCamera> camera;  ///< colour camera scaled to the requested size
+  /// The file's depth camera when it says `depth_registered` false / 0 (`depth_camera` map of
+  /// the camera YAML, `IR_*` / `Rotation` / `Translation` of calib_params), intrinsics scaled
+  /// to the requested size like the colour's (a depth camera without a size takes it as it
+  /// is); unset for registered depth.
+  std::optional<DepthCamera> depth_camera;
   std::string error;                    ///< why loading failed (empty on success)
   std::string format;                   ///< which key layout was found
 };
@@ -100,6 +106,8 @@ struct CalibrationLoad {
 /// cx cy [width height distortion depth_scale]`, a .yaml/.yml file not starting with %YAML).
 /// When the file names its image size and it differs from (width, height), the intrinsics are
 /// scaled (uniform scaling only); with no size in the file they are used as they are.
+/// When the file says `depth_registered` false, its depth camera is returned too (same
+/// scaling rule, applied to the depth camera's own size).
 CalibrationLoad loadCalibration(const std::string& path, int width, int height);
 
 // ---------------------------------------------------------------------------------------------
@@ -218,6 +226,26 @@ struct RegistrationDecision {
   std::string warning;  ///< non-empty when the result differs from the request
 };
 RegistrationDecision decideRegistration(bool requested, bool hardware_supported);
+
+/// What the camera node publishes as its frames' depth camera (docs/cameras.md, "Unregistered
+/// depth"): nothing (DEPTH_REGISTERED) when the device registers depth to colour, else the
+/// depth camera of its own (DEPTH_OWN_CAMERA).
+struct DepthFramePlan {
+  std::optional<DepthCamera> depth_camera;  ///< unset: DEPTH_REGISTERED
+  std::string origin;   ///< where the depth camera came from (start-up line)
+  std::string warning;  ///< non-empty when the extrinsic is assumed, not calibrated
+  std::string error;    ///< non-empty: unregistered depth cannot be described; do not stream
+};
+/// Decides the depth frame of published frames. With depth in the colour frame: registered.
+/// Otherwise the calibration file's depth camera (intrinsics and extrinsic) when given, else
+/// the device's depth intrinsics (OpenNI2: the depth stream's field of view, (F1)) with an
+/// identity extrinsic and a warning (the extrinsic must come from a calibration), else an
+/// error. The depth camera's size must be (depth_width, depth_height), the depth images' size
+/// (a calibration without a size takes it).
+DepthFramePlan planDepthFrame(const RegistrationDecision& registration,
+                              const std::optional<DepthCamera>& calib_depth_camera,
+                              const std::optional<PinholeCamera>& device_depth_intrinsics,
+                              int depth_width, int depth_height);
 
 /// One video mode a device offers (OpenNI2 VideoMode without the OpenNI type).
 struct ModeCandidate {
