@@ -43,9 +43,10 @@ void DepthFilterNode::poll() {
 }
 
 void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
-                                   const DepthWithVariance& d, int8_t stage) {
-  const pplvo_msgs::depth_map_t m =
+                                   const DepthWithVariance& d, int8_t stage, int8_t reference) {
+  pplvo_msgs::depth_map_t m =
       depthToMsg(d, p.camera, p.utime, p.seq, p.stamp, stage, options_.compress);
+  m.reference = reference;
   bus_.publish(channel, &m);
 }
 
@@ -168,7 +169,7 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
   }
   Pending& p = *taken;
   if (options_.filter.model != DepthModel::kOgm) {
-    publishDepth(options_.fused_channel, p, p.depth, p.stage);
+    publishDepth(options_.fused_channel, p, p.depth, p.stage, static_cast<int8_t>(pose.reference));
     ++counters_.frames_out;
     return;
   }
@@ -193,9 +194,10 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     // Downstream still gets a depth map: the frame's own stage-2 output.
     ++counters_.frames_skipped;
     counters_.last_warning = result.warning + " (published C-GM as fused)";
-    publishDepth(options_.fused_channel, p, p.depth, p.stage);
+    publishDepth(options_.fused_channel, p, p.depth, p.stage, static_cast<int8_t>(pose.reference));
   } else {
-    publishDepth(options_.fused_channel, p, result.depth, pplvo_msgs::depth_map_t::STAGE_OGM);
+    publishDepth(options_.fused_channel, p, result.depth, pplvo_msgs::depth_map_t::STAGE_OGM,
+                 static_cast<int8_t>(pose.reference));
   }
   ++counters_.frames_out;
 }

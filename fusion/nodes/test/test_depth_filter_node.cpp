@@ -144,10 +144,15 @@ TEST(DepthFilterNode, MemqFramesAndPosesGiveCgmAndFusedMaps) {
     drain(lcm);
     ASSERT_EQ(static_cast<int>(c.cgm.size()), i + 1);  // C-GM at once, before the pose
     pplvo_msgs::pose_t p = poseMsg(scene, i);
+    // What the estimator says of the frame reaches the frontend with its fused depth.
+    p.reference = i % 3 == 0 ? pplvo_msgs::pose_t::REFERENCE_YES
+                             : pplvo_msgs::pose_t::REFERENCE_FALLBACK_ONLY;
     lcm.publish(channels::kPose, &p);
     drain(lcm);
     ASSERT_EQ(static_cast<int>(c.fused.size()), i + 1);
     EXPECT_EQ(c.fused.back().seq, i);
+    EXPECT_EQ(c.fused.back().reference, p.reference);
+    EXPECT_EQ(c.cgm.back().reference, pplvo_msgs::pose_t::REFERENCE_UNKNOWN);
     EXPECT_EQ(c.fused.back().stage, pplvo_msgs::depth_map_t::STAGE_OGM);
     EXPECT_EQ(c.fused.back().window_length, std::min(i + 1, 5));
     EXPECT_EQ(c.cgm.back().stage, pplvo_msgs::depth_map_t::STAGE_CGM);

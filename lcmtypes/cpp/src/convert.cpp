@@ -426,6 +426,7 @@ pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& d, const PinholeCamera& c
   m.stage = stage;
   m.camera = toMsg(camera);
   m.window_length = d.window_length;
+  m.reference = 0;  // the depth filter passes the pose's on (pose_t.reference)
   const int8_t enc = compress ? Img::ENCODING_ZLIB_F32 : Img::ENCODING_RAW_F32;
   m.depth = encodeImage(d.depth_m, enc);
   m.variance = encodeImage(d.var_m2, enc);

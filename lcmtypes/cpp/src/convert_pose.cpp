@@ -45,6 +45,7 @@ pplvo_msgs::pose_t toMsg(const FramePose& p) {
   m.n_plane_matches = p.n_plane_matches;
   m.iterations = p.iterations;
   m.final_cost = p.final_cost;
+  m.reference = static_cast<int8_t>(p.reference);
   m.n_window = static_cast<int32_t>(p.window.size());
   for (const auto& w : p.window) {
     m.window_seq.push_back(w.seq);
@@ -75,6 +76,10 @@ FramePose fromMsg(const pplvo_msgs::pose_t& m) {
   p.n_plane_matches = m.n_plane_matches;
   p.iterations = m.iterations;
   p.final_cost = m.final_cost;
+  if (m.reference < 0 || m.reference > 2) {
+    throw MessageError("unknown pose reference role " + std::to_string(m.reference));
+  }
+  p.reference = static_cast<ReferenceRole>(m.reference);
   if (m.n_window < 0 || static_cast<size_t>(m.n_window) != m.window_seq.size() ||
       m.window_seq.size() != m.window_max_translation_variance.size()) {
     throw MessageError("pose window arrays disagree with n_window");

@@ -16,6 +16,7 @@ FramePose makePose() {
   p.rel_covariance = Matrix6d::Identity() * 1e-6;
   p.rel_covariance(0, 5) = p.rel_covariance(5, 0) = 1e-8;
   p.n_point_matches = 200;
+  p.reference = ReferenceRole::kFallbackOnly;
   p.window = {{10, 1e-5}, {11, 2e-6}};
   return p;
 }
@@ -35,6 +36,7 @@ TEST(PoseConvert, RoundTrip) {
   EXPECT_TRUE(b.rel_covariance.isApprox(p.rel_covariance));
   ASSERT_EQ(b.window.size(), 2u);
   EXPECT_EQ(b.window[1].seq, 11);
+  EXPECT_EQ(b.reference, ReferenceRole::kFallbackOnly);
 }
 
 TEST(PoseConvert, NaNAndBadQuaternionsAreRejected) {
@@ -52,6 +54,9 @@ TEST(PoseConvert, NaNAndBadQuaternionsAreRejected) {
   EXPECT_THROW(fromMsg(m), MessageError);
   m = toMsg(makePose());
   m.status = 17;
+  EXPECT_THROW(fromMsg(m), MessageError);
+  m = toMsg(makePose());
+  m.reference = 3;
   EXPECT_THROW(fromMsg(m), MessageError);
 }
 

@@ -208,6 +208,23 @@ TEST(DecodeMessage, NamesAnOlderLogVersion) {
   EXPECT_NE(rig_error.find("older log version"), std::string::npos) << rig_error;
   EXPECT_NE(rig_error.find("depth_camera"), std::string::npos) << rig_error;
 
+  // pose_t and depth_map_t before the reference role (one int8_t more today).
+  auto withFingerprint = [](std::vector<uint8_t> bytes, uint64_t fingerprint) {
+    for (int i = 0; i < 8; ++i) bytes[i] = static_cast<uint8_t>(fingerprint >> (56 - 8 * i));
+    return bytes;
+  };
+  const std::vector<uint8_t> old_pose = withFingerprint(encode(pose()), 0xefc8a0c530381bb2ULL);
+  pplvo_msgs::pose_t pose_out;
+  const std::string pose_error = decodeMessage(old_pose.data(), old_pose.size(), &pose_out);
+  EXPECT_NE(pose_error.find("older log version: pose_t without reference"), std::string::npos)
+      << pose_error;
+  const std::vector<uint8_t> old_depth = withFingerprint(encode(depth()), 0x1ecd5069eeeacec5ULL);
+  pplvo_msgs::depth_map_t depth_out;
+  const std::string depth_error = decodeMessage(old_depth.data(), old_depth.size(), &depth_out);
+  EXPECT_NE(depth_error.find("older log version: depth_map_t without reference"),
+            std::string::npos)
+      << depth_error;
+
   // Today's layout still decodes, and carries the depth instant.
   pplvo_msgs::rgbd_frame_t now = frame();
   now.depth_utime = now.utime - 13000;

@@ -124,6 +124,7 @@ void EstimatorNode::publish(const TrackerOutput& out, const FrameFeatures& frame
   pose.utime = frame.utime;
   pose.seq = frame.seq;
   pose.stamp = frame.stamp;
+  pose.reference = odometry_.referenceRole(frame.seq);
   (void)stats;  // pose_t carries the inliers the estimate used (toFramePose)
   switch (pose.status) {
     case TrackingStatus::kFirstFrame:

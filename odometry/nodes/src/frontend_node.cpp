@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <pplvo_msgs/features_t.hpp>
+#include <pplvo_msgs/pose_t.hpp>
 
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/node_runtime.h"
@@ -237,7 +238,12 @@ void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
     fused = msgs::viewOfMsg(msg);  // used only in this handler: no copy of raw maps
   }
   pipeline::FrontendStats stats;
-  frontend_.lift3d(features, fused, &stats);
+  // What the estimator said of this frame (pose_t.reference, passed on by the depth filter);
+  // anything else is "unknown": the planes are fitted.
+  ReferenceRole role = ReferenceRole::kUnknown;
+  if (msg.reference == pplvo_msgs::pose_t::REFERENCE_YES) role = ReferenceRole::kReference;
+  if (msg.reference == pplvo_msgs::pose_t::REFERENCE_FALLBACK_ONLY) role = ReferenceRole::kFallbackOnly;
+  frontend_.lift3d(features, fused, &stats, role);
   last_lift_utime_ = newest_frame_utime_;  // the loop delivers
   if (!stats.warning.empty()) warn(stats.warning);
   {

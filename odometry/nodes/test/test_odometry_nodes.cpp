@@ -322,6 +322,52 @@ const FeatureSet& featureSet() {
   return s;
 }
 
+TEST(FrontendNode, FitsPlanesToTheFusedDepthOnlyForFramesTrackedAgainst) {
+  // The fused depth 2 cm behind the C-GM one: planes fitted to it have other offsets.
+  struct Case {
+    int8_t reference;
+    bool refitted;
+  };
+  for (const Case c : {Case{pplvo_msgs::pose_t::REFERENCE_UNKNOWN, true},
+                       Case{pplvo_msgs::pose_t::REFERENCE_YES, true},
+                       Case{pplvo_msgs::pose_t::REFERENCE_FALLBACK_ONLY, false}}) {
+    SCOPED_TRACE(static_cast<int>(c.reference));
+    lcm::LCM lcm("memq://");
+    FrontendNodeOptions options;
+    options.extract_ahead = false;
+    FrontendNode node(options, lcm);
+    Recorder<pplvo_msgs::features_t> f2d(lcm, channels::kFeatures), f3d(lcm, channels::kFeatures3d);
+    auto m0 = frameMsg(0);
+    auto d0 = cgmMsg(0);
+    lcm.publish(channels::kRgbd, &m0);
+    lcm.publish(channels::kDepthCgm, &d0);
+    drain(lcm);
+    ASSERT_EQ(f2d.msgs.size(), 1u);
+    const RgbdFrame& f = frames()[0].frame;
+    DepthWithVariance behind = depth_filter::CgmFilter().apply(f.depth_m);
+    behind.depth_m.setTo(0, behind.depth_m <= 0);
+    cv::Mat valid = behind.depth_m > 0;
+    cv::add(behind.depth_m, 0.02, behind.depth_m, valid);
+    pplvo_msgs::depth_map_t fused = msgs::toMsg(behind, f.camera, f.utime, f.seq, f.stamp,
+                                                pplvo_msgs::depth_map_t::STAGE_OGM);
+    fused.reference = c.reference;
+    lcm.publish(channels::kDepthFused, &fused);
+    drain(lcm);
+    ASSERT_EQ(f3d.msgs.size(), 1u);
+    const FrameFeatures cgm_planes = msgs::fromMsg(f2d.msgs[0]);
+    const FrameFeatures lifted = msgs::fromMsg(f3d.msgs[0]);
+    ASSERT_GE(cgm_planes.planes.size(), 2u);
+    bool same = lifted.planes.size() == cgm_planes.planes.size();
+    for (size_t i = 0; same && i < lifted.planes.size(); ++i) {
+      same = lifted.planes[i].plane.hessian == cgm_planes.planes[i].plane.hessian;
+    }
+    EXPECT_EQ(same, !c.refitted);
+    int with_3d = 0;
+    for (const auto& p : lifted.points) with_3d += p.has_3d;
+    EXPECT_GT(with_3d, 200);  // points are lifted either way
+  }
+}
+
 TEST(EstimatorNode, TracksEachFrameOnceItsReferenceArrives) {
   const FeatureSet& fs = featureSet();
   ASSERT_EQ(fs.f2d.size(), frames().size());
@@ -360,6 +406,16 @@ TEST(EstimatorNode, TracksEachFrameOnceItsReferenceArrives) {
     EXPECT_FALSE(p.window.empty());
   }
   EXPECT_EQ(node.counts().tracking, static_cast<int64_t>(fs.f2d.size()) - 1);
+  // Against keyframes (the default) the first frame is the first keyframe; the frames that
+  // are not new keyframes are said to be needed only for a fallback.
+  EXPECT_EQ(poses.msgs[0].reference, pplvo_msgs::pose_t::REFERENCE_YES);
+  int fallback_only = 0;
+  for (const auto& m : poses.msgs) {
+    EXPECT_TRUE(m.reference == pplvo_msgs::pose_t::REFERENCE_YES ||
+                m.reference == pplvo_msgs::pose_t::REFERENCE_FALLBACK_ONLY);
+    fallback_only += m.reference == pplvo_msgs::pose_t::REFERENCE_FALLBACK_ONLY;
+  }
+  EXPECT_GT(fallback_only, 0);
 }
 
 TEST(EstimatorNode, RestartsHoldingThePoseWhenTheReferenceNeverComes) {

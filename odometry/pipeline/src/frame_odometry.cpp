@@ -200,6 +200,11 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
   return out;
 }
 
+ReferenceRole FrameOdometry::referenceRole(int64_t seq) const {
+  if (options_.reference != TrackingReference::kKeyframe) return ReferenceRole::kReference;
+  return pending_keyframe_seq_ == seq ? ReferenceRole::kReference : ReferenceRole::kFallbackOnly;
+}
+
 std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatures& current,
                                                                 FrameOdometryStats* stats) {
   if (current.camera != keyframe_->camera) return std::nullopt;

@@ -133,7 +133,7 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
 }
 
 void Frontend::lift3d(FrameFeatures& features, const DepthWithVariance& fused,
-                      FrontendStats* stats) {
+                      FrontendStats* stats, ReferenceRole role) {
   FrontendStats local;
   FrontendStats& s = stats ? *stats : local;
   const std::string invalid = geometry::validateDepth(fused, features.camera);
@@ -145,7 +145,8 @@ void Frontend::lift3d(FrameFeatures& features, const DepthWithVariance& fused,
   }
   // Planes of the fused depth on a second thread while points and lines are lifted here
   // (disjoint members of `features`).
-  const bool planes = options_.families.planes && options_.planes_from_fused_depth;
+  const bool used = role != ReferenceRole::kFallbackOnly || !options_.fused_planes_only_for_references;
+  const bool planes = options_.families.planes && options_.planes_from_fused_depth && used;
   FrontendStats plane_stats;
   double planes_ms = 0;
   std::vector<PlaneFeature> fused_planes;

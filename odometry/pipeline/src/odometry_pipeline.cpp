@@ -31,6 +31,7 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
   r.pose.utime = frame.utime;
   r.pose.seq = frame.seq;
   r.pose.stamp = frame.stamp;
+  r.pose.reference = odometry_.referenceRole(frame.seq);
   measurement_.observePose(frame.seq, frame.utime, r.pose.T_w_c,
                             r.pose.status == TrackingStatus::kTracking);
   // O-GM on the new pose (as the depth filter process does on pose_t).
@@ -49,7 +50,7 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
   }
   r.fused_window_length = fused->window_length;
   // Frontend, 3D stage: this frame becomes the next one's reference.
-  frontend_.lift3d(features, *fused, &r.frontend);
+  frontend_.lift3d(features, *fused, &r.frontend, r.pose.reference);
   reference_ = std::move(features);
   return r;
 }

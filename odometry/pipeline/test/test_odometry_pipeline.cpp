@@ -132,6 +132,44 @@ TEST(OdometryPipeline, KeyframeTrackingHoldsAndTakesKeyframes) {
   EXPECT_LT(max_t, 0.03);
 }
 
+TEST(OdometryPipeline, FusedPlanesAreFittedOnlyForFramesTrackedAgainst) {
+  // Against keyframes only a new keyframe's 3D features are tracked against (and a fallback's,
+  // none here): the planes of the fused depth are fitted for those frames alone, and the poses
+  // are those of fitting them for every frame.
+  PipelineOptions only, every;
+  only.odometry.reference = every.odometry.reference = TrackingReference::kKeyframe;
+  every.frontend.fused_planes_only_for_references = false;
+  OdometryPipeline a(only), b(every);
+  const auto& f = frames();
+  int references = 0, fallbacks = 0;
+  for (int i = 0; i < static_cast<int>(f.size()); ++i) {
+    const PipelineFrameResult ra = a.process(f[i].frame);
+    const PipelineFrameResult rb = b.process(f[i].frame);
+    ASSERT_EQ(ra.pose.T_w_c.matrix(), rb.pose.T_w_c.matrix()) << i;
+    fallbacks += ra.odometry.keyframe_fallback;
+    // The first frame is the first keyframe; later ones are references exactly when taken.
+    const bool keyframe = i == 0 || ra.odometry.new_keyframe;
+    EXPECT_EQ(ra.pose.reference,
+              keyframe ? ReferenceRole::kReference : ReferenceRole::kFallbackOnly)
+        << i;
+    references += ra.pose.reference == ReferenceRole::kReference;
+  }
+  ASSERT_EQ(fallbacks, 0);
+  ASSERT_LT(references, kFrames / 2);
+  const int n = static_cast<int>(f.size());
+  ASSERT_NE(a.timings().find("planes"), nullptr);
+  EXPECT_EQ(a.timings().find("planes")->count, n + references);
+  EXPECT_EQ(b.timings().find("planes")->count, 2 * n);
+
+  // Frame to frame every frame is the next one's reference.
+  PipelineOptions frame_mode;
+  frame_mode.odometry.reference = TrackingReference::kFrame;
+  OdometryPipeline frame_to_frame(frame_mode);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(frame_to_frame.process(f[i].frame).pose.reference, ReferenceRole::kReference);
+  }
+}
+
 TEST(OdometryPipeline, KeyframeTrackingSurvivesTurningAwayAndBack) {
   // The camera turns 80 deg away from its start and back within 2 s: the first keyframe's
   // view leaves the image, new keyframes (or the previous frame) take over, and tracking

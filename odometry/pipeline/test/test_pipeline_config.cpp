@@ -152,6 +152,7 @@ TEST(PipelineConfig, DumpParseRoundTripWithNonDefaultValues) {
   o.frontend.lift.line_fit.weighting = geometry::LineFitOptions::Weighting::kPaperScalar;
   o.frontend.lift.max_line_samples = 64;
   o.frontend.planes_from_fused_depth = false;
+  o.frontend.fused_planes_only_for_references = false;
   o.odometry.tracker.window_length = 12;
   o.odometry.tracker.estimator.plane_scale_alpha = 0.05;
   o.odometry.tracker.estimator.point_sigma_px = 1.0 / 7.0;

@@ -17,6 +17,13 @@ enum class TrackingStatus : int8_t {
 };
 const char* toString(TrackingStatus status);
 
+/// Whether later frames are tracked against a frame's 3D features (pose_t.reference).
+enum class ReferenceRole : int8_t {
+  kUnknown = 0,       ///< not said: treated as kReference
+  kReference = 1,     ///< a new keyframe, or every frame when tracking frame to frame
+  kFallbackOnly = 2,  ///< used only if the next frame cannot be tracked against the keyframe
+};
+
 /// Transform uncertainty from an earlier frame to this one (paper eq. 22).
 struct WindowUncertainty {
   int64_t seq = 0;
@@ -35,6 +42,7 @@ struct FramePose {
   int n_point_matches = 0, n_line_matches = 0, n_plane_matches = 0;
   int iterations = 0;
   double final_cost = 0.0;
+  ReferenceRole reference = ReferenceRole::kUnknown;
   std::vector<WindowUncertainty> window;
 };
 

@@ -123,8 +123,9 @@ class DepthFilterNode {
   void handlePose(const pplvo_msgs::pose_t& msg);
   /// Drops (and counts) pending frames older than seq; returns the frame seq if it is next.
   std::optional<Pending> takePending(int64_t seq);
+  /// `reference`: the frame's pose_t.reference on the fused channel (0, unknown, otherwise).
   void publishDepth(const std::string& channel, const Pending& p, const DepthWithVariance& d,
-                    int8_t stage);
+                    int8_t stage, int8_t reference = 0);
 
   DepthFilterNodeOptions options_;
   msgs::Bus bus_;

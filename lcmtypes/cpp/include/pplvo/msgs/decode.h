@@ -25,6 +25,10 @@ inline constexpr OlderMessageVersion kOlderMessageVersions[] = {
     {"rgbd_frame_t", static_cast<int64_t>(0xfb99a9fa90b73068ULL),
      "rgbd_frame_t without depth_frame / depth_camera (pplvo before unregistered depth, "
      "2026-12-02)"},
+    {"pose_t", static_cast<int64_t>(0xefc8a0c530381bb2ULL),
+     "pose_t without reference (pplvo before 2026-12-03)"},
+    {"depth_map_t", static_cast<int64_t>(0x1ecd5069eeeacec5ULL),
+     "depth_map_t without reference (pplvo before 2026-12-03)"},
 };
 
 /// Why `size` bytes whose fingerprint is not MessageT's are not one: an older pplvo layout, or

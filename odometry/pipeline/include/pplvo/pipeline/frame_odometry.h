@@ -169,6 +169,10 @@ class FrameOdometry {
   int64_t lastSeq() const { return last_seq_; }
   /// The active keyframe's sequence number (-1: none yet, or frame-to-frame tracking).
   int64_t keyframeSeq() const { return keyframe_ ? keyframe_->seq : -1; }
+  /// Whether later frames will be tracked against the 3D features of `seq`, the frame given a
+  /// pose last: kReference for a new keyframe and for every frame when tracking frame to
+  /// frame, kFallbackOnly for the others (only a keyframe fallback would use them).
+  ReferenceRole referenceRole(int64_t seq) const;
   /// Keyframes taken since construction (or setFamilies()).
   int64_t keyframeCount() const { return keyframe_count_; }
   const OdometryTracker& tracker() const { return tracker_; }

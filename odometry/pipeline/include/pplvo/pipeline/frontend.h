@@ -10,6 +10,7 @@
 
 #include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
+#include "pplvo/core/frame_pose.h"
 #include "pplvo/core/rgbd_frame.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/features/line_extractor.h"
@@ -39,6 +40,10 @@ struct FrontendOptions {
   geometry::LiftOptions lift;
   /// Stage 3D extracts the planes again on the fused depth (paper); false keeps the C-GM ones.
   bool planes_from_fused_depth = true;
+  /// ... but only for frames that later frames are tracked against (ReferenceRole): in
+  /// keyframe mode a frame that is not a new keyframe keeps its C-GM planes, which only a
+  /// fallback to it would use.
+  bool fused_planes_only_for_references = true;
   /// Lines on a second thread during points and planes (stage 2D), fused-depth planes during
   /// lifting (stage 3D). The results are the same either way.
   bool parallel = true;
@@ -58,6 +63,10 @@ void visit(V& v, FrontendOptions& o) {
   v.field("planes_from_fused_depth", o.planes_from_fused_depth,
           "extract the planes again on the fused depth once the pose is known (Sec. 5.3: "
           "\"plane extraction must be called once more after the depth fusion\")");
+  v.field("fused_planes_only_for_references", o.fused_planes_only_for_references,
+          "only for frames that later frames are tracked against (new keyframes; every frame "
+          "when tracking frame to frame): the others keep their C-GM planes, which only a "
+          "keyframe fallback would use (pose_t.reference)");
   v.field("parallel", o.parallel,
           "lines on a second thread during points and planes, fused-depth planes during "
           "lifting (same results)");
@@ -84,10 +93,11 @@ class Frontend {
                           FrontendStats* stats = nullptr);
 
   /// Stage 3D: lifts the points and lines of `features` on `fused` and, if configured,
-  /// replaces its planes by those of the fused depth. A fused map whose size disagrees with
-  /// the camera leaves the features without 3D and says so in stats->warning.
+  /// replaces its planes by those of the fused depth (for a frame whose `role` is
+  /// kFallbackOnly only when fused_planes_only_for_references is off). A fused map whose size
+  /// disagrees with the camera leaves the features without 3D and says so in stats->warning.
   void lift3d(FrameFeatures& features, const DepthWithVariance& fused,
-              FrontendStats* stats = nullptr);
+              FrontendStats* stats = nullptr, ReferenceRole role = ReferenceRole::kUnknown);
 
   const FrontendOptions& options() const { return options_; }
   /// A snapshot of the stage timings (both stages).
