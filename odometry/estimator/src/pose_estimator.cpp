@@ -52,6 +52,8 @@ struct PointTerm {
   Eigen::Matrix3d cov;
   Eigen::Vector2d px;
   double var_px2;
+  bool has_error_cov = false;  // the error's covariance differs from cov (error_cov)
+  Eigen::Matrix3d error_cov = Eigen::Matrix3d::Zero();
   // weighting state
   Eigen::Matrix2d S = Eigen::Matrix2d::Zero();  // whitening: r_w = S r
   double sqrt_tukey = 1.0;
@@ -356,11 +358,12 @@ class JointProblem {
   /// line terms times `residual_variance_scale`: their residuals' actual covariance is that
   /// factor times the modelled Sigma_r (the robust scale squared; docs/estimator.md,
   /// "Covariance consistency on real data").
-  void information(const double* xi, double residual_variance_scale, Matrix6d& H,
-                   Matrix6d& M) const {
+  void information(const double* xi, double residual_variance_scale, Matrix6d& H, Matrix6d& M,
+                   Matrix6d* M_weighted = nullptr) const {
     const PoseEval pose(xi);
     H.setZero();
     M.setZero();
+    Matrix6d M_w = Matrix6d::Zero();
     if (!pose.valid) return;
     Eigen::Vector2d r;
     Matrix26 J2;
@@ -370,7 +373,17 @@ class JointProblem {
       const Matrix26 A = T.S * J2;
       const Matrix6d AtA = A.transpose() * A;
       H += AtA;
-      M += residual_variance_scale * AtA;
+      M_w += residual_variance_scale * AtA;
+      if (T.has_error_cov) {
+        // The residual's covariance is not the one it is weighted by: the whitened residual
+        // has covariance S Sigma_err S^T instead of I.
+        const Matrix23 JP = -J2.leftCols<3>() * pose.R;
+        const Eigen::Matrix2d Sigma_err =
+            JP * T.error_cov * JP.transpose() + T.var_px2 * Eigen::Matrix2d::Identity();
+        M += residual_variance_scale * A.transpose() * (T.S * Sigma_err * T.S.transpose()) * A;
+      } else {
+        M += residual_variance_scale * AtA;
+      }
     }
     for (const LineTerm& T : lines) {
       if (!T.active || T.sqrt_tukey <= 0) continue;
@@ -379,6 +392,7 @@ class JointProblem {
       const Matrix6d AtA = A.transpose() * A;
       H += AtA;
       M += residual_variance_scale * AtA;
+      M_w += residual_variance_scale * AtA;
     }
     Eigen::Vector3d r3;
     Matrix36 J3;
@@ -389,9 +403,11 @@ class JointProblem {
       const Matrix6d AtA = A.transpose() * A;
       H.noalias() += plane_weight * AtA;
       M.noalias() += plane_weight * plane_weight * plane_scale * AtA;
+      M_w.noalias() += plane_weight * plane_weight * plane_scale * AtA;
     }
     H = 0.5 * (H + H.transpose());
     M = 0.5 * (M + M.transpose());
+    if (M_weighted) *M_weighted = 0.5 * (M_w + M_w.transpose());
   }
 
  private:
@@ -434,9 +450,17 @@ void addPointTerms(const std::vector<PointMatch3D2D>& matches, JointProblem& pro
       ++sk.bad_covariance;
       continue;
     }
+    if (m.error_cov && (!m.error_cov->allFinite() || !isPsd<3>(*m.error_cov))) {
+      ++sk.bad_covariance;
+      continue;
+    }
     PointTerm T;
     T.P = m.P_prev.p;
     T.cov = m.P_prev.cov;
+    if (m.error_cov) {
+      T.has_error_cov = true;
+      T.error_cov = *m.error_cov;
+    }
     T.px = m.px_curr;
     T.var_px2 = m.sigma_px * m.sigma_px;
     problem.points.push_back(T);
@@ -565,11 +589,11 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
 /// variances, the smallest relative eigenvalue of the Jacobi-scaled information).
 void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
                         const PoseEstimatorOptions& o, PoseEstimate& est) {
-  Matrix6d H, M;
+  Matrix6d H, M, M_w;
   // The whitened point and line residuals spread by the robust scale s (>= 1, MAD): their
   // covariance is s^2 Sigma_r, not Sigma_r (on real images s ~ 1.5; 1 on synthetic ones).
   problem.information(xi.data(), o.tukey_mad_scale ? est.robust_scale * est.robust_scale : 1.0, H,
-                      M);
+                      M, &M_w);
   Eigen::Matrix<double, 6, 1> dinv_sqrt;
   bool diag_ok = H.allFinite() && M.allFinite();
   for (int i = 0; i < 6; ++i) {
@@ -593,8 +617,14 @@ void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
         null_part.noalias() += kLargeVariance * y.normalized() * y.normalized().transpose();
       }
     }
-    const Matrix6d cov = (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
+    const Matrix6d cov_w = (o.covariance_sandwich ? Matrix6d(Hinv * M_w * Hinv) : Hinv) + null_part;
+    // Points whose error covariance differs from their weighting one (error_cov) add the
+    // difference, propagated like the sandwich's middle term (with eq. 21 too).
+    const Matrix6d cov = cov_w + Hinv * (M - M_w) * Hinv;
     if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
+    if (cov_w.allFinite()) est.covariance_weighted = 0.5 * (cov_w + cov_w.transpose());
+  } else {
+    est.covariance_weighted = est.covariance;
   }
   est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
   est.max_rotation_variance = maxRotationVariance(est.covariance);
@@ -607,8 +637,11 @@ EstimateStatus classify(const PoseEstimate& est, bool solver_failed, int rows,
   if (solver_failed || !est.T_curr_prev.matrix().allFinite()) return EstimateStatus::kSolverFailure;
   if (rows < std::max(6, o.min_residuals)) return EstimateStatus::kTooFewConstraints;
   if (est.min_relative_eigenvalue < o.min_relative_eigenvalue) return EstimateStatus::kDegenerate;
-  if (!(est.max_translation_variance_m2 <= o.max_translation_variance_m2) ||
-      !(est.max_rotation_variance <= o.max_rotation_variance)) {
+  // The thresholds detect weak geometry (collinear points, near-parallel planes) and were set
+  // on the covariance the weights state: points' error_cov (errors the weights cannot see,
+  // e.g. a keyframe's fused landmarks) is published, not tested here.
+  if (!(maxTranslationVariance(est.covariance_weighted) <= o.max_translation_variance_m2) ||
+      !(maxRotationVariance(est.covariance_weighted) <= o.max_rotation_variance)) {
     return EstimateStatus::kUncertain;
   }
   return EstimateStatus::kOk;
@@ -619,7 +652,8 @@ EstimateStatus classify(const PoseEstimate& est, bool solver_failed, int rows,
 // ---------------------------------------------------------------------------------------------
 
 Correspondences buildCorrespondences(const FrameFeatures& prev, const FrameFeatures& curr,
-                                     const FeatureMatches& matches, const PoseEstimatorOptions& o) {
+                                     const FeatureMatches& matches, const PoseEstimatorOptions& o,
+                                     const std::vector<Eigen::Matrix3d>* prev_point_error_cov) {
   Correspondences out;
   auto inRange = [](int i, size_t n) { return i >= 0 && static_cast<size_t>(i) < n; };
   out.points.reserve(matches.points.size());
@@ -638,6 +672,9 @@ Correspondences buildCorrespondences(const FrameFeatures& prev, const FrameFeatu
     m.P_prev = fp.point;
     m.px_curr = fc.px;
     m.sigma_px = o.point_sigma_px * std::pow(o.octave_sigma_scale, std::max(0, fc.octave));
+    if (prev_point_error_cov && static_cast<size_t>(ip) < prev_point_error_cov->size()) {
+      m.error_cov = (*prev_point_error_cov)[ip];
+    }
     out.points.push_back(m);
   }
   for (const auto& [ip, ic] : matches.lines) {
@@ -680,6 +717,7 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
   PoseEstimate est;
   est.skipped = in.skipped;
   est.covariance = kLargeVariance * Matrix6d::Identity();
+  est.covariance_weighted = est.covariance;
   est.max_translation_variance_m2 = kLargeVariance;
   est.max_rotation_variance = kLargeVariance;
   const Pose3 guess = isValidPose(T_curr_prev_guess, 1e-4) ? T_curr_prev_guess : Pose3::Identity();

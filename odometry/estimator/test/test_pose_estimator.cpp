@@ -445,6 +445,77 @@ TEST(PoseEstimator, InvalidInputsAreSkippedAndCounted) {
   expectFinite(e3);
 }
 
+// A point's error covariance apart from its weighting covariance (a keyframe's fused
+// landmarks, docs/estimator.md "Keyframe landmarks"): the weights and the pose are those of
+// P_prev.cov; the covariance propagates error_cov. With error_cov = 4 cov and negligible pixel
+// noise, every point's residual covariance is 4 times the weighted one, so is the pose's.
+TEST(PoseEstimator, PointErrorCovarianceEntersThePoseCovarianceOnly) {
+  PoseEstimatorOptions opts;
+  opts.use_lines = opts.use_planes = false;
+  opts.use_tukey = false;
+  SceneConfig cfg;
+  cfg.n_points = 150;
+  cfg.sigma_px = 1e-4;
+  const PinholeCamera cam = testing::testCamera();
+  SceneGenerator gen(cam, cfg, 91);
+  const Pose3 T_true = testing::typicalMotion();
+  const Correspondences c = gen.generate(T_true);
+  Correspondences c4 = c;
+  for (PointMatch3D2D& m : c4.points) m.error_cov = 4.0 * m.P_prev.cov;
+  Correspondences c1 = c;
+  for (PointMatch3D2D& m : c1.points) m.error_cov = m.P_prev.cov;
+  const PoseEstimator estimator(opts);
+  const PoseEstimate e = estimator.estimate(c, cam);
+  const PoseEstimate e4 = estimator.estimate(c4, cam);
+  const PoseEstimate e1 = estimator.estimate(c1, cam);
+  ASSERT_TRUE(e.accepted());
+  ASSERT_TRUE(e4.accepted());
+  EXPECT_TRUE(e4.T_curr_prev.isApprox(e.T_curr_prev, 1e-12));
+  EXPECT_TRUE(e4.covariance_weighted.isApprox(e.covariance, 1e-9));
+  EXPECT_TRUE(e.covariance_weighted.isApprox(e.covariance, 1e-12));
+  EXPECT_TRUE(e1.covariance.isApprox(e.covariance, 1e-9));
+  EXPECT_LT((e4.covariance - 4.0 * e.covariance).norm(), 1e-2 * e4.covariance.norm());
+  EXPECT_NEAR(e4.max_translation_variance_m2, 4.0 * e.max_translation_variance_m2,
+              1e-2 * e4.max_translation_variance_m2);
+  // The paper's eq. 21 (no sandwich) adds the same difference.
+  PoseEstimatorOptions paper = opts;
+  paper.covariance_sandwich = false;
+  const PoseEstimate p4 = PoseEstimator(paper).estimate(c4, cam);
+  const double s2 = p4.robust_scale * p4.robust_scale;  // the excess counts s^2 (eq. 21 not)
+  EXPECT_LT((p4.covariance - (1.0 + 3.0 * s2) * p4.covariance_weighted).norm(),
+            1e-2 * p4.covariance.norm());
+
+  // buildCorrespondences takes error_cov by the previous point's index.
+  FrameFeatures prev, curr;
+  prev.camera = curr.camera = cam;
+  FeatureMatches m;
+  std::vector<Eigen::Matrix3d> error_cov;
+  for (size_t i = 0; i < c.points.size(); ++i) {
+    PointFeature fp;
+    fp.has_3d = true;
+    fp.point = c.points[i].P_prev;
+    prev.points.push_back(fp);
+    PointFeature fc;
+    fc.px = c.points[i].px_curr;
+    curr.points.push_back(fc);
+    m.points.emplace_back(static_cast<int>(i), static_cast<int>(i));
+    if (i + 1 < c.points.size()) error_cov.push_back(4.0 * c.points[i].P_prev.cov);
+  }
+  const Correspondences b = buildCorrespondences(prev, curr, m, opts, &error_cov);
+  ASSERT_EQ(b.points.size(), c.points.size());
+  for (size_t i = 0; i + 1 < b.points.size(); ++i) {
+    ASSERT_TRUE(b.points[i].error_cov.has_value());
+    EXPECT_TRUE(b.points[i].error_cov->isApprox(4.0 * c.points[i].P_prev.cov));
+  }
+  EXPECT_FALSE(b.points.back().error_cov.has_value());  // beyond the vector: none
+
+  // An invalid error covariance is skipped and counted like an invalid point covariance.
+  Correspondences d = SceneGenerator(cam, SceneConfig{}, 92).generate(T_true);
+  EXPECT_EQ(estimator.estimate(d, cam).skipped.bad_covariance, 0);
+  d.points[0].error_cov = -Eigen::Matrix3d::Identity();
+  EXPECT_EQ(estimator.estimate(d, cam).skipped.bad_covariance, 1);
+}
+
 TEST(PoseEstimator, BuildCorrespondencesFromFeatures) {
   const PinholeCamera cam = testing::testCamera();
   SceneGenerator gen(cam, SceneConfig{}, 81);

@@ -223,8 +223,13 @@ std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatu
   {
     ScopedStageTimer t(timings_, "pose");
     const PoseEstimator estimator(options_.tracker.estimator);
+    // Fused landmarks weigh by their fused covariance; the pose covariance propagates their
+    // covariance from before fusion (docs/estimator.md, "Keyframe landmarks").
+    const bool unfused =
+        options_.keyframe.fuse_landmarks && options_.keyframe.unfused_landmark_covariance;
     est = estimator.estimate(
-        buildCorrespondences(keyframe, current, matches, options_.tracker.estimator),
+        buildCorrespondences(keyframe, current, matches, options_.tracker.estimator,
+                             unfused ? &keyframe_point_error_cov_ : nullptr),
         current.camera, T_curr_kf_predicted);
   }
   if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
@@ -273,6 +278,8 @@ void FrameOdometry::takeKeyframe(const FrameFeatures& reference) {
     map_.clear();
   }
   keyframe_ = reference;
+  keyframe_point_error_cov_.clear();
+  for (const PointFeature& f : keyframe_->points) keyframe_point_error_cov_.push_back(f.point.cov);
   T_w_kf_ = tracker_.T_w_c();
   pending_keyframe_seq_ = -1;
   pending_keyframe_covariance_.reset();
@@ -375,9 +382,12 @@ KeyframeReason FrameOdometry::keyframeExhausted(const PoseEstimate& against_keyf
   if (against_keyframe.n_residuals < k.min_inlier_fraction * keyframe_first_rows_) {
     return KeyframeReason::kOverlap;
   }
-  const double var_t =
-      geometricVariance(against_keyframe, against_keyframe.max_translation_variance_m2);
-  const double var_q = geometricVariance(against_keyframe, against_keyframe.max_rotation_variance);
+  // The covariance the weights state (with fused landmarks, without their error from before
+  // fusion): the rule's factor g was set with it, and the decisions stay those measured
+  // (docs/estimator.md, "Keyframe landmarks").
+  const Matrix6d& cov = against_keyframe.covariance_weighted;
+  const double var_t = geometricVariance(against_keyframe, maxTranslationVariance(cov));
+  const double var_q = geometricVariance(against_keyframe, maxRotationVariance(cov));
   if (var_t > k.max_variance_growth * keyframe_first_var_t_ ||
       var_q > k.max_variance_growth * keyframe_first_var_q_) {
     return KeyframeReason::kUncertainty;

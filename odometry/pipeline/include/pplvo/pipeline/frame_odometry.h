@@ -50,6 +50,13 @@ struct KeyframeOptions {
   /// Gate on the squared Mahalanobis distance between the keyframe point and the moved
   /// observation (3 dof; 7.81 = 95 %).
   double fusion_gate_chi2 = 7.81;
+  /// With fuse_landmarks: the pose covariance of an estimate against the keyframe propagates
+  /// each landmark's covariance from before fusion (its weight still uses the fused one).
+  /// The observations fused into a landmark were moved into the keyframe by poses estimated
+  /// from the landmarks themselves, so they carry the landmarks' error: to first order, fusion
+  /// does not reduce the error an estimate against them inherits (docs/estimator.md,
+  /// "Keyframe landmarks"). false: the fused covariance (over-confident).
+  bool unfused_landmark_covariance = true;
   /// Local map: the 3D points and lines of up to this many earlier keyframes, moved into the
   /// active keyframe by the chain of keyframe poses (their covariance added), are matched and
   /// used together with the active keyframe's (0: the active keyframe alone). The chain
@@ -82,6 +89,10 @@ void visit(V& v, KeyframeOptions& o) {
   v.field("fusion_gate_chi2", o.fusion_gate_chi2,
           "gate on the squared Mahalanobis distance of an observation (3 dof; 7.81 = 95 %)",
           config::positive());
+  v.field("unfused_landmark_covariance", o.unfused_landmark_covariance,
+          "the pose covariance against the keyframe propagates each fused landmark's covariance "
+          "from before fusion (the observations were registered to the landmarks, so fusion "
+          "does not reduce the error the pose inherits); its weight uses the fused one");
 }
 
 struct FrameOdometryOptions {
@@ -207,6 +218,8 @@ class FrameOdometry {
 
   // Keyframe state (bounded: one keyframe's features).
   std::optional<FrameFeatures> keyframe_;
+  /// The keyframe's own point covariances, before any fusion (by point index).
+  std::vector<Eigen::Matrix3d> keyframe_point_error_cov_;
   Pose3 T_w_kf_ = Pose3::Identity();
   int64_t pending_keyframe_seq_ = -1;  ///< the frame whose 3D features become the keyframe
   KeyframeReason pending_reason_ = KeyframeReason::kNone;
