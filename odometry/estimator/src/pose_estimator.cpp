@@ -225,11 +225,16 @@ class JointProblem {
   /// min(alpha, 1/k) in the cost and the information.
   double plane_scale = 1.0;
   double plane_weight = 0.0;
+  /// Set by reweight: the point and line terms' weight in the cost and the information, and
+  /// the factor their residuals' covariance exceeds the modelled Sigma_r by (robust scale^2).
+  double point_weight = 1.0, line_weight = 1.0;
+  double point_var_scale = 1.0, line_var_scale = 1.0;
 
   struct ReweightResult {
     int rows = 0;  // rows with non-zero weight
     int n_points = 0, n_lines = 0, n_planes = 0;
     double scale = 1.0;
+    double point_scale = 1.0, line_scale = 1.0;  // the Tukey scales of each family
   };
 
   /// Recomputes Sigma_r, the whitening and the Tukey weights at pose xi (IRLS step).
@@ -237,7 +242,7 @@ class JointProblem {
     ReweightResult out;
     const PoseEval pose(xi);
     if (!pose.valid) return out;
-    std::vector<double> abs_w;
+    std::vector<double> abs_w, abs_p, abs_l;
     abs_w.reserve(2 * (points.size() + lines.size()));
     std::vector<double> norm_p(points.size(), 0.0), norm_l(lines.size(), 0.0);
     for (size_t i = 0; i < points.size(); ++i) {
@@ -286,15 +291,40 @@ class JointProblem {
     }
     plane_weight = o_.plane_weight_from_residuals ? std::min(o_.plane_scale_alpha, 1.0 / plane_scale)
                                                   : o_.plane_scale_alpha;
-    if (o_.tukey_mad_scale && !abs_w.empty()) {
-      auto mid = abs_w.begin() + abs_w.size() / 2;
-      std::nth_element(abs_w.begin(), mid, abs_w.end());
-      out.scale = std::max(1.0, 1.4826 * *mid);
+    const size_t n_point_values = 2 * static_cast<size_t>(std::count_if(
+                                      points.begin(), points.end(),
+                                      [](const PointTerm& T) { return T.active; }));
+    abs_p.assign(abs_w.begin(), abs_w.begin() + n_point_values);
+    abs_l.assign(abs_w.begin() + n_point_values, abs_w.end());
+    auto mad = [](std::vector<double>& v) {
+      auto mid = v.begin() + v.size() / 2;
+      std::nth_element(v.begin(), mid, v.end());
+      return std::max(1.0, 1.4826 * *mid);
+    };
+    if (o_.tukey_mad_scale && !abs_w.empty()) out.scale = mad(abs_w);
+    out.point_scale = out.line_scale = out.scale;
+    point_weight = line_weight = 1.0;
+    if (o_.tukey_mad_scale && o_.family_robust_scales) {
+      // Each family's own spread: a family whose residuals exceed their model by s_f more than
+      // the other's weighs (s_min / s_f)^2; too few values to tell fall back to the pooled
+      // scale.
+      constexpr size_t kMinValues = 20;
+      if (abs_p.size() >= kMinValues) out.point_scale = mad(abs_p);
+      if (abs_l.size() >= kMinValues) out.line_scale = mad(abs_l);
+      // Relative to the more precise family, which keeps weight 1: far from the solution the
+      // scales measure the misfit of every family, and weighing all of them down would hand
+      // the pose to the planes.
+      const double best = std::min(out.point_scale, out.line_scale);
+      point_weight = (best * best) / (out.point_scale * out.point_scale);
+      line_weight = (best * best) / (out.line_scale * out.line_scale);
     }
+    point_var_scale = o_.tukey_mad_scale ? out.point_scale * out.point_scale : 1.0;
+    line_var_scale = o_.tukey_mad_scale ? out.line_scale * out.line_scale : 1.0;
     for (size_t i = 0; i < points.size(); ++i) {
       PointTerm& T = points[i];
       if (!T.active) continue;
-      T.sqrt_tukey = o_.use_tukey ? tukeySqrtWeight(norm_p[i] / out.scale, o_.tukey_c) : 1.0;
+      T.sqrt_tukey =
+          o_.use_tukey ? tukeySqrtWeight(norm_p[i] / out.point_scale, o_.tukey_c) : 1.0;
       if (T.sqrt_tukey > 0) {
         out.rows += 2;
         ++out.n_points;
@@ -303,7 +333,8 @@ class JointProblem {
     for (size_t i = 0; i < lines.size(); ++i) {
       LineTerm& T = lines[i];
       if (!T.active) continue;
-      T.sqrt_tukey = o_.use_tukey ? tukeySqrtWeight(norm_l[i] / out.scale, o_.tukey_c) : 1.0;
+      T.sqrt_tukey =
+          o_.use_tukey ? tukeySqrtWeight(norm_l[i] / out.line_scale, o_.tukey_c) : 1.0;
       if (T.sqrt_tukey > 0) {
         out.rows += 2;
         ++out.n_lines;
@@ -325,7 +356,7 @@ class JointProblem {
     for (const PointTerm& T : points) {
       if (!T.active || T.sqrt_tukey <= 0) continue;
       if (!pointResidual(T, pose, cam_, r, pJ2, nullptr)) return false;
-      const Eigen::Matrix2d W = T.sqrt_tukey * T.S;
+      const Eigen::Matrix2d W = (T.sqrt_tukey * std::sqrt(point_weight)) * T.S;
       Eigen::Map<Eigen::Vector2d>(residuals + row) = W * r;
       if (jacobian) RowJac(jacobian + 6 * row, 2, 6) = W * J2;
       row += 2;
@@ -333,7 +364,8 @@ class JointProblem {
     for (const LineTerm& T : lines) {
       if (!T.active || T.sqrt_tukey <= 0) continue;
       if (!lineResidual(T, pose, cam_, r, pJ2, nullptr)) return false;
-      const Eigen::Vector2d w(T.sqrt_tukey * T.s[0], T.sqrt_tukey * T.s[1]);
+      const double sw = T.sqrt_tukey * std::sqrt(line_weight);
+      const Eigen::Vector2d w(sw * T.s[0], sw * T.s[1]);
       Eigen::Map<Eigen::Vector2d>(residuals + row) = w.cwiseProduct(r);
       if (jacobian) RowJac(jacobian + 6 * row, 2, 6) = w.asDiagonal() * J2;
       row += 2;
@@ -354,11 +386,12 @@ class JointProblem {
 
   /// H = J^T W J at xi over the inlier terms with the inverse-variance weights and alpha on
   /// the planes (Tukey weights only select the inliers): the information of eq. 21. M is the
-  /// same sum with alpha^2, for the sandwich covariance H^-1 M H^-1, and with the point and
-  /// line terms times `residual_variance_scale`: their residuals' actual covariance is that
-  /// factor times the modelled Sigma_r (the robust scale squared; docs/estimator.md,
-  /// "Covariance consistency on real data").
-  void information(const double* xi, double residual_variance_scale, Matrix6d& H, Matrix6d& M,
+  /// same sum with alpha^2, for the sandwich covariance H^-1 M H^-1; the point and line terms
+  /// weigh point_weight / line_weight in both, and count their variance scale in M: their
+  /// residuals' actual covariance is that factor times the modelled Sigma_r (the robust
+  /// scale squared; docs/estimator.md, "Covariance consistency on real data"). M_weighted, if
+  /// given, is M with each point's error covariance as its weighting one (error_cov ignored).
+  void information(const double* xi, Matrix6d& H, Matrix6d& M,
                    Matrix6d* M_weighted = nullptr) const {
     const PoseEval pose(xi);
     H.setZero();
@@ -372,17 +405,18 @@ class JointProblem {
       if (!pointResidual(T, pose, cam_, r, &J2, nullptr)) continue;
       const Matrix26 A = T.S * J2;
       const Matrix6d AtA = A.transpose() * A;
-      H += AtA;
-      M_w += residual_variance_scale * AtA;
+      H += point_weight * AtA;
+      const double c = point_weight * point_weight * point_var_scale;
+      M_w += c * AtA;
       if (T.has_error_cov) {
         // The residual's covariance is not the one it is weighted by: the whitened residual
         // has covariance S Sigma_err S^T instead of I.
         const Matrix23 JP = -J2.leftCols<3>() * pose.R;
         const Eigen::Matrix2d Sigma_err =
             JP * T.error_cov * JP.transpose() + T.var_px2 * Eigen::Matrix2d::Identity();
-        M += residual_variance_scale * A.transpose() * (T.S * Sigma_err * T.S.transpose()) * A;
+        M += c * A.transpose() * (T.S * Sigma_err * T.S.transpose()) * A;
       } else {
-        M += residual_variance_scale * AtA;
+        M += c * AtA;
       }
     }
     for (const LineTerm& T : lines) {
@@ -390,9 +424,9 @@ class JointProblem {
       if (!lineResidual(T, pose, cam_, r, &J2, nullptr)) continue;
       const Matrix26 A = Eigen::Vector2d(T.s[0], T.s[1]).asDiagonal() * J2;
       const Matrix6d AtA = A.transpose() * A;
-      H += AtA;
-      M += residual_variance_scale * AtA;
-      M_w += residual_variance_scale * AtA;
+      H += line_weight * AtA;
+      M += line_weight * line_weight * line_var_scale * AtA;
+      M_w += line_weight * line_weight * line_var_scale * AtA;
     }
     Eigen::Vector3d r3;
     Matrix36 J3;
@@ -541,6 +575,8 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
   JointProblem::ReweightResult& rw = out.rw;
   rw = problem.reweight(xi.data());
   est.robust_scale = rw.scale;
+  est.point_scale = rw.point_scale;
+  est.line_scale = rw.line_scale;
   est.plane_scale = problem.plane_scale;
   est.plane_weight = problem.plane_weight;
   for (int it = 0; it < o.max_irls_iterations; ++it) {
@@ -576,6 +612,8 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
     xi = poseToXi(xiToPose(xi));  // keep q_w >= 0
     rw = problem.reweight(xi.data());
     est.robust_scale = rw.scale;
+    est.point_scale = rw.point_scale;
+    est.line_scale = rw.line_scale;
     est.plane_scale = problem.plane_scale;
     est.plane_weight = problem.plane_weight;
     if (it > 0 && poseChangeSmall(xi, xi_before, o)) break;
@@ -592,8 +630,8 @@ void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
   Matrix6d H, M, M_w;
   // The whitened point and line residuals spread by the robust scale s (>= 1, MAD): their
   // covariance is s^2 Sigma_r, not Sigma_r (on real images s ~ 1.5; 1 on synthetic ones).
-  problem.information(xi.data(), o.tukey_mad_scale ? est.robust_scale * est.robust_scale : 1.0, H,
-                      M, &M_w);
+  // (With family_robust_scales each family has its own s and weighs 1/s^2.)
+  problem.information(xi.data(), H, M, &M_w);
   Eigen::Matrix<double, 6, 1> dinv_sqrt;
   bool diag_ok = H.allFinite() && M.allFinite();
   for (int i = 0; i < 6; ++i) {

@@ -288,7 +288,11 @@ PointExtraction PointExtractor::extract(const cv::Mat& image, const PinholeCamer
         // Search as far as the detection's own rounding reaches: half a pixel of its level.
         const double level_px = std::pow(options_.orb_scale_factor, std::max(0, kp.octave));
         const int radius = std::max(1, static_cast<int>(std::ceil(0.5 * level_px - 1e-9)));
-        kp.pt = refineCorner(gray, kp.pt, radius, options_.subpixel_window_px);
+        const int window =
+            options_.subpixel_window_scales_with_octave
+                ? std::max(1, static_cast<int>(std::lround(options_.subpixel_window_px * level_px)))
+                : options_.subpixel_window_px;
+        kp.pt = refineCorner(gray, kp.pt, radius, window);
       }
       PointFeature f;
       const Eigen::Vector2d raw(kp.pt.x, kp.pt.y);
