@@ -55,8 +55,11 @@ struct KeyframeOptions {
   /// The observations fused into a landmark were moved into the keyframe by poses estimated
   /// from the landmarks themselves, so they carry the landmarks' error: to first order, fusion
   /// does not reduce the error an estimate against them inherits (docs/estimator.md,
-  /// "Keyframe landmarks"). false: the fused covariance (over-confident).
-  bool unfused_landmark_covariance = true;
+  /// "Keyframe landmarks"). false (default): the fused covariance. With the per-family robust
+  /// scales (estimator.family_robust_scales) the points' measured spread already inflates the
+  /// covariance enough on the benchmark's sequences, and this on top makes the rendered ones
+  /// conservative beyond the band (share inside 0.99-1.00); it stays for points-only tracking.
+  bool unfused_landmark_covariance = false;
   /// Local map: the 3D points and lines of up to this many earlier keyframes, moved into the
   /// active keyframe by the chain of keyframe poses (their covariance added), are matched and
   /// used together with the active keyframe's (0: the active keyframe alone). The chain
@@ -92,7 +95,9 @@ void visit(V& v, KeyframeOptions& o) {
   v.field("unfused_landmark_covariance", o.unfused_landmark_covariance,
           "the pose covariance against the keyframe propagates each fused landmark's covariance "
           "from before fusion (the observations were registered to the landmarks, so fusion "
-          "does not reduce the error the pose inherits); its weight uses the fused one");
+          "does not reduce the error the pose inherits); its weight uses the fused one. Off: with "
+          "the per-family robust scales it makes the rendered sequences over-conservative "
+          "(docs/estimator.md)");
 }
 
 struct FrameOdometryOptions {
