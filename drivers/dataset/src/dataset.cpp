@@ -6,6 +6,8 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "pplvo/core/opencv_codecs.h"
+
 #include "pplvo/dataset/jpeg_decode.h"
 #include "pplvo/dataset/png_decode.h"
 
@@ -51,9 +53,11 @@ cv::Mat decode(const std::vector<uchar>& bytes, int flags, const std::string& pa
   }
   cv::Mat m;
   try {
-    m = cv::imdecode(bytes, flags);
+    m = openCvImdecode(bytes.data(), bytes.size(), flags);
   } catch (const cv::Exception& e) {
     throw FrameLoadError(path, std::string("corrupt image file (") + e.what() + ")");
+  } catch (const OpenCvCodecsUnavailable& e) {
+    throw FrameLoadError(path, std::string("neither PNG nor JPEG, and ") + e.what());
   }
   if (m.empty()) throw FrameLoadError(path, "corrupt or unsupported image file");
   return m;

@@ -1,11 +1,14 @@
 // JPEG decoding for dataset frames with libjpeg-turbo's TurboJPEG API (jpeg_decode.h).
 #include "pplvo/dataset/jpeg_decode.h"
 
+
 #include <turbojpeg.h>
 
 #include <memory>
 #include <optional>
 #include <opencv2/imgcodecs.hpp>
+
+#include "pplvo/core/opencv_codecs.h"
 #include <string>
 
 namespace pplvo::dataset {
@@ -101,9 +104,11 @@ int orientationOf(const uint8_t* data, size_t size) {
 cv::Mat decodeWithOpenCv(const uint8_t* data, size_t size, int flags) {
   cv::Mat out;
   try {
-    out = cv::imdecode(cv::Mat(1, int(size), CV_8U, const_cast<uint8_t*>(data)), flags);
+    out = openCvImdecode(data, size, flags);
   } catch (const cv::Exception& e) {
     throw JpegError(std::string("OpenCV could not decode the JPEG: ") + e.what());
+  } catch (const OpenCvCodecsUnavailable& e) {
+    throw JpegError(std::string("a JPEG only OpenCV decodes, and ") + e.what());
   }
   if (out.empty()) throw JpegError("OpenCV could not decode the JPEG");
   return out;

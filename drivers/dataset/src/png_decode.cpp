@@ -2,6 +2,7 @@
 // unfiltering fused with the conversion to OpenCV's layout. See png_decode.h.
 #include "pplvo/dataset/png_decode.h"
 
+
 #include <libdeflate.h>
 
 #include <climits>
@@ -9,6 +10,8 @@
 #include <cstring>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
+
+#include "pplvo/core/opencv_codecs.h"
 #include <string>
 #include <vector>
 
@@ -503,9 +506,11 @@ cv::Mat decodeWithOpenCv(const uint8_t* data, size_t size, int flags) {
   if (size > size_t(INT_MAX)) throw PngError("file too large for OpenCV");
   cv::Mat out;
   try {
-    out = cv::imdecode(cv::Mat(1, int(size), CV_8U, const_cast<uint8_t*>(data)), flags);
+    out = openCvImdecode(data, size, flags);
   } catch (const cv::Exception& e) {
     throw PngError(std::string("OpenCV: ") + e.what());
+  } catch (const OpenCvCodecsUnavailable& e) {
+    throw PngError(std::string("a layout only OpenCV decodes, and ") + e.what());
   }
   if (out.empty()) throw PngError("OpenCV could not decode this PNG layout");
   return out;

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "pplvo/core/image_header.h"
+#include "pplvo/core/opencv_codecs.h"
 
 namespace pplvo::msgs {
 namespace {
@@ -169,7 +170,13 @@ pplvo_msgs::image_t encodeImage(const cv::Mat& image_in, int8_t encoding, int jp
     } else {
       params = {cv::IMWRITE_PNG_COMPRESSION, 1};
     }
-    if (!cv::imencode(ext, image, buf, params)) throw MessageError("image encoding failed");
+    bool encoded = false;
+    try {
+      encoded = openCvImencode(ext, image, buf, params);
+    } catch (const OpenCvCodecsUnavailable& e) {
+      throw MessageError(encodingName(encoding) + " encoding needs " + e.what());
+    }
+    if (!encoded) throw MessageError("image encoding failed");
     msg.data = std::move(buf);
     msg.size = static_cast<int32_t>(msg.data.size());
   }
@@ -274,9 +281,11 @@ cv::Mat decodeImage(const pplvo_msgs::image_t& msg, bool view_raw) {
   }
   cv::Mat out;
   try {
-    out = cv::imdecode(msg.data, flags);
+    out = openCvImdecode(msg.data.data(), msg.data.size(), flags);
   } catch (const cv::Exception& e) {
     throw MessageError("corrupt " + encodingName(msg.encoding) + " payload: " + e.what());
+  } catch (const OpenCvCodecsUnavailable& e) {
+    throw MessageError(encodingName(msg.encoding) + " payload needs " + e.what());
   }
   if (out.empty()) throw MessageError("corrupt " + encodingName(msg.encoding) + " payload");
   if (out.cols != msg.width || out.rows != msg.height) {
