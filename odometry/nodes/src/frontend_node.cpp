@@ -4,6 +4,7 @@
 #include <pplvo_msgs/features_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 
+#include "pplvo/core/parallel.h"
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
@@ -142,8 +143,12 @@ void FrontendNode::extractReady() {
       continue;
     }
     auto extract = [this, frame = std::move(frame), depth = std::move(depth)] {
+      if (options_.extract_ahead_nice > 0) lowerThisThreadsPriority(options_.extract_ahead_nice);
       Extracted e;
       e.features = frontend_.extract2d(frame, depth, &e.stats);
+      const Stopwatch encode;
+      e.message = msgs::toMsg(e.features, pplvo_msgs::features_t::STAGE_2D);
+      e.encode_ms = encode.elapsedMs();
       return e;
     };
     if (!options_.extract_ahead) {
@@ -158,12 +163,8 @@ void FrontendNode::extractReady() {
 
 void FrontendNode::publishExtracted(Extracted extracted) {
   if (!extracted.stats.warning.empty()) warn(extracted.stats.warning);
-  {
-    ScopedStageTimer t(timings_, "encode");
-    const pplvo_msgs::features_t m =
-        msgs::toMsg(extracted.features, pplvo_msgs::features_t::STAGE_2D);
-    bus_.publish(options_.features_channel, &m);
-  }
+  timings_.add("encode", extracted.encode_ms);
+  bus_.publish(options_.features_channel, &extracted.message);
   awaiting_3d_.push_back(std::move(extracted.features));
   if (const int64_t n = trim(awaiting_3d_, options_.max_pending)) {
     counters_.frames_dropped += n;
