@@ -7,8 +7,8 @@
 // deterministic; the figures measured are in the comments, the bounds leave about 2x.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <vector>
@@ -39,7 +39,7 @@ synth::SynthOptions baseOptions(double trajectory_scale) {
 }
 
 struct Errors {
-  int not_tracking = 0;       ///< frames after the first not in TrackingStatus::kTracking
+  int not_tracking = 0;  ///< frames after the first not in TrackingStatus::kTracking
   bool all_finite = true;
   double ate_rmse_m = 0;      ///< T_w_c against the truth, world = first camera, no alignment
   double rpe_t_rmse_m = 0;    ///< frame-to-frame motion error, translation
@@ -47,8 +47,7 @@ struct Errors {
 };
 
 /// Runs the pipeline over the sequence; `edit` may change each frame before it is processed.
-Errors run(const synth::SyntheticSequence& seq,
-           const std::function<void(RgbdFrame&)>& edit = {}) {
+Errors run(const synth::SyntheticSequence& seq, const std::function<void(RgbdFrame&)>& edit = {}) {
   OdometryPipeline pipe{PipelineOptions{}};
   Errors e;
   double ate2 = 0, rpe_t2 = 0, rpe_r2 = 0;
