@@ -4,7 +4,6 @@
 #include <pplvo_msgs/features_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 
-#include "pplvo/core/parallel.h"
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/node_runtime.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
@@ -143,7 +142,6 @@ void FrontendNode::extractReady() {
       continue;
     }
     auto extract = [this, frame = std::move(frame), depth = std::move(depth)] {
-      if (options_.extract_ahead_nice > 0) lowerThisThreadsPriority(options_.extract_ahead_nice);
       Extracted e;
       e.features = frontend_.extract2d(frame, depth, &e.stats);
       const Stopwatch encode;

@@ -54,7 +54,6 @@ FrontendArgs parseFrontendArgs(const std::vector<std::string>& args) {
             .option("--status-channel", &o.status_channel)
             .option("--max-pending", &o.max_pending, 1)
             .flag("--no-extract-ahead", &o.extract_ahead, false)
-            .option("--extract-ahead-nice", &o.extract_ahead_nice, 0, 19)
             .option("--max-unlifted", &o.max_unlifted, 0, 1000)
             .option("--max-unlifted-wait-ms", &o.max_unlifted_wait_ms, 0, 3600000);
       },
@@ -73,8 +72,6 @@ std::string frontendUsage() {
          "  --max-pending N            frames held per queue (30)\n"
          "  --no-extract-ahead         extract 2D features in the message handler, not on a\n"
          "                             worker thread while the previous frame is lifted\n"
-         "  --extract-ahead-nice N     nice value of that worker (0-19; 0 = the process's):\n"
-         "                             the pose loop comes first on a busy machine\n"
          "  --max-unlifted N           frames extracted but not yet lifted beyond which a new\n"
          "                             frame is dropped before extraction (5; 0 = never)\n"
          "  --max-unlifted-wait-ms MS  with that many waiting and no fused depth for MS of\n"

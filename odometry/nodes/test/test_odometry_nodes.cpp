@@ -543,8 +543,7 @@ TEST(PipelineArgs, ReportsEveryProblem) {
 TEST(FrontendArgs, GoodBadAndHelp) {
   const FrontendArgs a = parseFrontendArgs(
       {"--lcm-url", "memq://", "--max-unlifted", "2", "--no-extract-ahead", "--features",
-       "points,planes", "--set", "frontend.points.max_points=321", "--prefault-mb", "8",
-       "--extract-ahead-nice", "7"});
+       "points,planes", "--set", "frontend.points.max_points=321", "--prefault-mb", "8"});
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
   EXPECT_EQ(a.options.lcm_url, "memq://");
   EXPECT_EQ(a.options.max_unlifted, 2);
@@ -552,9 +551,7 @@ TEST(FrontendArgs, GoodBadAndHelp) {
   EXPECT_FALSE(a.options.frontend.families.lines);
   EXPECT_EQ(a.options.frontend.points.max_points, 321);
   EXPECT_EQ(a.prefault_mb, 8);
-  EXPECT_EQ(a.options.extract_ahead_nice, 7);
   EXPECT_EQ(parseFrontendArgs({}).prefault_mb, 64);
-  EXPECT_FALSE(parseFrontendArgs({"--extract-ahead-nice", "20"}).errors.empty());
 
   const FrontendArgs bad = parseFrontendArgs({"--max-unlifted", "-1", "--depth-model", "gm"});
   ASSERT_EQ(bad.errors.size(), 2u);

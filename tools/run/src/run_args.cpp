@@ -19,7 +19,6 @@ RunArgs parseRunArgs(const std::vector<std::string>& args) {
       .option("--covariance", &o.covariance)
       .option("--max-frames", &o.max_frames, int64_t{0})
       .option("--in-flight", &o.in_flight, 1, 1000)
-      .option("--extract-ahead-nice", &o.extract_ahead_nice, 0, 19)
       .option("--start", &o.start, int64_t{0})
       .option("--fps", &o.fps, 0.0)
       .flag("--skip-bad", &o.skip_bad)
@@ -57,8 +56,6 @@ std::string runUsage() {
              "next\n"
              "                          frame's features are extracted while this one is fused;\n"
              "                          1: one frame at a time; same trajectory either way)\n"
-             "  --extract-ahead-nice N  nice value of the thread extracting the next frame's\n"
-             "                          features (0-19; 0 = the process's)\n"
              "  --preload               decode every frame before the first is published (as from "
              "a\n"
              "                          camera); the throughput then leaves the decoding out\n"

@@ -191,7 +191,6 @@ RunResult runPipeline(const RunOptions& options) {
 
     nodes::FrontendNodeOptions fe;
     fe.frontend = options.pipeline.frontend;
-    fe.extract_ahead_nice = options.extract_ahead_nice;
     nodes::FrontendNode frontend(fe, lcm);
 
     nodes::EstimatorNodeOptions es;

@@ -9,11 +9,6 @@ namespace pplvo {
 /// Calls task(i) for i = 0..n-1: in order on this thread when threads <= 1, else on up to
 /// `threads` threads of OpenCV's pool (parallel_for_). Tasks must write disjoint data; callers
 /// that need results independent of `threads` split their work into a fixed n.
-/// Raises the calling thread's nice value by `nice` (Linux: per thread; threads it starts
-/// afterwards inherit it). Best effort: false where the system refuses or has no per-thread
-/// priority. For work whose deadline is further away than the rest of the process's.
-bool lowerThisThreadsPriority(int nice);
-
 template <class Task>
 void forEachTask(int n, int threads, const Task& task) {
   if (threads <= 1 || n <= 1) {

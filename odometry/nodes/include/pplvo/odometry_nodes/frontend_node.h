@@ -48,11 +48,6 @@ struct FrontendNodeOptions {
   /// computes it in the handler. One frame at a time: a second one ahead measured no faster
   /// in pplvo-run (the two cores are then busy) and wastes work on frames dropped later.
   bool extract_ahead = true;
-  /// Nice value (0-19) of the extract-ahead worker and the threads it starts. The fused depth ->
-  /// lifting -> pose loop is what every later frame waits for, while the frame extracted ahead
-  /// has a whole frame period to finish: on a machine with fewer cores than runnable threads,
-  /// the loop should not share its core with the look-ahead work. 0 = the process's own.
-  int extract_ahead_nice = 0;
   /// Frames extracted but not yet lifted (their fused depth has not come) beyond which a new
   /// frame is dropped before extraction, counted: the loop through the estimator and the depth
   /// filter is behind, and the estimator would drop it anyway. 0 = never. Never drops in

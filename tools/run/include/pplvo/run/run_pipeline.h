@@ -31,8 +31,6 @@ struct RunOptions {
   /// time). With 2 the next frame's 2D features are extracted while this one is fused and
   /// lifted; the trajectory is the same.
   int in_flight = 2;
-  /// Nice value of the frontend's extract-ahead worker (FrontendNodeOptions::extract_ahead_nice).
-  int extract_ahead_nice = 0;
   bool progress = false;  ///< progress line on stderr
   /// --preload: the player decodes every frame before publishing the first (as a camera
   /// delivers decoded frames); the throughput then leaves the decoding out. Same trajectory.
