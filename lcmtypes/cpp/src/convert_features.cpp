@@ -48,7 +48,8 @@ cv::Mat unpackDescriptors(int8_t type, int32_t bytes, const std::vector<std::vec
 
 }  // namespace
 
-pplvo_msgs::features_t toMsg(const FrameFeatures& f, int8_t stage) {
+pplvo_msgs::features_t toMsg(const FrameFeatures& f, int8_t stage,
+                             const pplvo_msgs::image_t* encoded_labels) {
   pplvo_msgs::features_t m;
   m.utime = f.utime;
   m.seq = f.seq;
@@ -107,9 +108,13 @@ pplvo_msgs::features_t toMsg(const FrameFeatures& f, int8_t stage) {
     for (int k = 0; k < 3; ++k) o.centroid_c[k] = p.centroid[k];
     o.label = p.label;
   }
-  m.plane_labels = f.plane_labels.empty()
-                       ? encodeImage(cv::Mat(), pplvo_msgs::image_t::ENCODING_NONE)
-                       : encodeImage(f.plane_labels, pplvo_msgs::image_t::ENCODING_ZLIB_U8);
+  if (encoded_labels) {
+    m.plane_labels = *encoded_labels;
+  } else {
+    m.plane_labels = f.plane_labels.empty()
+                         ? encodeImage(cv::Mat(), pplvo_msgs::image_t::ENCODING_NONE)
+                         : encodeImage(f.plane_labels, pplvo_msgs::image_t::ENCODING_ZLIB_U8);
+  }
   return m;
 }
 

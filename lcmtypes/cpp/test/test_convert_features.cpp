@@ -112,6 +112,19 @@ TEST(FeaturesConvert, LabelsAreZlibAndPngLabelsOfOlderLogsStillDecode) {
   EXPECT_EQ(cv::norm(b.plane_labels, f.plane_labels, cv::NORM_INF), 0.0);
 }
 
+TEST(FeaturesConvert, PreEncodedLabelsGiveTheSameMessage) {
+  const FrameFeatures f = makeFeatures(false);
+  const pplvo_msgs::features_t two_d = toMsg(f, pplvo_msgs::features_t::STAGE_2D);
+  const pplvo_msgs::features_t fresh = toMsg(f, pplvo_msgs::features_t::STAGE_3D);
+  const pplvo_msgs::features_t reused =
+      toMsg(f, pplvo_msgs::features_t::STAGE_3D, &two_d.plane_labels);
+  std::vector<uint8_t> a(fresh.getEncodedSize()), b(reused.getEncodedSize());
+  ASSERT_EQ(a.size(), b.size());
+  fresh.encode(a.data(), 0, static_cast<int>(a.size()));
+  reused.encode(b.data(), 0, static_cast<int>(b.size()));
+  EXPECT_EQ(a, b);  // byte for byte
+}
+
 TEST(FeaturesConvert, InconsistentMessagesThrow) {
   auto m = toMsg(makeFeatures(false), pplvo_msgs::features_t::STAGE_2D);
   auto bad = m;

@@ -163,6 +163,9 @@ void FrontendNode::publishExtracted(Extracted extracted) {
   if (!extracted.stats.warning.empty()) warn(extracted.stats.warning);
   timings_.add("encode", extracted.encode_ms);
   bus_.publish(options_.features_channel, &extracted.message);
+  encoded_labels_.push_back({extracted.features.seq, extracted.features.plane_labels.data,
+                             std::move(extracted.message.plane_labels)});
+  if (static_cast<int>(encoded_labels_.size()) > options_.max_pending) encoded_labels_.pop_front();
   awaiting_3d_.push_back(std::move(extracted.features));
   if (const int64_t n = trim(awaiting_3d_, options_.max_pending)) {
     counters_.frames_dropped += n;
@@ -247,7 +250,16 @@ void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
   if (!stats.warning.empty()) warn(stats.warning);
   {
     ScopedStageTimer t(timings_, "encode");
-    const pplvo_msgs::features_t m = msgs::toMsg(features, pplvo_msgs::features_t::STAGE_3D);
+    while (!encoded_labels_.empty() && encoded_labels_.front().seq < features.seq) {
+      encoded_labels_.pop_front();
+    }
+    const pplvo_msgs::image_t* labels = nullptr;
+    if (!encoded_labels_.empty() && encoded_labels_.front().seq == features.seq &&
+        encoded_labels_.front().pixels == features.plane_labels.data) {
+      labels = &encoded_labels_.front().message;  // the same Mat: lifting kept the labels
+    }
+    const pplvo_msgs::features_t m =
+        msgs::toMsg(features, pplvo_msgs::features_t::STAGE_3D, labels);
     bus_.publish(options_.features_3d_channel, &m);
   }
   ++counters_.frames_out;

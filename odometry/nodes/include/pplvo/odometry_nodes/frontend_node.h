@@ -133,6 +133,16 @@ class FrontendNode {
   pipeline::Frontend frontend_;
   std::deque<RgbdFrame> frames_;           ///< colour in, C-GM depth not yet
   std::deque<PendingDepth> cgm_;           ///< C-GM depth in, colour not yet
+  /// The plane labels of a frame as its stage-2D message carried them, and their pixels: the
+  /// stage-3D message reuses them when lifting kept the labels (every frame but those whose
+  /// planes are refitted on the fused depth), instead of compressing them again on the
+  /// handler thread, which carries the pose loop.
+  struct EncodedLabels {
+    int64_t seq = -1;
+    const uchar* pixels = nullptr;
+    pplvo_msgs::image_t message;
+  };
+  std::deque<EncodedLabels> encoded_labels_;
   std::deque<FrameFeatures> awaiting_3d_;  ///< stage 2D published, fused depth not yet
   int64_t last_extracted_seq_ = -1;
   int64_t dropped_loop_behind_ = 0;
