@@ -58,6 +58,25 @@ NeesResult runNees(const PoseEstimatorOptions& opts, const SceneConfig& cfg, int
   return r;
 }
 
+/// Two estimator configurations on the same `trials` scenes of `gen`, each scene edited by
+/// `corrupt` first: add(k, estimate, error) for configuration k = 0, 1 of `opts`, with the
+/// error xi(estimate) - xi(T_true).
+template <class Corrupt, class Add>
+void compareOnSameScenes(SceneGenerator& gen, const PinholeCamera& cam, const Pose3& T_true,
+                         int trials, const PoseEstimatorOptions* const (&opts)[2],
+                         const Corrupt& corrupt, const Add& add) {
+  const Vector6d xi_true = poseToXi(T_true);
+  for (int i = 0; i < trials; ++i) {
+    Correspondences c = gen.generate(T_true);
+    corrupt(c);
+    for (int k = 0; k < 2; ++k) {
+      const PoseEstimate e = PoseEstimator(*opts[k]).estimate(c, cam, Pose3::Identity());
+      ASSERT_TRUE(e.accepted()) << "trial " << i << " configuration " << k;
+      add(k, e, Vector6d(poseToXi(e.T_curr_prev) - xi_true));
+    }
+  }
+}
+
 void expectUnbiased(const NeesResult& r, int trials) {
   for (int k = 0; k < 6; ++k) {
     // |mean| within 4 standard errors of the mean.
@@ -186,7 +205,6 @@ TEST(PoseEstimator, OverconfidentPlanesAreWeightedByTheirResiduals) {
   cfg.plane_sigma_d_m *= factor;
   const PinholeCamera cam = testing::testCamera();
   const Pose3 T_true = testing::typicalMotion();
-  const Vector6d xi_true = poseToXi(T_true);
   PoseEstimatorOptions measured, paper;
   paper.plane_weight_from_residuals = false;
   ASSERT_TRUE(measured.plane_weight_from_residuals);  // the default
@@ -195,22 +213,20 @@ TEST(PoseEstimator, OverconfidentPlanesAreWeightedByTheirResiduals) {
   } on, off;
   SceneGenerator gen(cam, cfg, 21);
   const int trials = 200;
-  for (int i = 0; i < trials; ++i) {
-    Correspondences c = gen.generate(T_true);
+  const auto overconfident = [&](Correspondences& c) {
     for (PlaneMatch3D3D& m : c.planes) {  // the stated covariance: 100x too small in std
       m.prev.cov /= factor * factor;
       m.curr.cov /= factor * factor;
     }
-    for (auto [opts, sum] : {std::pair{&measured, &on}, std::pair{&paper, &off}}) {
-      const PoseEstimate e = PoseEstimator(*opts).estimate(c, cam, Pose3::Identity());
-      ASSERT_TRUE(e.accepted());
-      const Vector6d err = poseToXi(e.T_curr_prev) - xi_true;
-      sum->nees += err.dot(e.covariance.ldlt().solve(err)) / trials;
-      sum->err2 += err.head<3>().squaredNorm() / trials;
-      sum->scale += e.plane_scale / trials;
-      sum->weight += e.plane_weight / trials;
-    }
-  }
+  };
+  compareOnSameScenes(gen, cam, T_true, trials, {&measured, &paper}, overconfident,
+                      [&](int k, const PoseEstimate& e, const Vector6d& err) {
+                        Sum* sum = k == 0 ? &on : &off;
+                        sum->nees += err.dot(e.covariance.ldlt().solve(err)) / trials;
+                        sum->err2 += err.head<3>().squaredNorm() / trials;
+                        sum->scale += e.plane_scale / trials;
+                        sum->weight += e.plane_weight / trials;
+                      });
   std::printf("planes 100x over-confident: measured k %.0f, weight %.2g, NEES %.2f, rms t %.2f mm; "
               "alpha alone: NEES %.2f, rms t %.2f mm\n",
               on.scale, on.weight, on.nees, 1e3 * std::sqrt(on.err2), off.nees,
@@ -239,7 +255,6 @@ TEST(PoseEstimator, EachFamilyIsWeightedByItsOwnRobustScale) {
   cfg.line_sigma_px *= factor;
   const PinholeCamera cam = testing::testCamera();
   const Pose3 T_true = testing::typicalMotion();
-  const Vector6d xi_true = poseToXi(T_true);
   PoseEstimatorOptions family, pooled;
   ASSERT_TRUE(family.family_robust_scales);  // the default
   pooled.family_robust_scales = false;
@@ -248,19 +263,17 @@ TEST(PoseEstimator, EachFamilyIsWeightedByItsOwnRobustScale) {
   } on, off;
   SceneGenerator gen(cam, cfg, 23);
   const int trials = 200;
-  for (int i = 0; i < trials; ++i) {
-    Correspondences c = gen.generate(T_true);
+  const auto overconfident = [&](Correspondences& c) {
     for (LineMatch3D2D& m : c.lines) m.sigma_px = stated;  // 4x too small
-    for (auto [opts, sum] : {std::pair{&family, &on}, std::pair{&pooled, &off}}) {
-      const PoseEstimate e = PoseEstimator(*opts).estimate(c, cam, Pose3::Identity());
-      ASSERT_TRUE(e.accepted());
-      const Vector6d err = poseToXi(e.T_curr_prev) - xi_true;
-      sum->nees += err.dot(e.covariance.ldlt().solve(err)) / trials;
-      sum->err2 += err.head<3>().squaredNorm() / trials;
-      sum->point_scale += e.point_scale / trials;
-      sum->line_scale += e.line_scale / trials;
-    }
-  }
+  };
+  compareOnSameScenes(gen, cam, T_true, trials, {&family, &pooled}, overconfident,
+                      [&](int k, const PoseEstimate& e, const Vector6d& err) {
+                        Sum* sum = k == 0 ? &on : &off;
+                        sum->nees += err.dot(e.covariance.ldlt().solve(err)) / trials;
+                        sum->err2 += err.head<3>().squaredNorm() / trials;
+                        sum->point_scale += e.point_scale / trials;
+                        sum->line_scale += e.line_scale / trials;
+                      });
   std::printf("lines 4x over-confident: per family s_p %.2f s_l %.2f, NEES %.2f, rms t %.3f mm; "
               "pooled s %.2f, NEES %.2f, rms t %.3f mm\n",
               on.point_scale, on.line_scale, on.nees, 1e3 * std::sqrt(on.err2), off.point_scale,
