@@ -69,8 +69,10 @@ if [ -d "$data" ]; then
   # A few colour frames for the JPEG seeds (below).
   find "$data" -path '*rgb*' -name '*.png' -size -400k | sort | awk 'NR % 60 == 1 && n++ < 3' \
     >"$build/corpus/jpeg-sources.txt"
-  # One colour PNG as an image_t plane (header: width, height, encoding 4 = png).
-  f=$(find "$data" -path '*rgb*' -name '*.png' -size -400k | sort | head -1)
+  # One colour PNG as an image_t plane (header: width, height, encoding 4 = png). awk reads the
+  # whole list: `head -1` could exit while sort still writes, and pipefail turns that SIGPIPE
+  # into exit 141 (it did in CI).
+  f=$(find "$data" -path '*rgb*' -name '*.png' -size -400k | sort | awk 'NR == 1')
   if [ -n "$f" ]; then
     python3 - "$f" "$build/corpus/fuzz_image_decode/png" <<'PY'
 import struct, sys
