@@ -6,14 +6,21 @@
 #include <cstddef>
 #include <cstring>
 #include <limits>
+#include <thread>
 
 #include "pplvo/core/parallel.h"
 
 namespace pplvo::depth_filter {
 
+int ogmThreads(const OgmOptions& options) {
+  if (options.threads > 0) return options.threads;
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
+}
+
 OgmFusion::OgmFusion(const Options& options) : options_(options) {
   // Ranges: visit(V&, OgmOptions&) (the configuration rejects other values).
-  assert(options_.max_window >= 1 && options_.k_consistency >= 1 && options_.threads >= 1);
+  assert(options_.max_window >= 1 && options_.k_consistency >= 1 && options_.threads >= 0);
+  options_.threads = ogmThreads(options_);
 }
 
 void OgmFusion::warn(const std::string& what) {

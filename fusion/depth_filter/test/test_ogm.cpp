@@ -9,6 +9,7 @@
 #include <random>
 #include <opencv2/core.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "pplvo/depth_filter/cgm_filter.h"
@@ -228,7 +229,7 @@ ThreadRun fuseWithThreads(const PinholeCamera& cam, const std::vector<DepthWithV
   OgmOptions o;
   o.threads = threads;
   OgmFusion ogm(o);
-  EXPECT_EQ(ogm.options().threads, threads);
+  EXPECT_EQ(ogm.options().threads, ogmThreads(o));  // 0 resolved
   ThreadRun run;
   for (size_t i = 0; i < frames.size(); ++i) {
     EXPECT_TRUE(ogm.addFrame(static_cast<int64_t>(i), cam, frames[i]));
@@ -338,10 +339,21 @@ TEST(OgmParallel, PointsOnBandBoundaryRowsSameForAnyThreadCount) {
   EXPECT_GT(in_rows, 2000);
   EXPECT_GT(in_rows, cv::countNonZero(last) * 9 / 10);
   EXPECT_GT(serial.stats.points_gated, 10000);
-  for (const int threads : {2, 3, 4}) {
+  for (const int threads : {0, 2, 3, 4}) {
     expectIdentical(serial, fuseWithThreads(cam, frames, poses, threads),
                     std::to_string(threads) + " threads");
   }
+}
+
+TEST(OgmThreads, ZeroLeavesOneHardwareThreadToTheRestOfThePipeline) {
+  OgmOptions o;
+  EXPECT_EQ(o.threads, 0);  // the default
+  const int hardware = static_cast<int>(std::thread::hardware_concurrency());
+  EXPECT_EQ(ogmThreads(o), std::max(1, hardware - 1));
+  o.threads = 3;
+  EXPECT_EQ(ogmThreads(o), 3);
+  o.threads = 1;
+  EXPECT_EQ(OgmFusion(o).options().threads, 1);
 }
 
 TEST(OgmParallel, MoreThreadsThanRows) {

@@ -58,9 +58,15 @@ struct OgmOptions {
   double min_depth_m = 0.05;
   /// Threads of fuse() (OpenCV's parallel_for_ pool): the output image is split into this many
   /// horizontal bands, each accumulating the points that land in it in the serial order.
-  /// 1 = serial. The results (depth, variance, stats) do not depend on it, bit for bit.
-  int threads = 2;
+  /// 1 = serial; 0 = one fewer than the machine's hardware threads (at least 1), since in the
+  /// pipeline the frontend extracts the next frame on one while a frame is fused: on two cores
+  /// a second band only adds its share of re-projected rows and a hand-off (docs/pipeline.md,
+  /// "Speed"). The results (depth, variance, stats) do not depend on it, bit for bit.
+  int threads = 0;
 };
+
+/// The bands OgmOptions::threads asks for on this machine (0 resolved; >= 1).
+int ogmThreads(const OgmOptions& options);
 
 /// Schema of OgmOptions (pplvo/core/config_schema.h): the one place of their names, docs and
 /// ranges (OgmFusion asserts them in debug builds).
@@ -84,9 +90,10 @@ void visit(V& v, OgmOptions& o) {
           "projected points closer than this to the current camera are ignored (m)",
           config::atLeast(0));
   v.field("threads", o.threads,
-          "threads of the fusion (OpenCV's pool; bands of the image): 1 = serial. The results "
-          "do not depend on it, bit for bit",
-          config::atLeast(1));
+          "threads of the fusion (OpenCV's pool; bands of the image): 1 = serial, 0 = one "
+          "fewer than the hardware threads (at least 1; the frontend extracts the next frame "
+          "on the other). The results do not depend on it, bit for bit",
+          config::atLeast(0));
 }
 
 /// O-GM fusion. Each window frame is stored as its C-GM depth and range variance
