@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 namespace pplvo::depth_filter {
 
@@ -14,13 +15,12 @@ cv::Mat warpDepth(const PinholeCamera& camera, const cv::Mat& depth_m, const Pos
     throw std::invalid_argument("warpDepth: depth must be CV_32FC1 of the camera's size");
   }
   const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
-  const auto ray = [&](int u, int v, double* x, double* y) {
-    *x = (u - cx) / fx;
-    *y = (v - cy) / fy;
-    return true;
-  };
+  std::vector<double> ray_x(static_cast<size_t>(camera.width));
+  std::vector<double> ray_y(static_cast<size_t>(camera.height));
+  for (int u = 0; u < camera.width; ++u) ray_x[static_cast<size_t>(u)] = (u - cx) / fx;
+  for (int v = 0; v < camera.height; ++v) ray_y[static_cast<size_t>(v)] = (v - cy) / fy;
   cv::Mat out;
-  detail::forwardWarp(depth_m, nullptr, ray, camera, T_target_source, {}, &out, nullptr);
+  detail::forwardWarpPinholeNearest(depth_m, ray_x, ray_y, camera, T_target_source, &out);
   return out;
 }
 

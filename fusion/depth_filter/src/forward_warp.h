@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -22,6 +23,48 @@ struct ForwardWarpOptions {
   /// |fx|, |fy| of the source (pixels per unit ray), for the footprint.
   double source_fx = 1, source_fy = 1;
 };
+
+/// The last step of a forward warp: closes one-pixel cracks of a stretched surface in `out`
+/// (infinity = nothing landed) where both neighbours on a line are present and within 1 % of
+/// each other (a depth step is left open), the variance `var` (may be null) alike, and writes
+/// the result with 0 for missing depth.
+inline void closeCracks(const cv::Mat& out, const cv::Mat* var_in, cv::Mat* out_depth,
+                        cv::Mat* out_var) {
+  const int w = out.cols, h = out.rows;
+  const float kInf = std::numeric_limits<float>::infinity();
+  const bool with_var = var_in != nullptr;
+  const cv::Mat var = with_var ? *var_in : cv::Mat();
+  cv::Mat closed = out.clone();
+  cv::Mat closed_var = with_var ? var.clone() : cv::Mat();
+  const auto near = [](float a, float b) {
+    return std::isfinite(a) && std::isfinite(b) && std::abs(a - b) <= 0.01f * std::min(a, b);
+  };
+  for (int v = 1; v + 1 < h; ++v) {
+    for (int u = 1; u + 1 < w; ++u) {
+      if (std::isfinite(out.at<float>(v, u))) continue;
+      const float l = out.at<float>(v, u - 1), r = out.at<float>(v, u + 1);
+      const float a = out.at<float>(v - 1, u), b = out.at<float>(v + 1, u);
+      if (near(l, r)) {
+        closed.at<float>(v, u) = 0.5f * (l + r);
+        if (with_var) closed_var.at<float>(v, u) = 0.5f * (var.at<float>(v, u - 1) + var.at<float>(v, u + 1));
+      } else if (near(a, b)) {
+        closed.at<float>(v, u) = 0.5f * (a + b);
+        if (with_var) closed_var.at<float>(v, u) = 0.5f * (var.at<float>(v - 1, u) + var.at<float>(v + 1, u));
+      }
+    }
+  }
+  closed.setTo(0.0f, closed == kInf);
+  *out_depth = closed;
+  if (out_var) *out_var = closed_var;
+}
+
+/// forwardWarp without splatting or variance for an undistorted pinhole source, whose ray
+/// through (u, v) is (ray_x[u], ray_y[v]) with ray_x[u] = (u - cx) / fx and ray_y[v] =
+/// (v - cy) / fy: the same output bit for bit (the same double arithmetic per point, in the
+/// same order), with the transform and projection of each row done in a vectorised pass.
+void forwardWarpPinholeNearest(const cv::Mat& depth_m, const std::vector<double>& ray_x,
+                               const std::vector<double>& ray_y, const PinholeCamera& target,
+                               const Pose3& T_target_source, cv::Mat* out_depth);
 
 /// Moves every valid point of `depth_m` (CV_32FC1, 0 = none; point = z * (ray_x, ray_y, 1) with
 /// `ray(u, v, &x, &y)` the source pixel's ray) by `T_target_source` into `target`'s pixel grid
@@ -140,30 +183,7 @@ void forwardWarp(const cv::Mat& depth_m, const cv::Mat* var_m2, RayFn ray,
       }
     }
   }
-  // Close one-pixel cracks of a stretched surface: both neighbours on a line present and
-  // within 1 % of each other (a depth step is left open).
-  cv::Mat closed = out.clone();
-  cv::Mat closed_var = var_m2 ? var.clone() : cv::Mat();
-  const auto near = [](float a, float b) {
-    return std::isfinite(a) && std::isfinite(b) && std::abs(a - b) <= 0.01f * std::min(a, b);
-  };
-  for (int v = 1; v + 1 < h; ++v) {
-    for (int u = 1; u + 1 < w; ++u) {
-      if (std::isfinite(out.at<float>(v, u))) continue;
-      const float l = out.at<float>(v, u - 1), r = out.at<float>(v, u + 1);
-      const float a = out.at<float>(v - 1, u), b = out.at<float>(v + 1, u);
-      if (near(l, r)) {
-        closed.at<float>(v, u) = 0.5f * (l + r);
-        if (var_m2) closed_var.at<float>(v, u) = 0.5f * (var.at<float>(v, u - 1) + var.at<float>(v, u + 1));
-      } else if (near(a, b)) {
-        closed.at<float>(v, u) = 0.5f * (a + b);
-        if (var_m2) closed_var.at<float>(v, u) = 0.5f * (var.at<float>(v - 1, u) + var.at<float>(v + 1, u));
-      }
-    }
-  }
-  closed.setTo(0.0f, closed == kInf);
-  *out_depth = closed;
-  if (out_var) *out_var = closed_var;
+  closeCracks(out, var_m2 ? &var : nullptr, out_depth, out_var);
 }
 
 }  // namespace pplvo::depth_filter::detail
