@@ -56,7 +56,6 @@ DepthWithVariance DepthRegistration::apply(const PinholeCamera& colour, const De
     return std::isfinite(*x);
   };
   detail::ForwardWarpOptions options;
-  options.splat = true;
   options.source_fx = std::abs(dc.fx);
   options.source_fy = std::abs(dc.fy);
   DepthWithVariance out;

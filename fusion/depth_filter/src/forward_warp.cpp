@@ -16,9 +16,9 @@ struct RowMove {
   int w;
 };
 
-/// Each point of the row moved as forwardWarp's `moved` does it -- p = R (x z, y z, z) + t,
-/// summed left to right as Eigen does, then fx p_x / p_z + cx -- into its target position
-/// (uf, vf) and depth; a point without depth or behind the camera gets uf = -1e9, off every
+/// Each point of the row moved -- p = R (x z, y z, z) + t, summed left to right as Eigen's
+/// R * p + t does, then fx p_x / p_z + cx as PinholeCamera::project -- into its target
+/// position (uf, vf) and depth; a point without depth or behind the camera gets uf = -1e9, off every
 /// image. Branch-free so that it vectorises; AVX2 and baseline x86-64 clones (no FMA in
 /// either, so every operation rounds as in the scalar code).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
@@ -73,7 +73,7 @@ void forwardWarpPinholeNearest(const cv::Mat& depth_m, const std::vector<double>
     m.z = depth_m.ptr<float>(v);
     m.ray_y = ray_y[static_cast<size_t>(v)];
     moveRow(m, uf.data(), vf.data(), zt.data());
-    // Each point on its nearest pixel, in the generic warp's order: the nearest surface wins.
+    // Each point on its nearest pixel in row-major order: the nearest surface wins.
     for (int u = 0; u < m.w; ++u) {
       const long ut = std::lround(uf[static_cast<size_t>(u)]);
       const long vr = std::lround(vf[static_cast<size_t>(u)]);

@@ -1,6 +1,7 @@
 #pragma once
-// Forward warping of a depth map into another (or the same) pinhole camera: the one
-// implementation behind warpDepth (time alignment) and DepthRegistration. Internal header.
+// Forward warping of a depth map into another (or the same) pinhole camera: the nearest-pixel
+// warp of warpDepth (time alignment) and the footprint warp of DepthRegistration, sharing the
+// crack closing. Internal header.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -13,14 +14,12 @@
 
 namespace pplvo::depth_filter::detail {
 
-/// How source points land in the target image.
+/// How source points land in the target image of forwardWarp.
 struct ForwardWarpOptions {
-  /// Cover every target pixel whose centre lies in the source pixel's footprint (its angular
-  /// size seen from the target at the point's depth, fronto-parallel) instead of the nearest
-  /// pixel: a lower-resolution source leaves no sieve of holes, and a higher-resolution one
-  /// gives each target pixel one point per surface.
-  bool splat = false;
-  /// |fx|, |fy| of the source (pixels per unit ray), for the footprint.
+  /// |fx|, |fy| of the source (pixels per unit ray), for the footprint: each point covers every
+  /// target pixel whose centre lies in its source pixel's angular size seen from the target at
+  /// the point's depth (fronto-parallel), so that a lower-resolution source leaves no sieve of
+  /// holes and a higher-resolution one gives each target pixel one point per surface.
   double source_fx = 1, source_fy = 1;
 };
 
@@ -58,19 +57,20 @@ inline void closeCracks(const cv::Mat& out, const cv::Mat* var_in, cv::Mat* out_
   if (out_var) *out_var = closed_var;
 }
 
-/// forwardWarp without splatting or variance for an undistorted pinhole source, whose ray
-/// through (u, v) is (ray_x[u], ray_y[v]) with ray_x[u] = (u - cx) / fx and ray_y[v] =
-/// (v - cy) / fy: the same output bit for bit (the same double arithmetic per point, in the
-/// same order), with the transform and projection of each row done in a vectorised pass.
+/// Moves every valid point of `depth_m` (CV_32FC1, 0 = none) of an undistorted pinhole source,
+/// whose ray through (u, v) is (ray_x[u], ray_y[v], 1), by `T_target_source` onto its nearest
+/// pixel of `target`, the nearest surface winning (ties: the first in row-major order), then
+/// closes cracks (closeCracks). Each row's transform and projection runs in a vectorised pass
+/// with the per-point double arithmetic p = R (x z, y z, z) + t, u = fx p_x / p_z + cx.
 void forwardWarpPinholeNearest(const cv::Mat& depth_m, const std::vector<double>& ray_x,
                                const std::vector<double>& ray_y, const PinholeCamera& target,
                                const Pose3& T_target_source, cv::Mat* out_depth);
 
 /// Moves every valid point of `depth_m` (CV_32FC1, 0 = none; point = z * (ray_x, ray_y, 1) with
 /// `ray(u, v, &x, &y)` the source pixel's ray) by `T_target_source` into `target`'s pixel grid
-/// (undistorted pinhole). The nearest surface wins where several land on one pixel (with
-/// options.splat, two passes: the nearest surface over each point's footprint, then each pixel
-/// takes the point of that surface whose footprint holds its centre, if any). Then
+/// (undistorted pinhole), each over its footprint (options) in two passes: the nearest surface
+/// over each point's footprint, then each pixel takes the point of that surface whose
+/// footprint holds its centre, if any. Then
 /// one-pixel cracks of a stretched surface are closed (both neighbours on a line present and
 /// within 1 % of each other; a depth step is left open). With `var_m2` (CV_32FC1 of the
 /// source's size) the variance travels with its depth, scaled by (dz_t/dz_s)^2 = (R ray)_z^2
@@ -124,63 +124,47 @@ void forwardWarp(const cv::Mat& depth_m, const cv::Mat* var_m2, RayFn ray,
     }
   };
   Landed pt;
-  if (!options.splat) {
-    // Each point on its nearest pixel, the nearest surface winning.
-    for (int v = 0; v < depth_m.rows; ++v) {
-      for (int u = 0; u < depth_m.cols; ++u) {
-        if (!moved(u, v, &pt)) continue;
-        const long ut = std::lround(pt.px.x()), vr = std::lround(pt.px.y());
-        if (ut < 0 || vr < 0 || ut >= w || vr >= h) continue;
-        float& d = out.at<float>(static_cast<int>(vr), static_cast<int>(ut));
+  // Pass 1, occlusion: every point covers its footprint, at least its nearest pixel; the
+  // nearest surface's depth per pixel.
+  for (int v = 0; v < depth_m.rows; ++v) {
+    for (int u = 0; u < depth_m.cols; ++u) {
+      if (!moved(u, v, &pt)) continue;
+      forCentres(pt.px, std::max(pt.su, 1.0), std::max(pt.sv, 1.0), [&](int ut, int vr) {
+        float& d = out.at<float>(vr, ut);
         if (pt.z < d) {
           d = pt.z;
-          if (var_m2) var.at<float>(static_cast<int>(vr), static_cast<int>(ut)) = pt.var;
+          if (var_m2) var.at<float>(vr, ut) = pt.var;
         }
-      }
+      });
     }
-  } else {
-    // Pass 1, occlusion: every point covers its footprint, at least its nearest pixel; the
-    // nearest surface's depth per pixel.
-    for (int v = 0; v < depth_m.rows; ++v) {
-      for (int u = 0; u < depth_m.cols; ++u) {
-        if (!moved(u, v, &pt)) continue;
-        forCentres(pt.px, std::max(pt.su, 1.0), std::max(pt.sv, 1.0), [&](int ut, int vr) {
-          float& d = out.at<float>(vr, ut);
-          if (pt.z < d) {
-            d = pt.z;
-            if (var_m2) var.at<float>(vr, ut) = pt.var;
-          }
-        });
-      }
+  }
+  // Pass 2, value: a pixel whose centre lies in the footprint of a point of that nearest
+  // surface (within 1 %) takes that point (the nearest of them), not the nearest of all the
+  // surface's points that rounded to it: a surface sampled more densely than the target
+  // grid would otherwise come out biased towards the camera (the minimum of several noisy
+  // samples). Pixels no footprint centre-covers keep pass 1's depth.
+  cv::Mat value(h, w, CV_32FC1, cv::Scalar(kInf));
+  cv::Mat value_var;
+  if (var_m2) value_var = cv::Mat(h, w, CV_32FC1, cv::Scalar(0.0f));
+  for (int v = 0; v < depth_m.rows; ++v) {
+    for (int u = 0; u < depth_m.cols; ++u) {
+      if (!moved(u, v, &pt)) continue;
+      if (pt.su >= 1.0 && pt.sv >= 1.0) continue;  // pass 1 already wrote its footprint
+      forCentres(pt.px, pt.su, pt.sv, [&](int ut, int vr) {
+        if (pt.z > out.at<float>(vr, ut) * 1.01f) return;  // behind the nearest surface
+        float& d = value.at<float>(vr, ut);
+        if (pt.z < d) {
+          d = pt.z;
+          if (var_m2) value_var.at<float>(vr, ut) = pt.var;
+        }
+      });
     }
-    // Pass 2, value: a pixel whose centre lies in the footprint of a point of that nearest
-    // surface (within 1 %) takes that point (the nearest of them), not the nearest of all the
-    // surface's points that rounded to it: a surface sampled more densely than the target
-    // grid would otherwise come out biased towards the camera (the minimum of several noisy
-    // samples). Pixels no footprint centre-covers keep pass 1's depth.
-    cv::Mat value(h, w, CV_32FC1, cv::Scalar(kInf));
-    cv::Mat value_var;
-    if (var_m2) value_var = cv::Mat(h, w, CV_32FC1, cv::Scalar(0.0f));
-    for (int v = 0; v < depth_m.rows; ++v) {
-      for (int u = 0; u < depth_m.cols; ++u) {
-        if (!moved(u, v, &pt)) continue;
-        if (pt.su >= 1.0 && pt.sv >= 1.0) continue;  // pass 1 already wrote its footprint
-        forCentres(pt.px, pt.su, pt.sv, [&](int ut, int vr) {
-          if (pt.z > out.at<float>(vr, ut) * 1.01f) return;  // behind the nearest surface
-          float& d = value.at<float>(vr, ut);
-          if (pt.z < d) {
-            d = pt.z;
-            if (var_m2) value_var.at<float>(vr, ut) = pt.var;
-          }
-        });
-      }
-    }
-    for (int v = 0; v < h; ++v) {
-      for (int u = 0; u < w; ++u) {
-        if (!std::isfinite(value.at<float>(v, u))) continue;
-        out.at<float>(v, u) = value.at<float>(v, u);
-        if (var_m2) var.at<float>(v, u) = value_var.at<float>(v, u);
-      }
+  }
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      if (!std::isfinite(value.at<float>(v, u))) continue;
+      out.at<float>(v, u) = value.at<float>(v, u);
+      if (var_m2) var.at<float>(v, u) = value_var.at<float>(v, u);
     }
   }
   closeCracks(out, var_m2 ? &var : nullptr, out_depth, out_var);

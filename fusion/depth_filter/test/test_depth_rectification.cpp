@@ -6,21 +6,10 @@
 #include <cstdio>
 
 #include "pplvo/depth_filter/depth_rectification.h"
+#include "pplvo/fixtures/cameras.h"
 
 namespace pplvo::depth_filter {
 namespace {
-
-PinholeCamera fr1Camera() {  // TUM fr1's colour camera (calib_params.xml of tum_fr1_xyz_short)
-  PinholeCamera c;
-  c.width = 640;
-  c.height = 480;
-  c.fx = 517.3;
-  c.fy = 516.5;
-  c.cx = 318.6;
-  c.cy = 255.3;
-  c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
-  return c;
-}
 
 // Depth a distorted camera measures of the plane n.X = d: each raw pixel's ray is its
 // undistorted pixel's pinhole ray.
@@ -54,7 +43,7 @@ double rmsPlaneDistance(const PinholeCamera& c, const cv::Mat& depth, const Eige
 }
 
 TEST(DepthRectifier, WithoutDistortionReturnsTheInputItself) {
-  PinholeCamera c = fr1Camera();
+  PinholeCamera c = fixtures::tumFr1Camera();
   c.distortion = {0, 0, 0, 0, 0};
   const cv::Mat depth(c.height, c.width, CV_32FC1, cv::Scalar(1.5f));
   DepthRectifier r;
@@ -64,14 +53,14 @@ TEST(DepthRectifier, WithoutDistortionReturnsTheInputItself) {
 }
 
 TEST(DepthRectifier, EachPixelReadsTheRawPixelTheLensMapsItTo) {
-  const PinholeCamera c = fr1Camera();
+  const PinholeCamera c = fixtures::tumFr1Camera();
   cv::Mat index(c.height, c.width, CV_32FC1);
   for (int v = 0; v < c.height; ++v)
     for (int u = 0; u < c.width; ++u) index.at<float>(v, u) = float(v * c.width + u + 1);
   DepthRectifier r;
   const cv::Mat out = r.apply(c, index);
   int outside = 0;
-  for (const Eigen::Vector2i p : {Eigen::Vector2i(319, 255), Eigen::Vector2i(100, 80),
+  for (const Eigen::Vector2i& p : {Eigen::Vector2i(319, 255), Eigen::Vector2i(100, 80),
                                   Eigen::Vector2i(600, 400), Eigen::Vector2i(0, 0),
                                   Eigen::Vector2i(639, 479), Eigen::Vector2i(320, 5)}) {
     const Eigen::Vector2d raw = c.distortPixel(p.cast<double>());
@@ -91,7 +80,7 @@ TEST(DepthRectifier, EachPixelReadsTheRawPixelTheLensMapsItTo) {
 }
 
 TEST(DepthRectifier, PlaneSeenThroughTheLensBackProjectsOntoThePlane) {
-  const PinholeCamera c = fr1Camera();
+  const PinholeCamera c = fixtures::tumFr1Camera();
   const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();
   const double d = n.dot(Eigen::Vector3d(0, 0, 2.0));  // through (0, 0, 2 m)
   const cv::Mat raw = rawDepthOfPlane(c, n, d);
@@ -112,7 +101,7 @@ TEST(DepthRectifier, PlaneSeenThroughTheLensBackProjectsOntoThePlane) {
 }
 
 TEST(DepthRectifier, RejectsDepthOfAnotherSize) {
-  const PinholeCamera c = fr1Camera();
+  const PinholeCamera c = fixtures::tumFr1Camera();
   DepthRectifier r;
   EXPECT_THROW(r.apply(c, cv::Mat(10, 10, CV_32FC1, cv::Scalar(1.0f))), std::invalid_argument);
 }
