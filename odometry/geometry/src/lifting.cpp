@@ -5,6 +5,8 @@
 #include <limits>
 #include <random>
 
+#include "line_inliers.h"
+
 namespace pplvo::geometry {
 
 std::string validateDepth(const DepthWithVariance& depth, const PinholeCamera& camera) {
@@ -154,6 +156,8 @@ LineFitResult liftLine(const PinholeCamera& camera, const DepthWithVariance& dep
   std::vector<char> best, cur(n);
   int best_count = 0;
   const double thr2 = options.line_ransac_threshold_m * options.line_ransac_threshold_m;
+  detail::PointColumns columns;
+  columns.assign(P);
   for (int it = 0; it < options.line_ransac_iterations; ++it) {
     const int i = pick(rng);
     int j = pick(rng);
@@ -161,12 +165,7 @@ LineFitResult liftLine(const PinholeCamera& camera, const DepthWithVariance& dep
     const Eigen::Vector3d d = P[j] - P[i];
     const double dn2 = d.squaredNorm();
     if (!(dn2 > 1e-12)) continue;
-    int count = 0;
-    for (int q = 0; q < n; ++q) {
-      const double dist2 = (P[q] - P[i]).cross(d).squaredNorm() / dn2;
-      cur[q] = dist2 < thr2;
-      count += cur[q];
-    }
+    const int count = detail::markLineInliers(columns, P[i], d, dn2, thr2, cur.data());
     if (count > best_count) {
       best_count = count;
       best = cur;

@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include "../src/line_inliers.h"  // the RANSAC's vectorised distance test
+
 #include "pplvo/fixtures/box_room.h"
 #include "pplvo/geometry/lifting.h"
 
@@ -201,6 +205,45 @@ TEST(LiftLines, NoDepthAndNanEndpoints) {
   EXPECT_EQ(st.lines_lifted, 0);
   EXPECT_EQ(st.lines_too_few_samples, 2);
   EXPECT_FALSE(liftLines(f, DepthWithVariance{}).error.empty());
+}
+
+// The vectorised inlier test marks exactly what the Eigen expression it replaced marks, also
+// for distances within rounding of the threshold, which a reordered formula would flip.
+TEST(LineInliers, VectorisedTestMarksBitForBitWhatTheEigenExpressionMarks) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> coord(-3.0, 3.0), depth(0.3, 6.0);
+  std::normal_distribution<double> off(0.0, 0.02);
+  int boundary_cases = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int n = 1 + static_cast<int>(rng() % 130);  // odd and even, shorter than a vector
+    const Eigen::Vector3d a(coord(rng), coord(rng), depth(rng));
+    const Eigen::Vector3d d = Eigen::Vector3d(coord(rng), coord(rng), coord(rng)) * 0.1;
+    std::vector<Eigen::Vector3d> P(static_cast<size_t>(n));
+    for (int q = 0; q < n; ++q) {
+      const double t = coord(rng);
+      P[static_cast<size_t>(q)] = a + t * d + Eigen::Vector3d(off(rng), off(rng), off(rng));
+    }
+    const double dn2 = d.squaredNorm();
+    // Half the trials put the threshold exactly on one point's distance: strict < must hold.
+    double thr2 = 0.02 * 0.02;
+    if (trial % 2 == 1) {
+      thr2 = (P[static_cast<size_t>(rng() % n)] - a).cross(d).squaredNorm() / dn2;
+      ++boundary_cases;
+    }
+    detail::PointColumns columns;
+    columns.assign(P);
+    std::vector<char> marks(static_cast<size_t>(n), 7);
+    const int count = detail::markLineInliers(columns, a, d, dn2, thr2, marks.data());
+    int expected_count = 0;
+    for (int q = 0; q < n; ++q) {
+      const double dist2 = (P[static_cast<size_t>(q)] - a).cross(d).squaredNorm() / dn2;
+      const char expected = dist2 < thr2;
+      expected_count += expected;
+      ASSERT_EQ(marks[static_cast<size_t>(q)], expected) << "trial " << trial << " point " << q;
+    }
+    EXPECT_EQ(count, expected_count);
+  }
+  EXPECT_EQ(boundary_cases, 100);
 }
 
 }  // namespace
