@@ -19,9 +19,10 @@ namespace {
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-int markRows(const double* __restrict px, const double* __restrict py, const double* __restrict pz,
-             int n, double ax, double ay, double az, double dx, double dy, double dz, double dn2,
-             double thr2, char* __restrict inlier) {
+int markWithinDistance(const double* __restrict px, const double* __restrict py,
+                       const double* __restrict pz, int n, double ax, double ay, double az,
+                       double dx, double dy, double dz, double dn2, double thr2,
+                       char* __restrict inlier) {
   int count = 0;
   for (int q = 0; q < n; ++q) {
     const double ex = px[q] - ax, ey = py[q] - ay, ez = pz[q] - az;
@@ -41,8 +42,8 @@ int markRows(const double* __restrict px, const double* __restrict py, const dou
 
 int markLineInliers(const PointColumns& points, const Eigen::Vector3d& a, const Eigen::Vector3d& d,
                     double dn2, double thr2, char* inlier) {
-  return markRows(points.x.data(), points.y.data(), points.z.data(), points.size(), a.x(), a.y(),
-                  a.z(), d.x(), d.y(), d.z(), dn2, thr2, inlier);
+  return markWithinDistance(points.x.data(), points.y.data(), points.z.data(), points.size(), a.x(),
+                            a.y(), a.z(), d.x(), d.y(), d.z(), dn2, thr2, inlier);
 }
 
 }  // namespace pplvo::geometry::detail

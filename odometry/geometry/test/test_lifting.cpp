@@ -3,7 +3,6 @@
 #include <random>
 
 #include "../src/line_inliers.h"  // the RANSAC's vectorised distance test
-
 #include "pplvo/fixtures/box_room.h"
 #include "pplvo/geometry/lifting.h"
 
