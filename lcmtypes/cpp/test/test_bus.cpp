@@ -269,6 +269,88 @@ TEST(Bus, CorruptPacketsAreCountedSkipsAndTheNextMessageIsHandled) {
       << r.counters.last_warning;
 }
 
+/// Records what each status message held when its handler ran.
+struct StatusLog {
+  std::vector<std::vector<std::string>> stage_names;
+  std::vector<std::string> nodes;
+  NodeCounters counters;
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::node_status_t* m) {
+    std::vector<std::string> names;
+    for (const auto& s : m->stages) names.push_back(s.name);
+    stage_names.push_back(names);
+    nodes.push_back(m->node);
+  }
+};
+
+pplvo_msgs::node_status_t statusWithStages(const std::string& node, int n_stages) {
+  StageTimings timings;
+  for (int i = 0; i < n_stages; ++i) timings.add("stage" + std::to_string(i), 1.0);
+  return toStatusMsg(node, NodeCounters{}, timings, 1);
+}
+
+TEST(Bus, EveryMessageIsDecodedWhole) {
+  // The decoder keeps one message between packets (its buffers are reused): a shorter message
+  // after a longer one must not keep the longer one's tail, a failed decode must not leak.
+  lcm::LCM lcm("memq://");
+  Bus bus(lcm);
+  StatusLog log;
+  bus.subscribe("A", &StatusLog::onStatus, &log, log.counters, "test");
+  const std::vector<int> sizes = {3, 1, 0, 5, 2};
+  for (size_t i = 0; i < sizes.size(); ++i) {
+    const auto m = statusWithStages("node" + std::to_string(i), sizes[i]);
+    bus.publish("A", &m);
+    if (i == 2) lcm.publish("A", "garbage", 7);  // fails to decode between two good ones
+  }
+  drain(bus);
+  ASSERT_EQ(log.nodes.size(), sizes.size());
+  for (size_t i = 0; i < sizes.size(); ++i) {
+    EXPECT_EQ(log.nodes[i], "node" + std::to_string(i));
+    ASSERT_EQ(log.stage_names[i].size(), static_cast<size_t>(sizes[i]));
+    for (int k = 0; k < sizes[i]; ++k) EXPECT_EQ(log.stage_names[i][k], "stage" + std::to_string(k));
+  }
+  EXPECT_EQ(log.counters.frames_skipped, 1);
+}
+
+/// A handler that, while handling its first message, has the same decoder handle a second one
+/// (as a handler that handles its bus would): the first message must stay intact.
+struct Nesting {
+  detail::TypedAdapter<pplvo_msgs::node_status_t, Nesting>* adapter = nullptr;
+  const lcm::ReceiveBuffer* inner = nullptr;
+  std::vector<std::string> seen;
+  NodeCounters counters;
+  void onStatus(const lcm::ReceiveBuffer*, const std::string& channel,
+                const pplvo_msgs::node_status_t* m) {
+    const std::string before = m->node;
+    if (inner) {
+      const lcm::ReceiveBuffer* nested = inner;
+      inner = nullptr;
+      adapter->onRaw(nested, channel);
+    }
+    seen.push_back(before == m->node ? m->node : "changed under the handler");
+  }
+};
+
+TEST(Bus, ANestedMessageDoesNotOverwriteTheOneBeingHandled) {
+  Nesting h;
+  detail::TypedAdapter<pplvo_msgs::node_status_t, Nesting> adapter(&Nesting::onStatus, &h,
+                                                                   h.counters, "test");
+  h.adapter = &adapter;
+  auto encode = [](const pplvo_msgs::node_status_t& m) {
+    std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+    m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    return bytes;
+  };
+  std::vector<uint8_t> outer_bytes = encode(statusWithStages("outer", 2));
+  std::vector<uint8_t> inner_bytes = encode(statusWithStages("inner", 4));
+  lcm::ReceiveBuffer outer{outer_bytes.data(), static_cast<uint32_t>(outer_bytes.size()), 0};
+  lcm::ReceiveBuffer inner{inner_bytes.data(), static_cast<uint32_t>(inner_bytes.size()), 0};
+  h.inner = &inner;
+  adapter.onRaw(&outer, "A");
+  adapter.onRaw(&outer, "A");  // the kept message is free again
+  EXPECT_EQ(h.seen, (std::vector<std::string>{"inner", "outer", "outer"}));
+  EXPECT_EQ(h.counters.errors, 0);
+}
+
 TEST(Bus, AnExceptionLeavingAHandlerIsCountedAndLcmKeepsHandling) {
   // In LCM 1.3.1 an exception through lcm_handle leaves its mutex locked: the next handle()
   // would hang. The bus's decoder catches it; a second message proves handle() still works.
