@@ -12,7 +12,6 @@
 /// runner keep a single memq:// instance.
 #include <poll.h>
 
-#include <atomic>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
@@ -53,20 +52,13 @@ class TypedAdapter : public SubscriptionAdapter {
 
   void onRaw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) noexcept {
     try {
-      // Decoded into the message kept from the previous packet: lcm-gen's decoder overwrites
-      // every field and resizes its vectors, so a payload of the same size (a frame, a depth
-      // map: megabytes) is neither allocated, page-faulted nor zero-filled again. A nested or
-      // concurrent call (a handler that handles its bus) decodes into a message of its own.
-      if (reused_in_use_.exchange(true)) {
-        MessageT msg;
-        dispatch(rbuf, channel, &msg);
+      MessageT msg;
+      const std::string error = decodeMessage(rbuf->data, rbuf->data_size, &msg);
+      if (!error.empty()) {
+        countUndecodable(counters_, node_, channel, error);
         return;
       }
-      struct Release {
-        std::atomic<bool>& flag;
-        ~Release() { flag.store(false); }
-      } release{reused_in_use_};
-      dispatch(rbuf, channel, &reused_);
+      (handler_->*method_)(rbuf, channel, &msg);
     } catch (const std::exception& e) {
       countEscaped(counters_, node_, e.what());
     } catch (...) {
@@ -75,21 +67,10 @@ class TypedAdapter : public SubscriptionAdapter {
   }
 
  private:
-  void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, MessageT* msg) {
-    const std::string error = decodeMessage(rbuf->data, rbuf->data_size, msg);
-    if (!error.empty()) {
-      countUndecodable(counters_, node_, channel, error);
-      return;
-    }
-    (handler_->*method_)(rbuf, channel, msg);
-  }
-
   Method method_;
   Handler* handler_;
   NodeCounters& counters_;
   std::string node_;
-  MessageT reused_;
-  std::atomic<bool> reused_in_use_{false};
 };
 
 }  // namespace detail
