@@ -44,6 +44,12 @@ void DepthFilterNode::poll() {
 
 void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
                                    const DepthWithVariance& d, int8_t stage, int8_t reference) {
+  if (!options_.compress) {
+    // Straight into the packet: 2 x 1.2 MB a map (VGA) copied once, not twice.
+    encodeDepthPacket(d, p.camera, p.utime, p.seq, p.stamp, stage, reference, &wire_);
+    bus_.publish(channel, wire_.data(), static_cast<unsigned>(wire_.size()));
+    return;
+  }
   pplvo_msgs::depth_map_t m =
       depthToMsg(d, p.camera, p.utime, p.seq, p.stamp, stage, options_.compress);
   m.reference = reference;

@@ -125,6 +125,20 @@ TEST(DepthFilterConvert, PoseWindowAndDepthRoundTrip) {
     EXPECT_EQ(cv::norm(e.var_m2, d.var_m2, cv::NORM_INF), 0.0);
     EXPECT_EQ(e.window_length, 4);
   }
+  // The packet the node publishes uncompressed: the same map and fields, the pose's reference.
+  std::vector<uint8_t> packet;
+  encodeDepthPacket(d, cam, 1, 2, "s", pplvo_msgs::depth_map_t::STAGE_OGM, 2, &packet);
+  pplvo_msgs::depth_map_t m;
+  ASSERT_EQ(m.decode(packet.data(), 0, static_cast<int>(packet.size())),
+            static_cast<int>(packet.size()));
+  EXPECT_EQ(m.seq, 2);
+  EXPECT_EQ(m.stamp, "s");
+  EXPECT_EQ(m.reference, 2);
+  EXPECT_EQ(m.depth.encoding, pplvo_msgs::image_t::ENCODING_RAW_F32);
+  const DepthWithVariance e = depthFromMsg(m);
+  EXPECT_EQ(cv::norm(e.depth_m, d.depth_m, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(e.var_m2, d.var_m2, cv::NORM_INF), 0.0);
+  EXPECT_EQ(e.window_length, 4);
 }
 
 TEST(DepthFilterNode, MemqFramesAndPosesGiveCgmAndFusedMaps) {

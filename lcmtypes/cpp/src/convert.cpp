@@ -443,6 +443,79 @@ pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& d, const PinholeCamera& c
 }
 
 namespace {
+
+/// Appends a big-endian int32, as LCM encodes one.
+uint8_t* putInt32(uint8_t* out, int32_t value) {
+  const auto v = static_cast<uint32_t>(value);
+  for (int i = 0; i < 4; ++i) out[i] = static_cast<uint8_t>(v >> (24 - 8 * i));
+  return out + 4;
+}
+
+/// Appends the rows of a CV_32FC1 plane as ENCODING_RAW_F32 data (host byte order: little-endian
+/// on every platform pplvo builds for, as encodeImage()).
+uint8_t* putPlane(uint8_t* out, const cv::Mat& plane) {
+  const size_t row_bytes = static_cast<size_t>(plane.cols) * sizeof(float);
+  for (int v = 0; v < plane.rows; ++v) {
+    std::memcpy(out, plane.ptr(v), row_bytes);
+    out += row_bytes;
+  }
+  return out;
+}
+
+}  // namespace
+
+void encodeRawDepthMap(const DepthWithVariance& d, const PinholeCamera& camera, int64_t utime,
+                       int64_t seq, const std::string& stamp, int8_t stage, int8_t reference,
+                       std::vector<uint8_t>* wire) {
+  if (d.depth_m.type() != CV_32FC1 || d.var_m2.type() != CV_32FC1) {
+    throw MessageError("cannot encode depth map planes of types " +
+                       std::to_string(d.depth_m.type()) + " and " +
+                       std::to_string(d.var_m2.type()) + " as raw_f32");
+  }
+  if (d.depth_m.size() != d.var_m2.size()) {
+    throw MessageError("depth and variance planes of different sizes");
+  }
+  const int64_t plane_bytes = static_cast<int64_t>(d.depth_m.total()) * 4;
+  if (plane_bytes > (int64_t{1} << 30)) throw MessageError("depth map too large for a message");
+  // The message without its two payloads, encoded by lcm-gen: everything but the data bytes.
+  // Its tail is depth.size, variance {width, height, encoding, size} and reference: the
+  // payloads go after the first and second size fields (image_t: width, height, encoding,
+  // size, data[size]; the test compares the result with lcm-gen's encoding byte for byte).
+  pplvo_msgs::depth_map_t shell;
+  shell.utime = utime;
+  shell.seq = seq;
+  shell.stamp = stamp;
+  shell.stage = stage;
+  shell.camera = toMsg(camera);
+  shell.window_length = d.window_length;
+  shell.reference = reference;
+  for (Img* img : {&shell.depth, &shell.variance}) {
+    img->width = d.depth_m.cols;
+    img->height = d.depth_m.rows;
+    img->encoding = Img::ENCODING_RAW_F32;
+    img->size = 0;
+  }
+  const int shell_size = shell.getEncodedSize();
+  thread_local std::vector<uint8_t> head;
+  head.resize(static_cast<size_t>(shell_size));
+  if (shell.encode(head.data(), 0, shell_size) != shell_size) {
+    throw MessageError("depth_map_t encoding failed");
+  }
+  constexpr int kTail = 4 + 13 + 1;  // depth.size, variance header, reference
+  const uint8_t* tail = head.data() + shell_size - kTail;
+  wire->resize(static_cast<size_t>(shell_size + 2 * plane_bytes));
+  uint8_t* out = wire->data();
+  std::memcpy(out, head.data(), static_cast<size_t>(shell_size - kTail));
+  out += shell_size - kTail;
+  out = putInt32(out, static_cast<int32_t>(plane_bytes));
+  out = putPlane(out, d.depth_m);
+  std::memcpy(out, tail + 4, 9);  // variance width, height, encoding
+  out = putInt32(out + 9, static_cast<int32_t>(plane_bytes));
+  out = putPlane(out, d.var_m2);
+  *out = static_cast<uint8_t>(tail[kTail - 1]);
+}
+
+namespace {
 DepthWithVariance decodeDepthMap(const pplvo_msgs::depth_map_t& m, bool view_raw) {
   DepthWithVariance d;
   d.window_length = m.window_length;

@@ -315,6 +315,51 @@ TEST(Convert, DepthMapViewSharesRawPayloadsAndDecodesCompressedOnes) {
   EXPECT_THROW(viewOfMsg(bad), MessageError);
 }
 
+TEST(Convert, RawDepthMapWireBytesAreLcmGensEncoding) {
+  // encodeRawDepthMap writes the planes straight into the packet; the bytes must be those of
+  // the message toMsg() builds, encoded by lcm-gen, for any stamp, size, ROI and field values.
+  struct Case {
+    int rows, cols;
+    std::string stamp;
+    int8_t stage, reference;
+    int window;
+    bool roi;
+  };
+  const std::vector<Case> cases = {
+      {48, 64, "1305031102.175304", pplvo_msgs::depth_map_t::STAGE_OGM, 2, 10, false},
+      {1, 1, "", pplvo_msgs::depth_map_t::STAGE_CGM, 0, 1, false},
+      {7, 13, std::string(300, 's'), pplvo_msgs::depth_map_t::STAGE_SENSOR, -1, 3, true}};
+  std::vector<uint8_t> wire = {1, 2, 3};  // reused: any previous content is replaced
+  for (const Case& c : cases) {
+    DepthWithVariance d;
+    cv::Mat depth(c.rows + 4, c.cols + 6, CV_32FC1);
+    cv::randu(depth, 0.5f, 4.0f);
+    d.depth_m = c.roi ? depth(cv::Rect(3, 2, c.cols, c.rows)) : depth(cv::Rect(0, 0, c.cols, c.rows)).clone();
+    d.var_m2 = d.depth_m.mul(d.depth_m) * 1e-4;
+    d.window_length = c.window;
+    if (c.roi) {
+      ASSERT_FALSE(d.depth_m.isContinuous());  // rows are copied one by one
+    }
+    PinholeCamera cam = vga();
+    cam.width = c.cols;
+    cam.height = c.rows;
+    auto m = toMsg(d, cam, 5, 3, c.stamp, c.stage, false);
+    m.reference = c.reference;
+    std::vector<uint8_t> expected(static_cast<size_t>(m.getEncodedSize()));
+    ASSERT_EQ(m.encode(expected.data(), 0, static_cast<int>(expected.size())),
+              static_cast<int>(expected.size()));
+    encodeRawDepthMap(d, cam, 5, 3, c.stamp, c.stage, c.reference, &wire);
+    EXPECT_EQ(wire, expected) << c.rows << "x" << c.cols << " stamp of " << c.stamp.size();
+  }
+  DepthWithVariance wrong;  // no planes (as toMsg), a double plane, planes of two sizes
+  EXPECT_THROW(encodeRawDepthMap(wrong, vga(), 0, 0, "", 0, 0, &wire), MessageError);
+  wrong.depth_m = cv::Mat(4, 4, CV_32FC1, cv::Scalar(1));
+  wrong.var_m2 = cv::Mat(4, 4, CV_64FC1, cv::Scalar(1));
+  EXPECT_THROW(encodeRawDepthMap(wrong, vga(), 0, 0, "", 0, 0, &wire), MessageError);
+  wrong.var_m2 = cv::Mat(4, 5, CV_32FC1, cv::Scalar(1));
+  EXPECT_THROW(encodeRawDepthMap(wrong, vga(), 0, 0, "", 0, 0, &wire), MessageError);
+}
+
 TEST(Convert, StatusCarriesStages) {
   NodeCounters c;
   c.frames_in = 3;

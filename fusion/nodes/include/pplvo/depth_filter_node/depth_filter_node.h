@@ -133,6 +133,7 @@ class DepthFilterNode {
   depth_filter::MeasurementStages measurement_;  ///< stages 0-2
   depth_filter::OgmFusion ogm_;
   depth_filter::OgmResult fused_;  ///< reused output buffers of the fusion
+  std::vector<uint8_t> wire_;      ///< reused packet of an uncompressed depth map
   std::deque<Pending> pending_;
   std::deque<Deferred> deferred_;
   int64_t alignment_waits_timed_out_ = 0;

@@ -68,6 +68,14 @@ pplvo_msgs::rgbd_frame_t toMsg(const RgbdFrame& frame, double depth_scale, int8_
 pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& depth, const PinholeCamera& camera,
                               int64_t utime, int64_t seq, const std::string& stamp, int8_t stage,
                               bool compress = false);
+/// The bytes lcm-gen's encode() gives for toMsg(depth, camera, utime, seq, stamp, stage,
+/// false) with `reference` set, written straight from the two float planes into `wire`
+/// (resized; keep it between calls): each plane is copied once instead of twice (into the
+/// message's vectors, then by LCM's encode). For Bus::publish(channel, data, size). Throws
+/// MessageError where toMsg() does (planes not CV_32FC1, sizes that disagree).
+void encodeRawDepthMap(const DepthWithVariance& depth, const PinholeCamera& camera, int64_t utime,
+                       int64_t seq, const std::string& stamp, int8_t stage, int8_t reference,
+                       std::vector<uint8_t>* wire);
 DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& msg);
 /// fromMsg() with decodeImageView(): raw maps point into `msg` (valid while it lives; for a
 /// handler that uses the map before it returns).
