@@ -97,6 +97,49 @@ bool OgmFusion::contains(int64_t seq) const {
   return false;
 }
 
+namespace {
+
+/// One row of addFrame: depth and range weight 1 / sigma_r^2 (eq. 6) of the valid points (0
+/// elsewhere), the row's depth range (both 0 without a point) and the count of invalid
+/// non-zero samples. Compiled for AVX2 and for baseline x86-64, chosen at load time; the same
+/// float operations either way, so the stored window is bit for bit the same.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+int32_t storeRow(const float* __restrict zi, const float* __restrict vi,
+                 const float* __restrict cs, int w, float* __restrict zo, float* __restrict wo,
+                 float* zmin, float* zmax) {
+  int32_t bad = 0;
+  for (int u = 0; u < w; ++u) {  // branch-free: vectorised
+    const float z = zi[u], var = vi[u];
+    // Float selects, not && (which GCC 12 keeps as branches); NaN fails every comparison.
+    float okf = z > 0.f ? 1.f : 0.f;
+    okf = z < 1e30f ? okf : 0.f;
+    okf = var > 0.f ? okf : 0.f;
+    okf = var < 1e30f ? okf : 0.f;
+    const bool ok = okf > 0.5f;
+    bad += static_cast<int32_t>(z != 0.f ? 1.f - okf : 0.f);
+    const float var_safe = ok ? var : 1.f;
+    zo[u] = ok ? z : 0.f;
+    wo[u] = ok ? (cs[u] * cs[u]) / var_safe : 0.f;
+  }
+  // Depth range of the stored points (0 = none) as integers: positive floats order like
+  // their bits.
+  int32_t zmin_bits = std::numeric_limits<int32_t>::max(), zmax_bits = 0;
+  for (int u = 0; u < w; ++u) {
+    int32_t bits;
+    std::memcpy(&bits, &zo[u], sizeof bits);
+    zmin_bits = std::min(zmin_bits, bits > 0 ? bits : std::numeric_limits<int32_t>::max());
+    zmax_bits = std::max(zmax_bits, bits);
+  }
+  if (zmax_bits == 0) zmin_bits = 0;  // no point: both 0
+  std::memcpy(zmin, &zmin_bits, sizeof zmin_bits);
+  std::memcpy(zmax, &zmax_bits, sizeof zmax_bits);
+  return bad;
+}
+
+}  // namespace
+
 bool OgmFusion::addFrame(int64_t seq, const PinholeCamera& camera, const DepthWithVariance& cgm) {
   if (!camera.valid() || cgm.depth_m.type() != CV_32FC1 || cgm.var_m2.type() != CV_32FC1 ||
       cgm.depth_m.rows != camera.height || cgm.depth_m.cols != camera.width ||
@@ -137,30 +180,10 @@ bool OgmFusion::addFrame(int64_t seq, const PinholeCamera& camera, const DepthWi
   const int w = camera.width, h = camera.height;
   int64_t bad = 0;
   for (int v = 0; v < h; ++v) {
-    const float* zi = cgm.depth_m.ptr<float>(v);
-    const float* vi = cgm.var_m2.ptr<float>(v);
-    float* zo = slot->depth_m.ptr<float>(v);
-    float* wo = slot->weight.ptr<float>(v);
-    const float* cs = &cos_[static_cast<size_t>(v) * w];
-    int32_t bad_row = 0;
-    // Depth range of the row's points as integers: positive floats order like their bits.
-    int32_t zmin_bits = std::numeric_limits<int32_t>::max(), zmax_bits = 0;
-    for (int u = 0; u < w; ++u) {  // branch-free (vectorised); NaN fails every comparison
-      const float z = zi[u], var = vi[u];
-      const bool ok = (z > 0.f) & (z < 1e30f) & (var > 0.f) & (var < 1e30f);
-      bad_row += static_cast<int32_t>(!ok & (z != 0.f));
-      const float var_safe = ok ? var : 1.f;
-      zo[u] = ok ? z : 0.f;
-      wo[u] = ok ? (cs[u] * cs[u]) / var_safe : 0.f;  // 1 / sigma_r^2, eq. (6)
-      int32_t bits;
-      std::memcpy(&bits, &z, sizeof bits);
-      zmin_bits = std::min(zmin_bits, ok ? bits : std::numeric_limits<int32_t>::max());
-      zmax_bits = std::max(zmax_bits, ok ? bits : 0);
-    }
-    bad += bad_row;
-    if (zmax_bits == 0) zmin_bits = 0;  // no point: both 0
-    std::memcpy(&slot->row_zmin[static_cast<size_t>(v)], &zmin_bits, sizeof zmin_bits);
-    std::memcpy(&slot->row_zmax[static_cast<size_t>(v)], &zmax_bits, sizeof zmax_bits);
+    bad += storeRow(cgm.depth_m.ptr<float>(v), cgm.var_m2.ptr<float>(v),
+                    &cos_[static_cast<size_t>(v) * w], w, slot->depth_m.ptr<float>(v),
+                    slot->weight.ptr<float>(v), &slot->row_zmin[static_cast<size_t>(v)],
+                    &slot->row_zmax[static_cast<size_t>(v)]);
   }
   stats_.invalid_pixels += bad;
   ++stats_.frames_added;
