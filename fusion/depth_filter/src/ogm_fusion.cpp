@@ -106,9 +106,9 @@ namespace {
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-int32_t storeRow(const float* __restrict zi, const float* __restrict vi,
-                 const float* __restrict cs, int w, float* __restrict zo, float* __restrict wo,
-                 float* zmin, float* zmax) {
+int32_t
+storeRow(const float* __restrict zi, const float* __restrict vi, const float* __restrict cs, int w,
+         float* __restrict zo, float* __restrict wo, float* zmin, float* zmax) {
   int32_t bad = 0;
   for (int u = 0; u < w; ++u) {  // branch-free: vectorised
     const float z = zi[u], var = vi[u];

@@ -334,7 +334,8 @@ TEST(Convert, RawDepthMapWireBytesAreLcmGensEncoding) {
     DepthWithVariance d;
     cv::Mat depth(c.rows + 4, c.cols + 6, CV_32FC1);
     cv::randu(depth, 0.5f, 4.0f);
-    d.depth_m = c.roi ? depth(cv::Rect(3, 2, c.cols, c.rows)) : depth(cv::Rect(0, 0, c.cols, c.rows)).clone();
+    d.depth_m = c.roi ? depth(cv::Rect(3, 2, c.cols, c.rows))
+                      : depth(cv::Rect(0, 0, c.cols, c.rows)).clone();
     d.var_m2 = d.depth_m.mul(d.depth_m) * 1e-4;
     d.window_length = c.window;
     if (c.roi) {
