@@ -425,9 +425,11 @@ std::optional<DepthCamera> depthCameraFromMsg(const pplvo_msgs::rgbd_frame_t& m)
   return d;
 }
 
-pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& d, const PinholeCamera& camera,
-                              int64_t utime, int64_t seq, const std::string& stamp, int8_t stage,
-                              bool compress) {
+namespace {
+/// The fields of a depth map message other than its two images and reference.
+pplvo_msgs::depth_map_t depthMapFields(const DepthWithVariance& d, const PinholeCamera& camera,
+                                       int64_t utime, int64_t seq, const std::string& stamp,
+                                       int8_t stage) {
   pplvo_msgs::depth_map_t m;
   m.utime = utime;
   m.seq = seq;
@@ -435,6 +437,14 @@ pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& d, const PinholeCamera& c
   m.stage = stage;
   m.camera = toMsg(camera);
   m.window_length = d.window_length;
+  return m;
+}
+}  // namespace
+
+pplvo_msgs::depth_map_t toMsg(const DepthWithVariance& d, const PinholeCamera& camera,
+                              int64_t utime, int64_t seq, const std::string& stamp, int8_t stage,
+                              bool compress) {
+  pplvo_msgs::depth_map_t m = depthMapFields(d, camera, utime, seq, stamp, stage);
   m.reference = 0;  // the depth filter passes the pose's on (pose_t.reference)
   const int8_t enc = compress ? Img::ENCODING_ZLIB_F32 : Img::ENCODING_RAW_F32;
   m.depth = encodeImage(d.depth_m, enc);
@@ -481,13 +491,7 @@ void encodeRawDepthMap(const DepthWithVariance& d, const PinholeCamera& camera, 
   // Its tail is depth.size, variance {width, height, encoding, size} and reference: the
   // payloads go after the first and second size fields (image_t: width, height, encoding,
   // size, data[size]; the test compares the result with lcm-gen's encoding byte for byte).
-  pplvo_msgs::depth_map_t shell;
-  shell.utime = utime;
-  shell.seq = seq;
-  shell.stamp = stamp;
-  shell.stage = stage;
-  shell.camera = toMsg(camera);
-  shell.window_length = d.window_length;
+  pplvo_msgs::depth_map_t shell = depthMapFields(d, camera, utime, seq, stamp, stage);
   shell.reference = reference;
   for (Img* img : {&shell.depth, &shell.variance}) {
     img->width = d.depth_m.cols;
@@ -495,24 +499,22 @@ void encodeRawDepthMap(const DepthWithVariance& d, const PinholeCamera& camera, 
     img->encoding = Img::ENCODING_RAW_F32;
     img->size = 0;
   }
+  // Encoded at the start of the packet; its tail is kept aside and written after the planes.
   const int shell_size = shell.getEncodedSize();
-  thread_local std::vector<uint8_t> head;
-  head.resize(static_cast<size_t>(shell_size));
-  if (shell.encode(head.data(), 0, shell_size) != shell_size) {
+  wire->resize(static_cast<size_t>(shell_size + 2 * plane_bytes));
+  if (shell.encode(wire->data(), 0, shell_size) != shell_size) {
     throw MessageError("depth_map_t encoding failed");
   }
   constexpr int kTail = 4 + 13 + 1;  // depth.size, variance header, reference
-  const uint8_t* tail = head.data() + shell_size - kTail;
-  wire->resize(static_cast<size_t>(shell_size + 2 * plane_bytes));
-  uint8_t* out = wire->data();
-  std::memcpy(out, head.data(), static_cast<size_t>(shell_size - kTail));
-  out += shell_size - kTail;
+  uint8_t tail[kTail];
+  std::memcpy(tail, wire->data() + shell_size - kTail, kTail);
+  uint8_t* out = wire->data() + shell_size - kTail;
   out = putInt32(out, static_cast<int32_t>(plane_bytes));
   out = putPlane(out, d.depth_m);
   std::memcpy(out, tail + 4, 9);  // variance width, height, encoding
   out = putInt32(out + 9, static_cast<int32_t>(plane_bytes));
   out = putPlane(out, d.var_m2);
-  *out = static_cast<uint8_t>(tail[kTail - 1]);
+  *out = tail[kTail - 1];
 }
 
 namespace {
