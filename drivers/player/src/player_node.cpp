@@ -356,7 +356,9 @@ void PlayerNode::drain() {
   for (int i = 0; i < 100000; ++i) {
     const int rc = bus_.handleTimeout(0);
     if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
-    if (rc <= 0) break;
+    if (rc < 0) break;
+    // In process, the workers' last results (the last frames' fusion and lifting) too.
+    if (rc == 0 && !(options_.in_process_idle && options_.in_process_idle())) break;
   }
 }
 
@@ -378,7 +380,8 @@ bool PlayerNode::waitForPose(int64_t seq) {
     while (last_pose_seq_ < seq && !msgs::shutdownRequested()) {
       const int rc = bus_.handleTimeout(0);
       if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
-      if (rc <= 0) break;
+      if (rc < 0) break;
+      if (rc == 0 && !(options_.in_process_idle && options_.in_process_idle())) break;
     }
     return last_pose_seq_ >= seq;
   }

@@ -25,6 +25,7 @@ DepthFilterNode::DepthFilterNode(const DepthFilterNodeOptions& options, msgs::Bu
 
 DepthFilterNode::~DepthFilterNode() {
   for (const msgs::BusSubscription& s : subscriptions_) bus_.unsubscribe(s);
+  if (fusion_.valid()) fusion_.wait();  // the worker uses this object's members
 }
 
 void DepthFilterNode::onFrame(const lcm::ReceiveBuffer*, const std::string&,
@@ -40,6 +41,20 @@ void DepthFilterNode::onPose(const lcm::ReceiveBuffer*, const std::string&,
 
 void DepthFilterNode::poll() {
   msgs::guarded(counters_, kName, [&] { releaseDeferred(); });
+  publishFusions(false);
+}
+
+bool DepthFilterNode::publishFusions(bool wait) {
+  bool published = false;
+  msgs::guarded(counters_, kName, [&] {
+    while (fusion_.valid() &&
+           (wait || fusion_.wait_for(std::chrono::seconds(0)) == std::future_status::ready)) {
+      finishFusion();
+      published = true;
+      wait = false;
+    }
+  });
+  return published;
 }
 
 void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
@@ -99,11 +114,11 @@ void DepthFilterNode::releaseDeferred() {
       const bool too_many = static_cast<int>(deferred_.size()) > options_.max_deferred;
       if (!too_many && now - d.since < max_wait) return;
       ++alignment_waits_timed_out_;
-      counters_.last_warning = "frame " + std::to_string(d.frame.seq) +
-                               ": depth moved with an older velocity (the pose of frame " +
-                               std::to_string(d.frame.seq -
-                                              depth_filter::DepthTimeAligner::kPoseLag) +
-                               " did not come in time)";
+      counters_.last_warning =
+          "frame " + std::to_string(d.frame.seq) +
+          ": depth moved with an older velocity (the pose of frame " +
+          std::to_string(d.frame.seq - depth_filter::DepthTimeAligner::kPoseLag) +
+          " did not come in time)";
     }
     const RgbdFrame frame = std::move(deferred_.front().frame);
     deferred_.pop_front();
@@ -157,7 +172,9 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
   try {
     pose = msgs::fromMsg(msg);  // NaN / invalid rotation / bad window arrays: MessageError
   } catch (const msgs::MessageError&) {
-    // Downstream still gets the frame's own stage-1/2 map; guarded() counts the skip.
+    // Downstream still gets the frame's own stage-1/2 map, after the fusions of the frames
+    // before it; guarded() counts the skip.
+    while (fusion_.valid()) finishFusion();
     if (std::optional<Pending> p = takePending(msg.seq)) {
       publishDepth(options_.fused_channel, *p, p->depth, p->stage);
       ++counters_.frames_out;
@@ -165,7 +182,7 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     throw;
   }
   measurement_.observePose(pose.seq, pose.utime, pose.T_w_c,
-                            pose.status == TrackingStatus::kTracking);
+                           pose.status == TrackingStatus::kTracking);
   std::optional<Pending> taken = takePending(pose.seq);
   if (!taken) {
     ++unknown_poses_;
@@ -179,38 +196,81 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     ++counters_.frames_out;
     return;
   }
-  depth_filter::OgmResult& result = fused_;  // buffers reused frame to frame
-  const int64_t shortened_before = ogm_.stats().frames_fused_limited;
-  const Stopwatch ogm_watch;
-  if (pose.status == TrackingStatus::kLost || pose.status == TrackingStatus::kReinitialised) {
-    ogm_.reset();  // poses across a tracking loss cannot register the window
-  }
-  for (const WindowUncertainty& w : pose.window) {
-    ogm_.setWindowUncertainty(w.seq, w.max_translation_variance_m2);
-  }
-  ogm_.addFrame(p.seq, p.camera, p.depth);
+  Fusion& f = to_fuse_.emplace_back();
+  f.frame = std::move(p);
+  f.pose = std::move(pose);
   // Frames newer than this one already wait for their poses: the loop is behind the sensor.
-  const int limit = overloadWindow(static_cast<int>(pending_.size()), options_);
-  ogm_.fuse(p.seq, pose.T_w_c, &result, limit);
-  const double ogm_ms = ogm_watch.elapsedMs();
+  f.limit = overloadWindow(static_cast<int>(pending_.size()), options_);
+  startFusion();
+}
+
+void DepthFilterNode::startFusion() {
+  if (fusion_.valid() || to_fuse_.empty()) return;
+  fusing_ = std::move(to_fuse_.front());
+  to_fuse_.pop_front();
+  fusing_.shortened_before = ogm_.stats().frames_fused_limited;
+  auto fuse = [this] {
+    const Stopwatch ogm_watch;
+    const FramePose& pose = fusing_.pose;
+    const Pending& p = fusing_.frame;
+    if (pose.status == TrackingStatus::kLost || pose.status == TrackingStatus::kReinitialised) {
+      ogm_.reset();  // poses across a tracking loss cannot register the window
+    }
+    for (const WindowUncertainty& w : pose.window) {
+      ogm_.setWindowUncertainty(w.seq, w.max_translation_variance_m2);
+    }
+    ogm_.addFrame(p.seq, p.camera, p.depth);
+    ogm_.fuse(p.seq, pose.T_w_c, &fused_, fusing_.limit);  // buffers reused frame to frame
+    return ogm_watch.elapsedMs();
+  };
+  if (options_.fuse_on_worker) {
+    fusion_ = std::async(std::launch::async, std::move(fuse));
+  } else {
+    std::promise<double> done;
+    done.set_value(fuse());
+    fusion_ = done.get_future();
+    finishFusion();
+  }
+}
+
+void DepthFilterNode::finishFusion() {
+  std::future<double> fusion = std::move(fusion_);
+  double ogm_ms = 0;
+  try {
+    ogm_ms = fusion.get();
+  } catch (...) {
+    // Downstream still gets a depth map (the frame's own stage-2 output); the next fusion
+    // starts, and guarded() counts the error.
+    publishDepth(options_.fused_channel, fusing_.frame, fusing_.frame.depth, fusing_.frame.stage,
+                 static_cast<int8_t>(fusing_.pose.reference));
+    ++counters_.frames_out;
+    startFusion();
+    throw;
+  }
+  const Pending& p = fusing_.frame;
+  const int8_t reference = static_cast<int8_t>(fusing_.pose.reference);
+  const depth_filter::OgmResult& result = fused_;
   timings_.add("ogm", ogm_ms);
   // The shortened ones again on their own: their count shows in every status message.
-  if (ogm_.stats().frames_fused_limited > shortened_before) timings_.add("ogm_shortened", ogm_ms);
+  if (ogm_.stats().frames_fused_limited > fusing_.shortened_before) {
+    timings_.add("ogm_shortened", ogm_ms);
+  }
   if (!result.ok) {
     // Downstream still gets a depth map: the frame's own stage-2 output.
     ++counters_.frames_skipped;
     counters_.last_warning = result.warning + " (published C-GM as fused)";
-    publishDepth(options_.fused_channel, p, p.depth, p.stage, static_cast<int8_t>(pose.reference));
+    publishDepth(options_.fused_channel, p, p.depth, p.stage, reference);
   } else {
     publishDepth(options_.fused_channel, p, result.depth, pplvo_msgs::depth_map_t::STAGE_OGM,
-                 static_cast<int8_t>(pose.reference));
+                 reference);
   }
   ++counters_.frames_out;
+  startFusion();
 }
 
 void DepthFilterNode::publishStatus(int64_t utime) {
   msgs::guarded(counters_, kName, [&] {
-    if (counters_.last_warning.empty() && !ogm_.stats().last_warning.empty()) {
+    if (counters_.last_warning.empty() && !fusion_.valid() && !ogm_.stats().last_warning.empty()) {
       counters_.last_warning = ogm_.stats().last_warning;
     }
     const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, timings_, utime);

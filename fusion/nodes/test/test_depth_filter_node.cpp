@@ -14,13 +14,13 @@
 #include <thread>
 #include <vector>
 
+#include "pplvo/depth_filter_node/depth_filter_args.h"
 #include "pplvo/depth_filter_node/depth_filter_convert.h"
 #include "pplvo/depth_filter_node/depth_filter_node.h"
 #include "pplvo/fixtures/analytic_scene.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/msgs/convert_pose.h"
 #include "pplvo/node/process.h"
-#include "pplvo/depth_filter_node/depth_filter_args.h"
 
 namespace pplvo::nodes {
 namespace {
@@ -181,6 +181,43 @@ TEST(DepthFilterNode, MemqFramesAndPosesGiveCgmAndFusedMaps) {
   EXPECT_EQ(node.counters().errors, 0);
   node.publishStatus(1);
   drain(lcm);
+}
+
+TEST(DepthFilterNode, FusingOnAWorkerPublishesTheSameMapsInFrameOrder) {
+  // All frames and their poses at once (a loop that posed ahead of the fusion): the worker
+  // fuses them in order; the fused maps come when published, byte for byte the handler's.
+  AnalyticScene scene(smallScene());
+  std::vector<std::vector<uint8_t>> fused_bytes[2];
+  for (const bool worker : {false, true}) {
+    lcm::LCM lcm("memq://");
+    ASSERT_TRUE(lcm.good());
+    DepthFilterNodeOptions o;
+    o.filter.ogm.max_window = 5;
+    o.fuse_on_worker = worker;
+    DepthFilterNode node(o, lcm);
+    Collector c;
+    lcm.subscribe(channels::kDepthFused, &Collector::onDepth, &c);
+    const int n = 6;
+    for (int i = 0; i < n; ++i) {
+      pplvo_msgs::rgbd_frame_t f = frameMsg(scene, i);
+      lcm.publish(channels::kRgbd, &f);
+      pplvo_msgs::pose_t p = poseMsg(scene, i);
+      lcm.publish(channels::kPose, &p);
+    }
+    drain(lcm);
+    while (node.publishFusions(true)) drain(lcm);
+    EXPECT_FALSE(node.fusing());
+    EXPECT_FALSE(node.publishFusions(true));  // nothing left: no wait
+    ASSERT_EQ(static_cast<int>(c.fused.size()), n);
+    for (int i = 0; i < n; ++i) {
+      EXPECT_EQ(c.fused[static_cast<size_t>(i)].seq, i);
+      EXPECT_EQ(c.fused[static_cast<size_t>(i)].stage, pplvo_msgs::depth_map_t::STAGE_OGM);
+    }
+    EXPECT_EQ(node.counters().frames_out, n);
+    EXPECT_EQ(node.counters().errors, 0);
+    fused_bytes[worker ? 1 : 0] = c.bytes;
+  }
+  EXPECT_TRUE(fused_bytes[0] == fused_bytes[1]);
 }
 
 // Depth 15 ms older than colour: frame j's depth is moved with the velocity of frames j-3 and

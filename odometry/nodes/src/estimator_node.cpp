@@ -1,6 +1,7 @@
 #include "pplvo/odometry_nodes/estimator_node.h"
 
 #include <algorithm>
+#include <optional>
 #include <pplvo_msgs/pose_t.hpp>
 
 #include "pplvo/msgs/convert_features.h"
@@ -75,7 +76,9 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
     counters_.frames_dropped += static_cast<int64_t>(waiting_.size()) - 1;
     waiting_.clear();
     ++counts_.restarts_missing_reference;
-    counters_.last_warning = "no 3D features for frame " + std::to_string(odometry_.lastSeq()) +
+    const int64_t awaited =
+        odometry_.awaitedLifted() >= 0 ? odometry_.awaitedLifted() : odometry_.lastSeq();
+    counters_.last_warning = "no 3D features for frame " + std::to_string(awaited) +
                              ": tracking restarted at " + std::to_string(newest.seq);
     TrackerOutput out = odometry_.restart(newest);
     drops_without_reference_ = 0;
@@ -87,33 +90,40 @@ void EstimatorNode::handleFeatures3d(const pplvo_msgs::features_t& msg) {
   if (msg.stage != pplvo_msgs::features_t::STAGE_3D) {
     throw msgs::MessageError("features_t on the 3D channel is not STAGE_3D");
   }
-  if (msg.seq != odometry_.lastSeq()) {
-    // Only the last posed frame can serve as a reference.
-    ++counters_.frames_skipped;
-    counters_.last_warning = "3D features of frame " + std::to_string(msg.seq) +
-                             " are not the reference (" + std::to_string(odometry_.lastSeq()) + ")";
+  if (!odometry_.wantsLifted(msg.seq) && msg.seq <= odometry_.lastSeq() &&
+      odometry_.lastSeq() >= 0) {
+    ++counts_.lifted_unused;  // its successor was posed without it
     return;
   }
+  if (!odometry_.wantsLifted(msg.seq)) {
+    // Only the last posed frame (a reference) and frames whose landmark fusion is due serve.
+    ++counters_.frames_skipped;
+    counters_.last_warning = "3D features of frame " + std::to_string(msg.seq) +
+                             " are not needed (last posed " + std::to_string(odometry_.lastSeq()) +
+                             ")";
+    return;
+  }
+  FrameFeatures lifted;
   {
     ScopedStageTimer t(timings_, "decode");
-    reference_ = msgs::fromMsg(msg);
+    lifted = msgs::fromMsg(msg);
   }
-  have_reference_ = true;
+  odometry_.addLifted(std::move(lifted));
   processWaiting();
 }
 
 void EstimatorNode::processWaiting() {
-  while (!waiting_.empty() && have_reference_ && reference_.seq == odometry_.lastSeq()) {
+  while (!waiting_.empty()) {
+    pipeline::FrameOdometryStats stats;
+    const std::optional<TrackerOutput> out = odometry_.tryTrack(waiting_.front(), &stats);
+    if (!out) return;  // a 3D stage it needs is not in yet (odometry_.awaitedLifted())
     FrameFeatures current = std::move(waiting_.front());
     waiting_.pop_front();
-    pipeline::FrameOdometryStats stats;
-    const TrackerOutput out = odometry_.track(reference_, current, &stats);
     counts_.keyframes = odometry_.keyframeCount();
     if (stats.new_keyframe) ++counts_.keyframe_reasons[static_cast<int>(stats.keyframe_reason)];
     if (stats.keyframe_fallback) ++counts_.keyframe_fallbacks;
-    have_reference_ = false;  // the next frame needs this one's 3D features
     drops_without_reference_ = 0;
-    publish(out, current, stats);
+    publish(*out, current, stats);
   }
 }
 

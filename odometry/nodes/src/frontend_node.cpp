@@ -204,13 +204,18 @@ void FrontendNode::publishWhenDue() {
   if (awaiting_3d_.empty()) finishInFlight();
 }
 
-void FrontendNode::poll() {
+void FrontendNode::poll() { publishStage2d(false); }
+
+bool FrontendNode::publishStage2d(bool wait) {
+  bool published = false;
   msgs::guarded(counters_, kName, [&] {
-    if (in_flight_.result.valid() &&
-        in_flight_.result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+    if (in_flight_.result.valid() && (wait || in_flight_.result.wait_for(std::chrono::seconds(0)) ==
+                                                  std::future_status::ready)) {
+      published = true;
       finishInFlight();
     }
   });
+  return published;
 }
 
 void FrontendNode::handleFused(const pplvo_msgs::depth_map_t& msg) {
@@ -244,7 +249,8 @@ void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
   // anything else is "unknown": the planes are fitted.
   ReferenceRole role = ReferenceRole::kUnknown;
   if (msg.reference == pplvo_msgs::pose_t::REFERENCE_YES) role = ReferenceRole::kReference;
-  if (msg.reference == pplvo_msgs::pose_t::REFERENCE_FALLBACK_ONLY) role = ReferenceRole::kFallbackOnly;
+  if (msg.reference == pplvo_msgs::pose_t::REFERENCE_FALLBACK_ONLY)
+    role = ReferenceRole::kFallbackOnly;
   frontend_.lift3d(features, fused, &stats, role);
   last_lift_utime_ = newest_frame_utime_;  // the loop delivers
   if (!stats.warning.empty()) warn(stats.warning);

@@ -348,8 +348,8 @@ TEST(FrontendNode, FitsPlanesToTheFusedDepthOnlyForFramesTrackedAgainst) {
     behind.depth_m.setTo(0, behind.depth_m <= 0);
     cv::Mat valid = behind.depth_m > 0;
     cv::add(behind.depth_m, 0.02, behind.depth_m, valid);
-    pplvo_msgs::depth_map_t fused = msgs::toMsg(behind, f.camera, f.utime, f.seq, f.stamp,
-                                                pplvo_msgs::depth_map_t::STAGE_OGM);
+    pplvo_msgs::depth_map_t fused =
+        msgs::toMsg(behind, f.camera, f.utime, f.seq, f.stamp, pplvo_msgs::depth_map_t::STAGE_OGM);
     fused.reference = c.reference;
     lcm.publish(channels::kDepthFused, &fused);
     drain(lcm);
@@ -424,6 +424,9 @@ TEST(EstimatorNode, RestartsHoldingThePoseWhenTheReferenceNeverComes) {
   EstimatorNodeOptions o;
   o.max_waiting = 1;
   o.max_drops_without_reference = 1;
+  // Frame to frame: every frame needs the previous one's 3D features (with keyframes a
+  // frame is posed against the keyframe without them: KeyframesPoseWithoutThePreviousFrame).
+  o.odometry.reference = pipeline::TrackingReference::kFrame;
   EstimatorNode node(o, lcm);
   Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
   lcm.publish(channels::kFeatures, &fs.f2d[0]);
@@ -463,6 +466,9 @@ TEST(EstimatorNode, RestartsWhenNoPoseCouldBeMadeForTheTimeBound) {
     lcm::LCM lcm("memq://");
     EstimatorNodeOptions o;
     o.max_reference_wait_ms = wait_ms;
+    // Frame to frame: every frame needs the previous one's 3D features (with keyframes a
+    // frame is posed against the keyframe without them: KeyframesPoseWithoutThePreviousFrame).
+    o.odometry.reference = pipeline::TrackingReference::kFrame;
     EstimatorNode node(o, lcm);
     Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
     lcm.publish(channels::kFeatures, &fs.f2d[0]);
@@ -485,6 +491,35 @@ TEST(EstimatorNode, RestartsWhenNoPoseCouldBeMadeForTheTimeBound) {
       EXPECT_EQ(poses.msgs.size(), 2u);
     }
   }
+}
+
+TEST(EstimatorNode, KeyframesPoseWithoutThePreviousFrame) {
+  // Against the keyframe, frame k+1 needs neither frame k's 3D features nor, until frame k+2,
+  // its landmark fusion: the pose loop does not wait for frame k's fused depth.
+  const FeatureSet& fs = featureSet();
+  lcm::LCM lcm("memq://");
+  EstimatorNode node({}, lcm);
+  Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
+  lcm.publish(channels::kFeatures, &fs.f2d[0]);
+  lcm.publish(channels::kFeatures3d, &fs.f3d[0]);  // the first keyframe
+  lcm.publish(channels::kFeatures, &fs.f2d[1]);
+  lcm.publish(channels::kFeatures3d, &fs.f3d[1]);
+  lcm.publish(channels::kFeatures, &fs.f2d[2]);  // against the keyframe
+  drain(lcm);
+  ASSERT_EQ(poses.msgs.size(), 3u);
+  lcm.publish(channels::kFeatures, &fs.f2d[3]);  // without frame 2's 3D features
+  drain(lcm);
+  ASSERT_EQ(poses.msgs.size(), 4u);
+  EXPECT_EQ(poses.msgs[3].status, pplvo_msgs::pose_t::STATUS_TRACKING);
+  lcm.publish(channels::kFeatures, &fs.f2d[4]);  // frame 2's landmark fusion is due
+  drain(lcm);
+  EXPECT_EQ(poses.msgs.size(), 4u);
+  lcm.publish(channels::kFeatures3d, &fs.f3d[2]);
+  drain(lcm);
+  ASSERT_EQ(poses.msgs.size(), 5u);
+  EXPECT_EQ(poses.msgs[4].seq, frames()[4].frame.seq);
+  EXPECT_EQ(node.counters().frames_skipped, 0);
+  EXPECT_EQ(node.counters().frames_dropped, 0);
 }
 
 TEST(EstimatorNode, InconsistentMessagesAreCountedNotFatal) {

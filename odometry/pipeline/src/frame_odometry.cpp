@@ -55,17 +55,26 @@ void FrameOdometry::setFamilies(const FeatureFamilies& families) {
   keyframe_.reset();
   pending_keyframe_seq_ = -1;
   keyframe_count_ = 0;
+  forgetPending();
+}
+
+void FrameOdometry::forgetPending() {
+  pending_fusions_.clear();
+  lifted_.clear();
+  keyframe_rejected_seq_ = -1;
 }
 
 void FrameOdometry::resetKeyframes(int64_t next_keyframe_seq, KeyframeReason reason) {
   keyframe_.reset();
   pending_keyframe_covariance_.reset();
+  pending_fusions_.clear();  // they would refine the keyframe dropped here
   const bool keyframes = options_.reference == TrackingReference::kKeyframe;
   pending_keyframe_seq_ = keyframes ? next_keyframe_seq : -1;
   pending_reason_ = keyframes ? reason : KeyframeReason::kNone;
 }
 
 TrackerOutput FrameOdometry::initialise(const FrameFeatures& first) {
+  forgetPending();
   last_seq_ = first.seq;
   resetKeyframes(first.seq, KeyframeReason::kStart);
   return tracker_.initialise(first.seq);
@@ -73,6 +82,7 @@ TrackerOutput FrameOdometry::initialise(const FrameFeatures& first) {
 
 TrackerOutput FrameOdometry::restart(const FrameFeatures& current) {
   const Pose3 T_w_c = tracker_.T_w_c();
+  forgetPending();
   last_seq_ = current.seq;
   resetKeyframes(current.seq, KeyframeReason::kStart);
   TrackerOutput out = tracker_.initialise(current.seq, T_w_c);
@@ -138,23 +148,98 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
   FrameOdometryStats local;
   FrameOdometryStats& s = stats ? *stats : local;
   s = FrameOdometryStats{};
-  if (last_seq_ < 0 || reference.seq != last_seq_ || current.seq <= reference.seq ||
-      current.camera != reference.camera) {
+  if (last_seq_ < 0 || reference.seq != last_seq_) {
     // The reference is not the frame tracked last (frames were lost in between or the stream
     // restarted): a motion from it would not chain onto T_w_c. Restart at this frame.
     s.reinitialised = true;
     return last_seq_ < 0 ? initialise(current) : restart(current);
   }
+  addLifted(reference);
+  if (std::optional<TrackerOutput> out = tryTrack(current, &s)) return *out;
+  // Only a pending fusion can wait for a 3D stage other than `reference`; a caller of this
+  // form handed it in with the previous call, so this is a frame whose 3D stage was skipped.
+  s = FrameOdometryStats{};
+  s.reinitialised = true;
+  return restart(current);
+}
+
+bool FrameOdometry::wantsLifted(int64_t seq) const {
+  if (last_seq_ < 0 || seq < 0) return false;
+  if (seq == last_seq_) return true;
+  for (const PendingFusion& f : pending_fusions_) {
+    if (f.seq == seq) return true;
+  }
+  return false;
+}
+
+bool FrameOdometry::addLifted(FrameFeatures lifted) {
+  if (!wantsLifted(lifted.seq)) return false;
+  auto it = lifted_.begin();
+  while (it != lifted_.end() && it->seq < lifted.seq) ++it;
+  if (it != lifted_.end() && it->seq == lifted.seq) {
+    *it = std::move(lifted);  // the same frame again: the newer message serves
+  } else {
+    lifted_.insert(it, std::move(lifted));
+  }
+  return true;
+}
+
+const FrameFeatures* FrameOdometry::lifted(int64_t seq) const {
+  for (const FrameFeatures& f : lifted_) {
+    if (f.seq == seq) return &f;
+  }
+  return nullptr;
+}
+
+void FrameOdometry::pruneLifted() {
+  for (auto it = lifted_.begin(); it != lifted_.end();) {
+    it = wantsLifted(it->seq) ? it + 1 : lifted_.erase(it);
+  }
+}
+
+std::optional<TrackerOutput> FrameOdometry::tryTrack(const FrameFeatures& current,
+                                                     FrameOdometryStats* stats) {
+  FrameOdometryStats local;
+  FrameOdometryStats& s = stats ? *stats : local;
+  s = FrameOdometryStats{};
+  awaited_lifted_ = -1;
+  if (last_seq_ < 0) return initialise(current);
+  if (current.seq <= last_seq_) {
+    // The stream restarted: a motion to an older frame would not chain onto T_w_c.
+    s.reinitialised = true;
+    return restart(current);
+  }
   const bool keyframes = options_.reference == TrackingReference::kKeyframe;
-  if (keyframes && pending_keyframe_seq_ == reference.seq) {
-    takeKeyframe(reference);
+  // Landmark fusion one frame behind: the frames posed before the previous one refine the
+  // keyframe now (their order of arrival does not matter, the result is the same).
+  while (!pending_fusions_.empty() && pending_fusions_.front().seq < last_seq_) {
+    const FrameFeatures* observed = lifted(pending_fusions_.front().seq);
+    if (observed == nullptr) {
+      awaited_lifted_ = pending_fusions_.front().seq;
+      return std::nullopt;
+    }
+    if (keyframe_) {
+      ScopedStageTimer t(timings_, "landmark_fusion");
+      fuseIntoKeyframe(*observed, pending_fusions_.front());
+    }
+    pending_fusions_.pop_front();
   }
-  if (keyframes && keyframe_ && pending_fusion_.seq == reference.seq) {
-    ScopedStageTimer t(timings_, "landmark_fusion");
-    fuseIntoKeyframe(reference);
+  const FrameFeatures* previous = lifted(last_seq_);
+  auto restartOnOtherCamera = [&]() -> std::optional<TrackerOutput> {
+    s = FrameOdometryStats{};
+    s.reinitialised = true;
+    return restart(current);
+  };
+  if (keyframes && pending_keyframe_seq_ == last_seq_) {
+    if (previous == nullptr) {
+      awaited_lifted_ = last_seq_;
+      return std::nullopt;
+    }
+    if (current.camera != previous->camera) return restartOnOtherCamera();
+    takeKeyframe(*previous);
   }
-  pending_fusion_.seq = -1;
-  if (keyframes && keyframe_ && keyframe_->seq != reference.seq) {
+  if (keyframes && keyframe_ && keyframe_->seq != last_seq_ &&
+      keyframe_rejected_seq_ != current.seq) {
     std::optional<PoseEstimate> through_keyframe = estimateFromKeyframe(current, &s);
     if (through_keyframe) {
       TrackerOutput out = tracker_.update(current.seq, *through_keyframe);
@@ -164,12 +249,22 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
       }
       s.new_keyframe = pending_keyframe_seq_ == current.seq;
       if (s.new_keyframe) s.keyframe_reason = pending_reason_;
+      pruneLifted();
       return out;
     }
     // The keyframe failed (matches lost, degenerate or too uncertain): the previous frame
     // serves, and this frame starts a new keyframe.
-    s.keyframe_fallback = true;
+    keyframe_rejected_seq_ = current.seq;
   }
+  if (previous == nullptr) {
+    awaited_lifted_ = last_seq_;
+    return std::nullopt;
+  }
+  const FrameFeatures& reference = *previous;
+  if (current.camera != reference.camera) return restartOnOtherCamera();
+  s = FrameOdometryStats{};
+  s.keyframe_fallback = keyframe_rejected_seq_ == current.seq;
+  keyframe_rejected_seq_ = -1;
   const FeatureMatches matches = match(reference, current, tracker_.predictedMotion());
   s.point_matches = static_cast<int>(matches.points.size());
   s.line_matches = static_cast<int>(matches.lines.size());
@@ -180,7 +275,6 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
     ScopedStageTimer t(timings_, "pose");
     out = tracker_.track(reference, current, matches);
   }
-  last_seq_ = current.seq;
   if (keyframes) {
     const bool first_against_keyframe = keyframe_ && keyframe_->seq == reference.seq;
     if (first_against_keyframe && out.estimate.accepted() &&
@@ -197,6 +291,8 @@ TrackerOutput FrameOdometry::track(const FrameFeatures& reference, const FrameFe
     s.new_keyframe = pending_keyframe_seq_ == current.seq;
     if (s.new_keyframe) s.keyframe_reason = pending_reason_;
   }
+  last_seq_ = current.seq;
+  pruneLifted();
   return out;
 }
 
@@ -237,10 +333,11 @@ std::optional<PoseEstimate> FrameOdometry::estimateFromKeyframe(const FrameFeatu
   }
   const Pose3 T_curr_kf = est.T_curr_prev;
   if (options_.keyframe.fuse_landmarks) {
-    pending_fusion_.seq = current.seq;
-    pending_fusion_.T_kf_frame = T_curr_kf.inverse();
-    pending_fusion_.covariance = invertedPoseCovariance(T_curr_kf, est.covariance);
-    pending_fusion_.points = matches.points;
+    PendingFusion& fusion = pending_fusions_.emplace_back();
+    fusion.seq = current.seq;
+    fusion.T_kf_frame = T_curr_kf.inverse();
+    fusion.covariance = invertedPoseCovariance(T_curr_kf, est.covariance);
+    fusion.points = matches.points;
   }
   const KeyframeReason exhausted = keyframeExhausted(est, T_curr_kf);
   if (exhausted != KeyframeReason::kNone) {
@@ -285,7 +382,7 @@ void FrameOdometry::takeKeyframe(const FrameFeatures& reference) {
   pending_keyframe_covariance_.reset();
   keyframe_first_rows_ = 0;
   ++keyframe_count_;
-  pending_fusion_ = PendingFusion{};
+  pending_fusions_.clear();  // they refine the keyframe replaced here
   // The map's features in the new keyframe, the relative pose's uncertainty added to each.
   map_points_.clear();
   map_lines_.clear();
@@ -338,12 +435,12 @@ FrameFeatures FrameOdometry::localMap() const {
   return map;
 }
 
-void FrameOdometry::fuseIntoKeyframe(const FrameFeatures& observed) {
+void FrameOdometry::fuseIntoKeyframe(const FrameFeatures& observed, const PendingFusion& fusion) {
   std::vector<PointFeature>& landmarks = keyframe_->points;
-  const Pose3& T = pending_fusion_.T_kf_frame;
+  const Pose3& T = fusion.T_kf_frame;
   const Eigen::Matrix3d R = T.linear();
   const Eigen::Vector3d q_xyz = poseToXi(T).tail<3>();
-  for (const auto& [i, j] : pending_fusion_.points) {
+  for (const auto& [i, j] : fusion.points) {
     if (i < 0 || j < 0 || i >= static_cast<int>(landmarks.size()) ||
         j >= static_cast<int>(observed.points.size())) {
       continue;
@@ -357,7 +454,7 @@ void FrameOdometry::fuseIntoKeyframe(const FrameFeatures& observed) {
     J.leftCols<3>().setIdentity();
     J.rightCols<3>() = rotatedPointJacobian(q_xyz, seen.point.p);
     const Eigen::Matrix3d C =
-        R * seen.point.cov * R.transpose() + J * pending_fusion_.covariance * J.transpose();
+        R * seen.point.cov * R.transpose() + J * fusion.covariance * J.transpose();
     const Eigen::Vector3d d = p - landmark.point.p;
     const Eigen::Matrix3d S = landmark.point.cov + C;
     const Eigen::LDLT<Eigen::Matrix3d> S_ldlt(S);

@@ -1,6 +1,8 @@
 #include "pplvo/run/run_pipeline.h"
 
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -8,6 +10,7 @@
 #include <memory>
 #include <pplvo_msgs/pose_t.hpp>
 #include <sstream>
+#include <thread>
 
 #include "pplvo/depth_filter_node/depth_filter_node.h"
 #include "pplvo/logging/event_log.h"
@@ -187,14 +190,27 @@ RunResult runPipeline(const RunOptions& options) {
     df.filter = options.pipeline.depth_filter;
     df.filter.overload.backlog =
         0;  // every frame fused over the full window (in_flight is bounded)
+    // The fusion of frame k runs on a worker while frame k+1 is posed on this thread
+    // (FrameOdometry::tryTrack needs frame k's 3D features only for a keyframe or a fallback).
+    df.fuse_on_worker = true;
+    // Off the loop, the fusion is what the loop waits for on every other frame (a frame's
+    // landmark fusion is due two frames later): with "auto" threads it takes two bands, so the
+    // loop's core, idle while it waits, fuses one of them (measured: docs/pipeline.md).
+    if (df.filter.ogm.threads == 0) {
+      df.filter.ogm.threads = std::min(2, static_cast<int>(std::thread::hardware_concurrency()));
+      df.filter.ogm.threads = std::max(1, df.filter.ogm.threads);
+    }
     nodes::DepthFilterNode depth_filter(df, lcm);
 
     nodes::FrontendNodeOptions fe;
     fe.frontend = options.pipeline.frontend;
+    // The player bounds the frames in flight: none is dropped for waiting (every frame posed).
+    fe.max_unlifted = 0;
     nodes::FrontendNode frontend(fe, lcm);
 
     nodes::EstimatorNodeOptions es;
     es.odometry = options.pipeline.odometry;
+    es.max_waiting = std::max(es.max_waiting, options.in_flight);
     nodes::EstimatorNode estimator(es, lcm);
 
     PoseCollector collector(lcm, result);
@@ -204,8 +220,9 @@ RunResult runPipeline(const RunOptions& options) {
     player::PlayerOptions po;
     po.dataset_dir = options.dataset_dir;
     po.rate = 0.0;  // as fast as possible
-    // Every node runs in this thread: the player dispatches memq's messages one at a time and
-    // publishes the next frame as soon as fewer than in_flight frames lack their pose.
+    // Every handler runs in this thread (the fusion and the extraction on workers): the player
+    // dispatches memq's messages one at a time and publishes the next frame as soon as fewer
+    // than in_flight frames lack their pose.
     po.lockstep = true;
     po.lockstep_in_flight = std::max(1, options.in_flight);
     po.in_process = true;
@@ -216,6 +233,15 @@ RunResult runPipeline(const RunOptions& options) {
     po.progress = options.progress;
     po.preload = options.preload;
     po.status_period_s = 1e9;  // no status messages inside one process
+    // Nothing queued: publish what the workers finished, waiting for the first of them.
+    po.in_process_idle = [&] {
+      while (depth_filter.fusing() || frontend.extracting()) {
+        const bool fused = depth_filter.publishFusions(false);
+        if (frontend.publishStage2d(false) || fused) return true;
+        std::this_thread::sleep_for(std::chrono::microseconds(50));
+      }
+      return false;
+    };
     player::PlayerNode player(po, lcm);
 
     result.index = player.dataset().index().summary;

@@ -2,6 +2,7 @@
 /// pplvo-player: publishes a TUM-layout RGB-D folder as rgbd_frame_t messages. A thin LCM
 /// node over pplvo_dataset; usage and channels in docs/player.md.
 #include <cstdint>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <pplvo_msgs/camera_info_t.hpp>
 #include <pplvo_msgs/image_t.hpp>
@@ -40,6 +41,10 @@ struct PlayerOptions {
   /// Every subscriber runs in this thread (memq://, pplvo-run): a lockstep wait dispatches
   /// what is queued and ends when nothing is left, since nothing else can publish.
   bool in_process = false;
+  /// In process: called when the queue is empty during a lockstep wait, for work the nodes run
+  /// off this thread (pplvo-run's fusion and extraction workers). It waits for some of it to
+  /// finish and publishes the results; false when none is running (the wait then ends).
+  std::function<bool()> in_process_idle;
   int64_t start = 0;         ///< --start: first associated frame
   int64_t max_frames = 0;    ///< --max-frames: 0 = all
   double max_depth_m = 0.0;  ///< --max-depth-m: 0 = no limit
@@ -53,8 +58,8 @@ struct PlayerOptions {
   /// frames); beyond `preload_max_mb` of decoded images the rest is decoded while playing.
   bool preload = false;
   int64_t preload_max_mb = 2048;  ///< --preload-max-mb
-  bool progress = false;         ///< progress line on stderr (main: isatty)
-  double status_period_s = 1.0;  ///< node_status_t period
+  bool progress = false;          ///< progress line on stderr (main: isatty)
+  double status_period_s = 1.0;   ///< node_status_t period
   /// A frame later than this behind schedule re-anchors the clock (no catch-up burst), s.
   double max_lag_s = 0.5;
   std::string node_name = "pplvo-player";

@@ -17,17 +17,17 @@ namespace pplvo::depth_filter {
 struct OgmStats {
   int64_t frames_added = 0;
   int64_t frames_fused = 0;
-  int64_t window_resets = 0;        ///< camera/size changed (warning) or reset() called
-  int64_t size_changes = 0;         ///< frames whose camera differs from the window's
-  int64_t unknown_frame_poses = 0;  ///< fuse() for a seq not in the window
-  int64_t invalid_poses = 0;        ///< NaN / non-rigid T_w_c given to fuse()
-  int64_t invalid_inputs = 0;       ///< frames rejected by addFrame (bad type/size)
-  int64_t invalid_pixels = 0;       ///< non-finite / non-positive variance, treated missing
-  int64_t evicted_capacity = 0;     ///< oldest frame dropped because the window was full
-  int64_t evicted_uncertainty = 0;  ///< frames dropped by the pose-uncertainty threshold
-  int64_t points_projected = 0;     ///< past-frame points that landed in the image
-  int64_t points_gated = 0;         ///< rejected by the consistency gate
-  int64_t pixels_filled = 0;        ///< output pixels with no current measurement
+  int64_t window_resets = 0;         ///< camera/size changed (warning) or reset() called
+  int64_t size_changes = 0;          ///< frames whose camera differs from the window's
+  int64_t unknown_frame_poses = 0;   ///< fuse() for a seq not in the window
+  int64_t invalid_poses = 0;         ///< NaN / non-rigid T_w_c given to fuse()
+  int64_t invalid_inputs = 0;        ///< frames rejected by addFrame (bad type/size)
+  int64_t invalid_pixels = 0;        ///< non-finite / non-positive variance, treated missing
+  int64_t evicted_capacity = 0;      ///< oldest frame dropped because the window was full
+  int64_t evicted_uncertainty = 0;   ///< frames dropped by the pose-uncertainty threshold
+  int64_t points_projected = 0;      ///< past-frame points that landed in the image
+  int64_t points_gated = 0;          ///< rejected by the consistency gate
+  int64_t pixels_filled = 0;         ///< output pixels with no current measurement
   int64_t frames_fused_limited = 0;  ///< fusions that left past frames out (window_limit)
   int64_t warnings = 0;
   std::string last_warning;
@@ -61,7 +61,8 @@ struct OgmOptions {
   /// 1 = serial; 0 = one fewer than the machine's hardware threads (at least 1), since in the
   /// pipeline the frontend extracts the next frame on one while a frame is fused: on two cores
   /// a second band only adds its share of re-projected rows and a hand-off (docs/pipeline.md,
-  /// "Speed"). The results (depth, variance, stats) do not depend on it, bit for bit.
+  /// "Speed"). pplvo-run, which fuses on a worker beside the pose loop, resolves 0 to two
+  /// bands instead. The results (depth, variance, stats) do not depend on it, bit for bit.
   int threads = 0;
 };
 
@@ -92,7 +93,8 @@ void visit(V& v, OgmOptions& o) {
   v.field("threads", o.threads,
           "threads of the fusion (OpenCV's pool; bands of the image): 1 = serial, 0 = one "
           "fewer than the hardware threads (at least 1; the frontend extracts the next frame "
-          "on the other). The results do not depend on it, bit for bit",
+          "on the other), 2 in pplvo-run (it fuses beside the pose loop). The results do not "
+          "depend on it, bit for bit",
           config::atLeast(0));
 }
 

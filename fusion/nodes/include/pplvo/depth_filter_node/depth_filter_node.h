@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <future>
 #include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <pplvo_msgs/pose_t.hpp>
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/frame_pose.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/depth_filter/cgm_filter.h"
 #include "pplvo/depth_filter/depth_filter_options.h"
@@ -53,6 +55,11 @@ struct DepthFilterNodeOptions {
   /// a dead estimator costs only the wait.
   int max_alignment_wait_ms = 100;
   int max_deferred = 3;
+  /// O-GM on a worker thread: a pose's handler queues the fusion and returns, and the fused
+  /// map is published, in frame order, by poll() or publishFusions() once it is done. For
+  /// nodes sharing one thread (pplvo-run): frame k is fused while frame k+1 is posed. The
+  /// maps are the same either way.
+  bool fuse_on_worker = false;
   /// The algorithm's options: the `depth_filter` section of the configuration (model, sensor,
   /// cgm, ogm, overload; pplvo/depth_filter/depth_filter_options.h). With model sensor or cgm
   /// the PPLVO_DEPTH_FUSED output is the stage-1/2 map, unchanged. pplvo-run and lockstep
@@ -78,13 +85,20 @@ class DepthFilterNode {
 
   /// Publishes node_status_t (counters, stage timings).
   void publishStatus(int64_t utime);
-  /// Between messages (runLcmNode): releases frames that waited max_alignment_wait_ms.
+  /// Between messages (runLcmNode): releases frames that waited max_alignment_wait_ms and
+  /// publishes finished fusions (fuse_on_worker).
   void poll();
+  /// With fuse_on_worker: publishes the fusions that are done, first waiting for one when
+  /// `wait`; true if any was published. Exceptions are counted, as in handlers.
+  bool publishFusions(bool wait);
+  /// Fusions queued or running on the worker (fuse_on_worker).
+  bool fusing() const { return fusion_.valid() || !to_fuse_.empty(); }
   /// Frames that waited for a pose to move their depth and went on without it.
   int64_t alignmentWaitsTimedOut() const { return alignment_waits_timed_out_; }
   int deferred() const { return static_cast<int>(deferred_.size()); }
 
   const msgs::NodeCounters& counters() const { return counters_; }
+  /// Read these with no fusion running (fusing() false).
   const depth_filter::OgmStats& ogmStats() const { return ogm_.stats(); }
   const StageTimings& timings() const { return timings_; }
   int64_t unknownPoses() const { return unknown_poses_; }
@@ -121,6 +135,17 @@ class DepthFilterNode {
   /// arrays) releases its frame's stage-1/2 map as the fused output and rethrows the
   /// MessageError, which guarded() counts in frames_skipped.
   void handlePose(const pplvo_msgs::pose_t& msg);
+  /// A frame with its pose, to be fused.
+  struct Fusion {
+    Pending frame;
+    FramePose pose;
+    int limit = 0;  ///< overloadWindow() when it was queued
+    int64_t shortened_before = 0;
+  };
+  /// Starts the next queued fusion on the worker (or runs it here without fuse_on_worker).
+  void startFusion();
+  /// Publishes the fusion in fusion_ (waiting for it) and starts the next one.
+  void finishFusion();
   /// Drops (and counts) pending frames older than seq; returns the frame seq if it is next.
   std::optional<Pending> takePending(int64_t seq);
   /// `reference`: the frame's pose_t.reference on the fused channel (0, unknown, otherwise).
@@ -133,6 +158,9 @@ class DepthFilterNode {
   depth_filter::MeasurementStages measurement_;  ///< stages 0-2
   depth_filter::OgmFusion ogm_;
   depth_filter::OgmResult fused_;  ///< reused output buffers of the fusion
+  std::deque<Fusion> to_fuse_;     ///< posed frames waiting for the worker, oldest first
+  Fusion fusing_;                  ///< the one fusion_ runs (touched by it alone meanwhile)
+  std::future<double> fusion_;     ///< its O-GM time (ms); the worker owns ogm_ and fused_
   std::vector<uint8_t> wire_;      ///< reused packet of an uncompressed depth map
   std::deque<Pending> pending_;
   std::deque<Deferred> deferred_;

@@ -9,7 +9,10 @@
 /// | PPLVO_STATUS        | node_status_t | out       | once a second                             |
 ///
 /// Frame k is tracked against the 3D features of the frame tracked last, which come back only
-/// after its pose went round the depth filter and the frontend. Frames that arrive meanwhile
+/// after its pose went round the depth filter and the frontend; with keyframes it waits for
+/// them only when that frame is the next keyframe or the keyframe's estimate is rejected (and
+/// for the 3D features of frame k-2, whose landmark fusion is due: FrameOdometry::tryTrack),
+/// so that frame k is posed while frame k-1 is fused and lifted. Frames that arrive meanwhile
 /// wait (at most max_waiting; the oldest are dropped, counted, and the next one is matched to
 /// the same reference over a longer motion). If the reference never comes (an upstream
 /// process died or dropped it), tracking restarts at the newest waiting frame with the last
@@ -55,6 +58,9 @@ struct EstimatorNodeOptions {
 struct EstimatorCounts {
   int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
   int64_t restarts_missing_reference = 0;
+  /// 3D features that came after every frame that could use them was posed (posed against the
+  /// keyframe, with no landmark fusion due): normal with keyframes, not an error.
+  int64_t lifted_unused = 0;
   /// Keyframe tracking (odometry.reference: keyframe): keyframes chosen, and frames whose
   /// keyframe estimate failed so that the previous frame served.
   int64_t keyframes = 0, keyframe_fallbacks = 0;
@@ -94,8 +100,6 @@ class EstimatorNode {
   std::vector<msgs::BusSubscription> subscriptions_;
   pipeline::FrameOdometry odometry_;
   std::deque<FrameFeatures> waiting_;  ///< stage 2D, oldest first
-  FrameFeatures reference_;            ///< stage 3D of the newest posed frame received
-  bool have_reference_ = false;
   int drops_without_reference_ = 0;
   int64_t newest_utime_ = -1;     ///< stamp of the newest stage-2D features received
   int64_t last_pose_utime_ = -1;  ///< newest_utime_ when the last pose was published

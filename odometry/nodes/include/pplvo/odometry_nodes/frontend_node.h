@@ -78,6 +78,11 @@ class FrontendNode {
   /// Publishes a stage 2D that finished on its worker thread but still waits for the previous
   /// frame's fused depth (which may never come): call it from the idle loop. Never blocks.
   void poll();
+  /// Publishes the stage 2D of the worker when it is done, first waiting for it when `wait`;
+  /// true if it was published. For a loop that has nothing else to do (pplvo-run).
+  bool publishStage2d(bool wait);
+  /// A stage 2D is running on the worker.
+  bool extracting() const { return in_flight_.result.valid(); }
   const msgs::NodeCounters& counters() const { return counters_; }
   /// Of counters().frames_dropped, the frames dropped before extraction because max_unlifted
   /// frames waited for their fused depth (the loop through estimator and depth filter behind).
@@ -131,8 +136,8 @@ class FrontendNode {
   msgs::Bus bus_;
   std::vector<msgs::BusSubscription> subscriptions_;
   pipeline::Frontend frontend_;
-  std::deque<RgbdFrame> frames_;           ///< colour in, C-GM depth not yet
-  std::deque<PendingDepth> cgm_;           ///< C-GM depth in, colour not yet
+  std::deque<RgbdFrame> frames_;  ///< colour in, C-GM depth not yet
+  std::deque<PendingDepth> cgm_;  ///< C-GM depth in, colour not yet
   /// The plane labels of a frame as its stage-2D message carried them, and their pixels: the
   /// stage-3D message reuses them when lifting kept the labels (every frame but those whose
   /// planes are refitted on the fused depth), instead of compressing them again on the

@@ -177,9 +177,28 @@ class FrameOdometry {
   /// tracking restarts at `current` (see restart()) and stats->reinitialised is set.
   /// With TrackingReference::kKeyframe, `reference` is kept as the keyframe when the last
   /// call chose it, and `current` is matched against the active keyframe (falling back to
-  /// `reference` when that estimate is rejected).
+  /// `reference` when that estimate is rejected). The same as addLifted(reference) followed
+  /// by tryTrack(current), for callers that have every frame's 3D stage before the next one.
   TrackerOutput track(const FrameFeatures& reference, const FrameFeatures& current,
                       FrameOdometryStats* stats = nullptr);
+
+  /// The pipelined form (docs/estimator.md, "Poses ahead of the fused depth"): hands in the
+  /// 3D stage of a posed frame, which tracking may need later. False (nothing kept) when no
+  /// later frame can use it: not the frame posed last, nor one whose landmark fusion is due.
+  bool addLifted(FrameFeatures lifted);
+  /// Whether addLifted() would keep the 3D stage of frame `seq` (checked before decoding).
+  bool wantsLifted(int64_t seq) const;
+  /// Poses `current` when the 3D stages it needs are in, else returns nullopt and
+  /// awaitedLifted() names the frame it waits for (nothing changed: call again after
+  /// addLifted()). With keyframes, a frame is posed against the keyframe and the local map
+  /// without the previous frame's 3D stage, unless that frame is the next keyframe or the
+  /// estimate is rejected (the previous frame then serves). Landmark fusion is one frame
+  /// behind: the 3D stage of frame k refines the keyframe before frame k+2 is posed, so that
+  /// frame k+1 never waits for it; the result is the same whatever the order of arrival.
+  std::optional<TrackerOutput> tryTrack(const FrameFeatures& current,
+                                        FrameOdometryStats* stats = nullptr);
+  /// The frame whose 3D stage the last tryTrack() waited for (-1: it did not wait).
+  int64_t awaitedLifted() const { return awaited_lifted_; }
 
   /// Sequence number of the last frame given a pose (-1 before the first).
   int64_t lastSeq() const { return last_seq_; }
@@ -207,9 +226,16 @@ class FrameOdometry {
   /// Applies the keyframe rule to an accepted estimate against the keyframe.
   KeyframeReason keyframeExhausted(const PoseEstimate& against_keyframe, const Pose3& T_curr_kf);
   void resetKeyframes(int64_t next_keyframe_seq, KeyframeReason reason);
-  /// Fuses the 3D points of `observed` (the frame last tracked against the keyframe) into
-  /// the keyframe's points they were matched to.
-  void fuseIntoKeyframe(const FrameFeatures& observed);
+  struct PendingFusion;
+  /// Fuses the 3D points of `observed` (a frame tracked against the keyframe) into the
+  /// keyframe's points they were matched to.
+  void fuseIntoKeyframe(const FrameFeatures& observed, const PendingFusion& fusion);
+  /// The kept 3D stage of frame `seq`, or nullptr.
+  const FrameFeatures* lifted(int64_t seq) const;
+  /// Drops the kept state of earlier frames: pending fusions, 3D stages, a rejected estimate.
+  void forgetPending();
+  /// Drops the 3D stages no later frame can use.
+  void pruneLifted();
   /// Takes `reference` as the active keyframe; the one it replaces joins the local map when
   /// the new one was chosen through it.
   void takeKeyframe(const FrameFeatures& reference);
@@ -231,7 +257,7 @@ class FrameOdometry {
   int keyframe_first_rows_ = 0;  ///< inlier rows of the first frame tracked against it
   double keyframe_first_var_t_ = 0, keyframe_first_var_q_ = 0;
   int64_t keyframe_count_ = 0;
-  /// The last frame tracked against the keyframe, waiting for its 3D features to refine the
+  /// A frame tracked against the keyframe, waiting for its 3D features to refine the
   /// keyframe's points: its pose in the keyframe and the point matches (keyframe, frame).
   struct PendingFusion {
     int64_t seq = -1;
@@ -239,7 +265,15 @@ class FrameOdometry {
     Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_kf_frame)
     std::vector<std::pair<int, int>> points;
   };
-  PendingFusion pending_fusion_;
+  /// Oldest first; at most the last two posed frames (fusion is one frame behind).
+  std::deque<PendingFusion> pending_fusions_;
+  /// 3D stages handed in that later frames may need (the last posed frame's, and those of
+  /// pending fusions), oldest first.
+  std::deque<FrameFeatures> lifted_;
+  /// The frame whose estimate against the keyframe was rejected while it waited for the
+  /// previous frame's 3D stage (the fallback): not estimated twice.
+  int64_t keyframe_rejected_seq_ = -1;
+  int64_t awaited_lifted_ = -1;
   /// Covariance of xi(T_pending_kf), the pending keyframe's pose in the active keyframe,
   /// when it was chosen through an estimate against the active keyframe.
   std::optional<Matrix6d> pending_keyframe_covariance_;

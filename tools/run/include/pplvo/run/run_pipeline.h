@@ -1,9 +1,11 @@
 #pragma once
 /// pplvo-run: every pplvo process (player, depth filter, frontend, estimator) in one process on
-/// one memq:// LCM instance. The player publishes as fast as possible and dispatches the
-/// queue after each frame, so every message of frame k is handled before frame k+1 is read:
-/// deterministic, every frame processed, the same code and messages as the separate
-/// processes. Evaluations use this.
+/// one memq:// LCM instance. The player publishes as fast as possible, at most `in_flight`
+/// frames ahead of their poses, and dispatches the queue on this thread; the depth filter's
+/// fusion and the frontend's extraction run on workers whose results it publishes when the
+/// queue is idle. Deterministic (each stage's output depends on its inputs, not on their
+/// order), every frame processed, the same code and messages as the separate processes.
+/// Evaluations use this.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -55,8 +57,8 @@ struct RunResult {
   int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
   int64_t keyframes = 0, keyframe_fallbacks = 0;  ///< the estimator's (reference: keyframe)
   std::string keyframe_reasons;  ///< "overlap N, uncertainty N, ..." (chosen keyframes)
-  double elapsed_s = 0.0;  ///< wall time of the run (reading the dataset included)
-  double preload_s = 0.0;  ///< of which decoding the frames beforehand (--preload)
+  double elapsed_s = 0.0;        ///< wall time of the run (reading the dataset included)
+  double preload_s = 0.0;        ///< of which decoding the frames beforehand (--preload)
   std::vector<NodeReport> nodes;
   /// How the dataset's index was built: missing files, malformed lines, unsorted and
   /// duplicate stamps (what pplvo-player prints at start-up).
