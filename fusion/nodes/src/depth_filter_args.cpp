@@ -15,7 +15,7 @@ std::vector<config::Shortcut> shortcuts() {
                "M2  window eviction threshold, m^2 (1e-4)"});
   s.push_back({"--overload-backlog", "depth_filter.overload.backlog",
                "N  when more than N newer frames wait for their pose, fuse over a shorter "
-               "window (3; 0 = never)"});
+               "window (2; 0 = never)"});
   s.push_back({"--overload-step", "depth_filter.overload.window_step",
                "N  frames the window shortens per frame of backlog beyond that, down to 2 (2)"});
   s.push_back({"--features", "features", "LIST  the pipeline's feature families (not used here)"});

@@ -275,16 +275,17 @@ TEST(DepthFilterNode, FrameWaitsForThePoseItsTimeAlignmentNeeds) {
 }
 
 TEST(DepthFilterNode, OverloadWindowRule) {
-  DepthFilterNodeOptions o;  // window 10; more than 3 newer frames waiting: 2 shorter per frame
+  DepthFilterNodeOptions o;  // window 10; more than 2 newer frames waiting: 2 shorter per frame
   ASSERT_EQ(o.filter.ogm.max_window, 10);
+  ASSERT_EQ(o.filter.overload.backlog, 2);
   EXPECT_EQ(overloadWindow(0, o), 0);
-  EXPECT_EQ(overloadWindow(3, o), 0);
-  EXPECT_EQ(overloadWindow(4, o), 8);
-  EXPECT_EQ(overloadWindow(5, o), 6);
-  EXPECT_EQ(overloadWindow(7, o), 2);
+  EXPECT_EQ(overloadWindow(2, o), 0);
+  EXPECT_EQ(overloadWindow(3, o), 8);
+  EXPECT_EQ(overloadWindow(4, o), 6);
+  EXPECT_EQ(overloadWindow(6, o), 2);
   EXPECT_EQ(overloadWindow(1000000, o), 2);  // never below the frame and one past frame
   o.filter.overload.window_step = 5;
-  EXPECT_EQ(overloadWindow(4, o), 5);
+  EXPECT_EQ(overloadWindow(3, o), 5);
   o.filter.ogm.max_window = 2;  // nothing to shorten
   EXPECT_EQ(overloadWindow(1000, o), 0);
   o.filter.ogm.max_window = 10;
@@ -630,7 +631,7 @@ TEST(DepthFilterArgs, ConfigSetAndShortcutsOnTheDepthFilterSchema) {
   const DepthFilterArgs d = parseDepthFilterArgs({});
   EXPECT_TRUE(d.errors.empty());
   EXPECT_EQ(d.options.filter.ogm.max_window, 10);
-  EXPECT_EQ(d.options.filter.overload.backlog, 3);
+  EXPECT_EQ(d.options.filter.overload.backlog, 2);
   EXPECT_EQ(d.prefault_mb, 64);
 }
 

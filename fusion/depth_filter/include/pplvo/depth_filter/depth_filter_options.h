@@ -21,8 +21,12 @@ namespace pplvo::depth_filter {
 /// dropped further down. The pose -> O-GM -> lifting loop runs once per frame and O-GM is its
 /// largest part, so a shorter window lets the loop catch up; the window keeps every frame for
 /// later fusions. pplvo-run and lockstep launches never shed (backlog 0).
+/// 2 because a pose comes about one frame period after its frame's features (not after the
+/// previous frame's fusion and lifting as before O-GM left the pose loop): 2 newer frames then
+/// mean what 3 meant before, the depth filter behind by about two frames, with the frontend's
+/// queue of frames waiting for fused depth (5) not yet full (docs/depth_filter.md).
 struct DepthFilterOverloadOptions {
-  int backlog = 3;      ///< newer frames waiting for their pose beyond which the window shortens
+  int backlog = 2;      ///< newer frames waiting for their pose beyond which the window shortens
   int window_step = 2;  ///< frames shorter per frame of backlog beyond that (at least 2 left)
 };
 
