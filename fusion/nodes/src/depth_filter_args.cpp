@@ -44,7 +44,8 @@ DepthFilterArgs parseDepthFilterArgs(const std::vector<std::string>& args) {
       .option("--status-channel", &o.status_channel)
       .option("--max-pending", &o.max_pending, 1)
       .option("--max-alignment-wait-ms", &o.max_alignment_wait_ms, 0)
-      .flag("--compress", &o.compress);
+      .flag("--compress", &o.compress)
+      .flag("--fuse-on-worker", &o.fuse_on_worker);
   p.parse(args);
   a.help = p.help();
   a.errors = p.errors();
@@ -74,6 +75,8 @@ std::string depthFilterUsage() {
          "  --max-alignment-wait-ms N  longest wait of a frame for the pose its time\n"
          "                           alignment needs (100)\n"
          "  --compress               zlib-compress published maps\n"
+         "  --fuse-on-worker         O-GM on a thread of its own: frames keep getting their\n"
+         "                           C-GM maps while a frame is fused\n"
          "depth filter options (the depth_filter section of the configuration; keys of other\n"
          "sections are accepted and left to the processes that use them):\n" +
          config::configUsage("pipeline YAML (config/pplvo.yaml): its depth_filter section",

@@ -199,8 +199,6 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
   Fusion& f = to_fuse_.emplace_back();
   f.frame = std::move(p);
   f.pose = std::move(pose);
-  // Frames newer than this one already wait for their poses: the loop is behind the sensor.
-  f.limit = overloadWindow(static_cast<int>(pending_.size()), options_);
   startFusion();
 }
 
@@ -208,6 +206,9 @@ void DepthFilterNode::startFusion() {
   if (fusion_.valid() || to_fuse_.empty()) return;
   fusing_ = std::move(to_fuse_.front());
   to_fuse_.pop_front();
+  // Frames newer than this one already wait for their poses or their fusion: the loop is
+  // behind the sensor. Without a worker a fusion starts as its pose comes (to_fuse_ empty).
+  fusing_.limit = overloadWindow(static_cast<int>(pending_.size() + to_fuse_.size()), options_);
   fusing_.shortened_before = ogm_.stats().frames_fused_limited;
   auto fuse = [this] {
     const Stopwatch ogm_watch;

@@ -611,6 +611,7 @@ TEST(DepthFilterArgs, ConfigSetAndShortcutsOnTheDepthFilterSchema) {
                                                   "--max-pending",
                                                   "9",
                                                   "--compress",
+                                                  "--fuse-on-worker",
                                                   "--prefault-mb",
                                                   "0"});
   EXPECT_TRUE(a.errors.empty()) << a.errors.front();
@@ -626,12 +627,14 @@ TEST(DepthFilterArgs, ConfigSetAndShortcutsOnTheDepthFilterSchema) {
   EXPECT_EQ(a.options.routes.size(), 1u);
   EXPECT_EQ(a.options.max_pending, 9);
   EXPECT_TRUE(a.options.compress);
+  EXPECT_TRUE(a.options.fuse_on_worker);
   EXPECT_EQ(a.prefault_mb, 0);
   // Defaults: the depth filter schema's.
   const DepthFilterArgs d = parseDepthFilterArgs({});
   EXPECT_TRUE(d.errors.empty());
   EXPECT_EQ(d.options.filter.ogm.max_window, 10);
   EXPECT_EQ(d.options.filter.overload.backlog, 2);
+  EXPECT_FALSE(d.options.fuse_on_worker);
   EXPECT_EQ(d.prefault_mb, 64);
 }
 

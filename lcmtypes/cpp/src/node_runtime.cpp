@@ -1,5 +1,6 @@
 #include "pplvo/msgs/node_runtime.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -61,12 +62,13 @@ void countEscaped(NodeCounters& counters, const std::string& node, const std::st
 }  // namespace detail
 
 int64_t spin(const Bus& bus, const std::function<bool()>& done,
-             const std::function<void()>& periodic, double period_s) {
+             const std::function<void()>& periodic, double period_s,
+             const std::function<int()>& wait_ms) {
   using Clock = std::chrono::steady_clock;
   auto next = Clock::now() + std::chrono::duration<double>(period_s);
   int64_t handled = 0;
   while (!shutdownRequested() && !(done && done())) {
-    const int rc = bus.handleTimeout(50);
+    const int rc = bus.handleTimeout(wait_ms ? std::max(0, wait_ms()) : 50);
     if (rc > 0) ++handled;
     // A signal (Ctrl-C) interrupts the wait with EINTR: that is a shutdown, not a failure.
     if (rc < 0) {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <pplvo_msgs/node_status_t.hpp>
@@ -174,6 +175,27 @@ TEST(Bus, SpinHandlesEveryInstanceUntilDone) {
       bus, [&] { return r.channels.size() >= 6; }, [&] { ++periodic; }, 10.0);
   EXPECT_EQ(r.channels.size(), 6u);
   EXPECT_EQ(periodic, 1);  // once at the end
+}
+
+/// A node whose worker finishes between messages asks spin() for short waits; without that it
+/// waits 50 ms for a message before checking done() again.
+TEST(Bus, SpinWaitsForAMessageAtMostWhatItIsAsked) {
+  lcm::LCM lcm("memq://");
+  Bus bus(lcm);
+  const auto checksIn200ms = [&](const std::function<int()>& wait_ms) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+    int checks = 0;
+    spin(
+        bus,
+        [&] {
+          ++checks;
+          return std::chrono::steady_clock::now() >= end;
+        },
+        {}, 10.0, wait_ms);
+    return checks;
+  };
+  EXPECT_LE(checksIn200ms({}), 6);                 // about 4: 50 ms a wait
+  EXPECT_GE(checksIn200ms([] { return 2; }), 20);  // about 100
 }
 
 /// Sets an environment variable for the scope of one test.

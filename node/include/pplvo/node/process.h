@@ -47,12 +47,18 @@ template <class N, class = void>
 struct HasPoll : std::false_type {};
 template <class N>
 struct HasPoll<N, std::void_t<decltype(std::declval<N&>().poll())>> : std::true_type {};
+template <class N, class = void>
+struct HasPollWait : std::false_type {};
+template <class N>
+struct HasPollWait<N, std::void_t<decltype(std::declval<const N&>().pollWaitMs())>>
+    : std::true_type {};
 }  // namespace detail
 
 /// Runs an LCM node until SIGINT/SIGTERM: maps the heap (prefault), installs the shutdown
 /// handlers, opens the bus (URL and routes), builds the node with `make(bus)` (which may print
 /// its start-up line), handles messages, calling node.poll() between messages when the node
-/// has one and node.publishStatus() about once a second, publishes a last status and prints
+/// has one (waiting at most node.pollWaitMs() for a message when it has that) and
+/// node.publishStatus() about once a second, publishes a last status and prints
 /// `summary(node)` on stderr. Any exception: "NAME: what" on stderr and exit code 1; else 0.
 template <class Node>
 int runLcmNode(const NodeProcess& process,
@@ -69,7 +75,11 @@ int runLcmNode(const NodeProcess& process,
           if constexpr (detail::HasPoll<Node>::value) node->poll();
           return false;
         },
-        [&] { node->publishStatus(hostUtime()); }, 1.0);
+        [&] { node->publishStatus(hostUtime()); }, 1.0,
+        [&] {
+          if constexpr (detail::HasPollWait<Node>::value) return node->pollWaitMs();
+          return 50;
+        });
     node->publishStatus(hostUtime());
     std::fputs(summary(*node).c_str(), stderr);
   } catch (const std::exception& e) {

@@ -93,6 +93,9 @@ class DepthFilterNode {
   bool publishFusions(bool wait);
   /// Fusions queued or running on the worker (fuse_on_worker).
   bool fusing() const { return fusion_.valid() || !to_fuse_.empty(); }
+  /// Longest wait for a message before poll() (runLcmNode): 1 ms while a fusion runs on the
+  /// worker, so that its map goes out within a millisecond of being done, else 50.
+  int pollWaitMs() const { return fusion_.valid() ? 1 : 50; }
   /// Frames that waited for a pose to move their depth and went on without it.
   int64_t alignmentWaitsTimedOut() const { return alignment_waits_timed_out_; }
   int deferred() const { return static_cast<int>(deferred_.size()); }
@@ -139,7 +142,7 @@ class DepthFilterNode {
   struct Fusion {
     Pending frame;
     FramePose pose;
-    int limit = 0;  ///< overloadWindow() when it was queued
+    int limit = 0;  ///< overloadWindow() when it starts
     int64_t shortened_before = 0;
   };
   /// Starts the next queued fusion on the worker (or runs it here without fuse_on_worker).

@@ -24,9 +24,12 @@ std::unique_ptr<lcm::LCM> openLcm(const std::string& url);
 
 /// Handles messages (on every instance of `bus` this process subscribed on) until shutdown is
 /// requested or `done()` returns true, calling `periodic` about every `period_s` seconds.
+/// Each wait for a message lasts at most `wait_ms()` ms (50 without it): a node whose worker
+/// finishes between messages asks for short waits so that `done()` sees the result soon.
 /// Returns the number of handled messages.
 int64_t spin(const Bus& bus, const std::function<bool()>& done,
-             const std::function<void()>& periodic, double period_s = 1.0);
+             const std::function<void()>& periodic, double period_s = 1.0,
+             const std::function<int()>& wait_ms = {});
 
 /// Notes the arrival of frame `seq` from a source that numbers its published frames
 /// consecutively (player, camera). A jump means frames were lost on the way (the socket buffer
