@@ -358,7 +358,7 @@ void PlayerNode::drain() {
     if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
     if (rc < 0) break;
     // In process, the workers' last results (the last frames' fusion and lifting) too.
-    if (rc == 0 && !(options_.in_process_idle && options_.in_process_idle())) break;
+    if (rc == 0 && !inProcessWorkPublished()) break;
   }
 }
 
@@ -381,7 +381,7 @@ bool PlayerNode::waitForPose(int64_t seq) {
       const int rc = bus_.handleTimeout(0);
       if (rc < 0 && !msgs::shutdownRequested()) throw std::runtime_error("LCM handle failed");
       if (rc < 0) break;
-      if (rc == 0 && !(options_.in_process_idle && options_.in_process_idle())) break;
+      if (rc == 0 && !inProcessWorkPublished()) break;
     }
     return last_pose_seq_ >= seq;
   }

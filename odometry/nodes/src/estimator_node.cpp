@@ -90,12 +90,11 @@ void EstimatorNode::handleFeatures3d(const pplvo_msgs::features_t& msg) {
   if (msg.stage != pplvo_msgs::features_t::STAGE_3D) {
     throw msgs::MessageError("features_t on the 3D channel is not STAGE_3D");
   }
-  if (!odometry_.wantsLifted(msg.seq) && msg.seq <= odometry_.lastSeq() &&
-      odometry_.lastSeq() >= 0) {
-    ++counts_.lifted_unused;  // its successor was posed without it
-    return;
-  }
   if (!odometry_.wantsLifted(msg.seq)) {
+    if (odometry_.lastSeq() >= 0 && msg.seq <= odometry_.lastSeq()) {
+      ++counts_.lifted_unused;  // its successor was posed without it
+      return;
+    }
     // Only the last posed frame (a reference) and frames whose landmark fusion is due serve.
     ++counters_.frames_skipped;
     counters_.last_warning = "3D features of frame " + std::to_string(msg.seq) +

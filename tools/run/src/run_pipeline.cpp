@@ -197,8 +197,8 @@ RunResult runPipeline(const RunOptions& options) {
     // landmark fusion is due two frames later): with "auto" threads it takes two bands, so the
     // loop's core, idle while it waits, fuses one of them (measured: docs/pipeline.md).
     if (df.filter.ogm.threads == 0) {
-      df.filter.ogm.threads = std::min(2, static_cast<int>(std::thread::hardware_concurrency()));
-      df.filter.ogm.threads = std::max(1, df.filter.ogm.threads);
+      df.filter.ogm.threads =
+          std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 2);
     }
     nodes::DepthFilterNode depth_filter(df, lcm);
 

@@ -126,6 +126,10 @@ class PlayerNode {
   void publishStream(int8_t event, const PlayerResult& result);
   void periodic(bool force);
   void drain();
+  /// In process with nothing queued: whether in_process_idle published a worker's result.
+  bool inProcessWorkPublished() const {
+    return options_.in_process_idle && options_.in_process_idle();
+  }
   void waitUntil(double target_s);
   bool waitForPose(int64_t seq);
   /// Waits (dispatching messages) for the pose of `seq`; counts and reports a timeout.
