@@ -219,17 +219,25 @@ TEST_F(CameraFakenect, RawFramesMatchTheSource) {
     compareFrame(m, sources_[k], 0);
   }
   // Stamps: strictly increasing host times whose intervals follow the source's (the device
-  // counter carries the source stamps at 60 MHz; the offset estimate moves only by jitter).
+  // counter carries the source stamps at 60 MHz). The mapper's offset is the lower envelope of
+  // arrival minus device time (DeviceClockMapper): it falls when a frame arrives with less
+  // latency than any before (by how much depends on the machine's load, so it is printed, not
+  // bounded; test_camera_convert checks the mapper on injected arrival times) and rises by
+  // at most the drift allowance. So no interval is longer than the source's by more than that
+  // allowance and the microsecond rounding, whatever the load (a stall over the mapper's
+  // 0.5 s outlier threshold aside).
+  const pplvo::camera::DeviceClockOptions clock;
   std::vector<double> err_ms;
   for (size_t k = 1; k < p.frames.size(); ++k) {
     EXPECT_GT(p.frames[k].utime, p.frames[k - 1].utime);
     const double dt_pub = (p.frames[k].utime - p.frames[k - 1].utime) * 1e-3;
     const double dt_src = (sources_[k].rgb_t - sources_[k - 1].rgb_t) * 1e3;
+    EXPECT_LE(dt_pub - dt_src, dt_src * clock.max_drift_ppm * 1e-6 + 5e-3)
+        << "interval " << k << " longer than the source's (ms)";
     err_ms.push_back(std::abs(dt_pub - dt_src));
     EXPECT_EQ(p.frames[k].stamp, pplvo::camera::stampText(p.frames[k].utime));
   }
   std::sort(err_ms.begin(), err_ms.end());
-  EXPECT_LT(err_ms[err_ms.size() / 2], 2.0) << "median interval error (ms)";
   std::printf(
       "raw run: 20 frames, worst depth error / bound %.3f, max colour diff %.0f, "
       "interval error vs source median %.3f ms max %.3f ms\n",

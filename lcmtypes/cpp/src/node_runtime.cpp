@@ -64,11 +64,18 @@ void countEscaped(NodeCounters& counters, const std::string& node, const std::st
 int64_t spin(const Bus& bus, const std::function<bool()>& done,
              const std::function<void()>& periodic, double period_s,
              const std::function<int()>& wait_ms) {
+  return spinOn([&bus](int timeout_ms) { return bus.handleTimeout(timeout_ms); }, done, periodic,
+                period_s, wait_ms);
+}
+
+int64_t spinOn(const std::function<int(int timeout_ms)>& handle_timeout,
+               const std::function<bool()>& done, const std::function<void()>& periodic,
+               double period_s, const std::function<int()>& wait_ms) {
   using Clock = std::chrono::steady_clock;
   auto next = Clock::now() + std::chrono::duration<double>(period_s);
   int64_t handled = 0;
   while (!shutdownRequested() && !(done && done())) {
-    const int rc = bus.handleTimeout(wait_ms ? std::max(0, wait_ms()) : 50);
+    const int rc = handle_timeout(wait_ms ? std::max(0, wait_ms()) : kSpinWaitMs);
     if (rc > 0) ++handled;
     // A signal (Ctrl-C) interrupts the wait with EINTR: that is a shutdown, not a failure.
     if (rc < 0) {

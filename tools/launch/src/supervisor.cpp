@@ -171,7 +171,7 @@ size_t Supervisor::spawn(const ProcessSpec& spec) {
   ChildState c;
   c.spec = spec;
   c.pid = pid;
-  c.started = std::chrono::steady_clock::now();
+  c.started = now_();
   if (n == static_cast<ssize_t>(sizeof child_errno)) {
     int status = 0;
     ::waitpid(pid, &status, 0);
@@ -191,7 +191,7 @@ std::vector<size_t> Supervisor::poll() {
     for (int changes = 0; changes < 4; ++changes) {
       int status = 0;
       const pid_t r = ::waitpid(c.pid, &status, WNOHANG | WUNTRACED | WCONTINUED);
-      const auto now = std::chrono::steady_clock::now();
+      const auto now = now_();
       if (r == c.pid && WIFSTOPPED(status)) {
         if (!c.paused_since) {
           c.paused_since = now;
@@ -218,8 +218,7 @@ std::vector<size_t> Supervisor::poll() {
       break;
     }
     if (c.exit && c.paused_since) {
-      c.paused_s +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - *c.paused_since).count();
+      c.paused_s += std::chrono::duration<double>(now_() - *c.paused_since).count();
       c.paused_since.reset();
     }
   }

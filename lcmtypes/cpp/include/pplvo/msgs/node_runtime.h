@@ -30,6 +30,14 @@ std::unique_ptr<lcm::LCM> openLcm(const std::string& url);
 int64_t spin(const Bus& bus, const std::function<bool()>& done,
              const std::function<void()>& periodic, double period_s = 1.0,
              const std::function<int()>& wait_ms = {});
+/// spin()'s wait when the node asks for none (ms).
+constexpr int kSpinWaitMs = 50;
+/// spin() on any wait for messages: `handle_timeout(ms)` waits at most ms for one and returns
+/// what lcm::LCM::handleTimeout returns (tests pass a fake that records the waits, so that
+/// nothing depends on the machine's load).
+int64_t spinOn(const std::function<int(int timeout_ms)>& handle_timeout,
+               const std::function<bool()>& done, const std::function<void()>& periodic,
+               double period_s = 1.0, const std::function<int()>& wait_ms = {});
 
 /// Notes the arrival of frame `seq` from a source that numbers its published frames
 /// consecutively (player, camera). A jump means frames were lost on the way (the socket buffer

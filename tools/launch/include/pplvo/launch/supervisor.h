@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -72,7 +73,12 @@ std::string selfExecutableDir();
 /// destructor kills (SIGKILL) and reaps whatever is still running, so no child outlives it.
 class Supervisor {
  public:
+  using Clock = std::chrono::steady_clock;
+  /// The time that starts, pauses and their lengths are read from (tests inject their own, so
+  /// that a measured pause does not depend on the machine's load).
+  using Now = std::function<Clock::time_point()>;
   Supervisor() = default;
+  explicit Supervisor(Now now) : now_(std::move(now)) {}
   Supervisor(const Supervisor&) = delete;
   Supervisor& operator=(const Supervisor&) = delete;
   ~Supervisor();
@@ -112,11 +118,11 @@ class Supervisor {
   bool stopStillRunning(const std::vector<size_t>& indices);
   void stopKill(const std::vector<size_t>& indices);
   std::vector<ChildState> children_;
+  Now now_ = [] { return Clock::now(); };
 };
 
 template <typename F>
 void Supervisor::stop(const std::vector<size_t>& indices, double grace_s, F&& on_wait) {
-  using Clock = std::chrono::steady_clock;
   stopBegin(indices);
   const auto deadline = Clock::now() + std::chrono::duration<double>(grace_s);
   while (stopStillRunning(indices) && Clock::now() < deadline) on_wait();

@@ -5,6 +5,7 @@
 /// channel. The pipeline is deterministic, so with the configuration of the recording every
 /// output is byte-identical; with another configuration the report shows what changed.
 #include <cstdint>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,8 @@ namespace pplvo::replay {
 enum class Stage { kDepthFilter, kFrontend, kEstimator };
 bool parseStage(const std::string& text, Stage* stage);
 const char* toString(Stage stage);
+/// The channels a stage's node subscribes to (their default names), which a replay feeds.
+std::set<std::string> stageInputChannels(Stage stage);
 
 struct ReplayOptions {
   std::string log;  ///< event log recorded with pplvo-run --log or pplvo-logger (all channels)
