@@ -22,7 +22,7 @@ set(PPLVO_PYTHON_INSTALL_DIR lib/python3/dist-packages
 # benchmarks or with headers outside an include/ folder stay out.
 set(pplvo_public_libraries
   pplvo_core pplvo_config_io pplvo_msgs_util pplvo_node pplvo_dataset pplvo_depth_filter pplvo_features
-  pplvo_geometry pplvo_estimator pplvo_pipeline pplvo_pipeline_config pplvo_eval pplvo_fixtures
+  pplvo_geometry pplvo_estimator pplvo_tracking pplvo_pipeline pplvo_pipeline_config pplvo_eval pplvo_fixtures
   pplvo_logging pplvo_player_node pplvo_depth_filter_node pplvo_odometry_nodes pplvo_run
   pplvo_replay pplvo_viewer_render)
 

@@ -57,7 +57,6 @@ configs=(
   "all, alpha=1|--set odometry.tracker.estimator.plane_scale_alpha=1"
   "all, frame to frame (paper)|--set odometry.reference=frame"
   "all, keyframe without landmark fusion|--set odometry.keyframe.fuse_landmarks=false"
-  "all, keyframe + local map of 2|--set odometry.keyframe.local_map_keyframes=2"
 )
 [ "$quick" = 1 ] && configs=("points|--features points" "all|--features points,lines,planes")
 

@@ -17,4 +17,24 @@ const char* toString(TrackingStatus status) {
   return enumName(kTrackingStatusNames, status, "unknown");
 }
 
+void TrackingStatusCounts::add(TrackingStatus status) {
+  switch (status) {
+    case TrackingStatus::kFirstFrame:
+      ++first;
+      break;
+    case TrackingStatus::kTracking:
+      ++tracking;
+      break;
+    case TrackingStatus::kVelocityModel:
+      ++velocity_model;
+      break;
+    case TrackingStatus::kLost:
+      ++lost;
+      break;
+    case TrackingStatus::kReinitialised:
+      ++reinitialised;
+      break;
+  }
+}
+
 }  // namespace pplvo

@@ -69,6 +69,18 @@ void OgmFusion::configure(const PinholeCamera& camera) {
   }
 }
 
+void OgmFusion::fuseOnPose(int64_t seq, const FramePose& pose, const PinholeCamera& camera,
+                           const DepthWithVariance& depth, OgmResult* result, int window_limit) {
+  if (pose.status == TrackingStatus::kLost || pose.status == TrackingStatus::kReinitialised) {
+    reset();  // poses across a tracking loss cannot register the window
+  }
+  for (const WindowUncertainty& w : pose.window) {
+    setWindowUncertainty(w.seq, w.max_translation_variance_m2);
+  }
+  addFrame(seq, camera, depth);
+  fuse(seq, pose.T_w_c, result, window_limit);
+}
+
 void OgmFusion::reset() {
   for (Slot& s : slots_) {
     s.used = false;

@@ -212,16 +212,9 @@ void DepthFilterNode::startFusion() {
   fusing_.shortened_before = ogm_.stats().frames_fused_limited;
   auto fuse = [this] {
     const Stopwatch ogm_watch;
-    const FramePose& pose = fusing_.pose;
     const Pending& p = fusing_.frame;
-    if (pose.status == TrackingStatus::kLost || pose.status == TrackingStatus::kReinitialised) {
-      ogm_.reset();  // poses across a tracking loss cannot register the window
-    }
-    for (const WindowUncertainty& w : pose.window) {
-      ogm_.setWindowUncertainty(w.seq, w.max_translation_variance_m2);
-    }
-    ogm_.addFrame(p.seq, p.camera, p.depth);
-    ogm_.fuse(p.seq, pose.T_w_c, &fused_, fusing_.limit);  // buffers reused frame to frame
+    // Into fused_, whose buffers are reused frame to frame.
+    ogm_.fuseOnPose(p.seq, fusing_.pose, p.camera, p.depth, &fused_, fusing_.limit);
     return ogm_watch.elapsedMs();
   };
   if (options_.fuse_on_worker) {

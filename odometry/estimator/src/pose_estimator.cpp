@@ -10,6 +10,7 @@
 
 #include "pplvo/core/enum_names.h"
 #include "pplvo/estimator/pose_parameterisation.h"
+#include "pplvo/estimator/residuals.h"
 
 namespace pplvo {
 
@@ -47,145 +48,17 @@ bool isPsd(const Eigen::Matrix<double, N, N>& C) {
 // Terms of the joint cost E. Each keeps its data plus the weighting state that is fixed
 // during one Ceres solve (IRLS).
 
-struct PointTerm {
-  Eigen::Vector3d P;
-  Eigen::Matrix3d cov;
-  Eigen::Vector2d px;
-  double var_px2;
-  bool has_error_cov = false;  // the error's covariance differs from cov (error_cov)
-  Eigen::Matrix3d error_cov = Eigen::Matrix3d::Zero();
-  // weighting state
-  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();  // whitening: r_w = S r
-  double sqrt_tukey = 1.0;
-  bool active = false;
-};
-
-struct LineTerm {
-  Eigen::Vector3d P[2];
-  Eigen::Matrix3d cov[2];
-  Eigen::Vector3d l;
-  double var_px2;
-  double s[2] = {0, 0};  // whitening of each endpoint distance
-  double sqrt_tukey = 1.0;
-  bool active = false;
-};
-
-struct PlaneTerm {
-  Eigen::Vector4d prev, curr;
-  Eigen::Matrix4d cov_prev, cov_curr;
-  Eigen::Matrix3d S = Eigen::Matrix3d::Zero();  // whitening (without alpha)
-  bool active = false;
-};
-
-/// Pose with the derivatives of R(v) w.r.t. each q_xyz component.
-struct PoseEval {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  Eigen::Matrix3d dR[3];  // dR/dv_k
-  bool valid = false;
-
-  explicit PoseEval(const double* xi) {
-    const Eigen::Vector3d v(xi[3], xi[4], xi[5]);
-    t = Eigen::Vector3d(xi[0], xi[1], xi[2]);
-    if (!(v.squaredNorm() < 1.0 - 1e-9) || !t.allFinite() || !v.allFinite()) return;
-    R = xiToPose((Vector6d() << t, v).finished()).linear();
-    Eigen::Matrix3d M[3];
-    for (int j = 0; j < 3; ++j) M[j] = rotatedPointJacobian(v, Eigen::Vector3d::Unit(j));
-    // column k of M[j] is dR/dv_k * e_j, i.e. column j of dR/dv_k.
-    for (int k = 0; k < 3; ++k) {
-      for (int j = 0; j < 3; ++j) dR[k].col(j) = M[j].col(k);
-    }
-    valid = true;
-  }
-  Eigen::Matrix3d dRp(const Eigen::Vector3d& p) const {
-    Eigen::Matrix3d out;
-    for (int k = 0; k < 3; ++k) out.col(k) = dR[k] * p;
-    return out;
-  }
-};
-
-using Matrix26 = Eigen::Matrix<double, 2, 6>;
-using Matrix36 = Eigen::Matrix<double, 3, 6>;
-using Matrix23 = Eigen::Matrix<double, 2, 3>;
-
-struct Projector {
-  double fx, fy, cx, cy, min_depth;
-  bool project(const Eigen::Vector3d& X, Eigen::Vector2d& px, Matrix23& dpi) const {
-    if (!(X.z() > min_depth)) return false;
-    const double iz = 1.0 / X.z();
-    px = {fx * X.x() * iz + cx, fy * X.y() * iz + cy};
-    dpi << fx * iz, 0, -fx * X.x() * iz * iz, 0, fy * iz, -fy * X.y() * iz * iz;
-    return true;
-  }
-};
-
-/// Residual (eq. 18) and its Jacobian w.r.t. xi; Sigma_r if requested.
-bool pointResidual(const PointTerm& T, const PoseEval& pose, const Projector& cam,
-                   Eigen::Vector2d& r, Matrix26* J, Eigen::Matrix2d* Sigma_r) {
-  const Eigen::Vector3d X = pose.R * T.P + pose.t;
-  Eigen::Vector2d px;
-  Matrix23 dpi;
-  if (!cam.project(X, px, dpi)) return false;
-  r = T.px - px;
-  if (J) {
-    J->leftCols<3>() = -dpi;
-    J->rightCols<3>() = -dpi * pose.dRp(T.P);
-  }
-  if (Sigma_r) {
-    const Matrix23 JP = dpi * pose.R;
-    *Sigma_r = JP * T.cov * JP.transpose() + T.var_px2 * Eigen::Matrix2d::Identity();
-  }
-  return true;
-}
-
-/// Residual (eq. 19): signed distances of the projected endpoints to l_curr.
-bool lineResidual(const LineTerm& T, const PoseEval& pose, const Projector& cam, Eigen::Vector2d& r,
-                  Matrix26* J, Eigen::Vector2d* var_r) {
-  for (int i = 0; i < 2; ++i) {
-    const Eigen::Vector3d X = pose.R * T.P[i] + pose.t;
-    Eigen::Vector2d px;
-    Matrix23 dpi;
-    if (!cam.project(X, px, dpi)) return false;
-    r(i) = T.l(0) * px.x() + T.l(1) * px.y() + T.l(2);
-    const Eigen::RowVector3d g = T.l.head<2>().transpose() * dpi;  // d r_i / d X
-    if (J) {
-      J->block<1, 3>(i, 0) = g;
-      J->block<1, 3>(i, 3) = g * pose.dRp(T.P[i]);
-    }
-    if (var_r) {
-      const Eigen::RowVector3d gR = g * pose.R;
-      (*var_r)(i) = gR * T.cov[i] * gR.transpose() + T.var_px2;
-    }
-  }
-  return true;
-}
-
-/// Residual (eq. 20, our form): the previous plane moved into the current frame,
-/// {n_c = R N, d_c = d - n_c . t} (PlaneWithCov::transformed), compared with the current plane
-/// through their plane "points": r = d_c n_c - d' N'.
-void planeResidual(const PlaneTerm& T, const PoseEval& pose, Eigen::Vector3d& r, Matrix36* J,
-                   Eigen::Matrix3d* Sigma_r) {
-  const Eigen::Vector3d N = T.prev.head<3>(), Nc = T.curr.head<3>();
-  const Eigen::Vector3d n = pose.R * N;
-  const double dc = T.prev(3) - n.dot(pose.t);
-  r = dc * n - T.curr(3) * Nc;
-  if (J) {
-    J->leftCols<3>() = -n * n.transpose();
-    J->rightCols<3>() = (dc * Eigen::Matrix3d::Identity() - n * pose.t.transpose()) * pose.dRp(N);
-  }
-  if (Sigma_r) {
-    Eigen::Matrix<double, 3, 4> dr_dpc;  // d r / d [n_c; d_c]
-    dr_dpc << dc * Eigen::Matrix3d::Identity(), n;
-    Eigen::Matrix4d Jt = Eigen::Matrix4d::Zero();  // d [n_c; d_c] / d [N; d]
-    Jt.topLeftCorner<3, 3>() = pose.R;
-    Jt.block<1, 3>(3, 0) = -pose.t.transpose() * pose.R;
-    Jt(3, 3) = 1.0;
-    const Eigen::Matrix<double, 3, 4> A = dr_dpc * Jt;
-    Eigen::Matrix<double, 3, 4> B;
-    B << -T.curr(3) * Eigen::Matrix3d::Identity(), -Nc;
-    *Sigma_r = A * T.cov_prev * A.transpose() + B * T.cov_curr * B.transpose();
-  }
-}
+using estimator::LineTerm;
+using estimator::Matrix23;
+using estimator::Matrix26;
+using estimator::Matrix36;
+using estimator::PlaneTerm;
+using estimator::PointTerm;
+using estimator::PoseEval;
+using estimator::Projector;
+using estimator::lineResidual;
+using estimator::planeResidual;
+using estimator::pointResidual;
 
 template <int N>
 bool whitening(const Eigen::Matrix<double, N, N>& Sigma, bool full,
@@ -389,14 +262,11 @@ class JointProblem {
   /// same sum with alpha^2, for the sandwich covariance H^-1 M H^-1; the point and line terms
   /// weigh point_weight / line_weight in both, and count their variance scale in M: their
   /// residuals' actual covariance is that factor times the modelled Sigma_r (the robust
-  /// scale squared; docs/estimator.md, "Covariance consistency on real data"). M_weighted, if
-  /// given, is M with each point's error covariance as its weighting one (error_cov ignored).
-  void information(const double* xi, Matrix6d& H, Matrix6d& M,
-                   Matrix6d* M_weighted = nullptr) const {
+  /// scale squared; docs/estimator.md, "The published covariance: what it contains").
+  void information(const double* xi, Matrix6d& H, Matrix6d& M) const {
     const PoseEval pose(xi);
     H.setZero();
     M.setZero();
-    Matrix6d M_w = Matrix6d::Zero();
     if (!pose.valid) return;
     Eigen::Vector2d r;
     Matrix26 J2;
@@ -407,17 +277,7 @@ class JointProblem {
       const Matrix6d AtA = A.transpose() * A;
       H += point_weight * AtA;
       const double c = point_weight * point_weight * point_var_scale;
-      M_w += c * AtA;
-      if (T.has_error_cov) {
-        // The residual's covariance is not the one it is weighted by: the whitened residual
-        // has covariance S Sigma_err S^T instead of I.
-        const Matrix23 JP = -J2.leftCols<3>() * pose.R;
-        const Eigen::Matrix2d Sigma_err =
-            JP * T.error_cov * JP.transpose() + T.var_px2 * Eigen::Matrix2d::Identity();
-        M += c * A.transpose() * (T.S * Sigma_err * T.S.transpose()) * A;
-      } else {
-        M += c * AtA;
-      }
+      M += c * AtA;
     }
     for (const LineTerm& T : lines) {
       if (!T.active || T.sqrt_tukey <= 0) continue;
@@ -426,7 +286,6 @@ class JointProblem {
       const Matrix6d AtA = A.transpose() * A;
       H += line_weight * AtA;
       M += line_weight * line_weight * line_var_scale * AtA;
-      M_w += line_weight * line_weight * line_var_scale * AtA;
     }
     Eigen::Vector3d r3;
     Matrix36 J3;
@@ -437,11 +296,9 @@ class JointProblem {
       const Matrix6d AtA = A.transpose() * A;
       H.noalias() += plane_weight * AtA;
       M.noalias() += plane_weight * plane_weight * plane_scale * AtA;
-      M_w.noalias() += plane_weight * plane_weight * plane_scale * AtA;
     }
     H = 0.5 * (H + H.transpose());
     M = 0.5 * (M + M.transpose());
-    if (M_weighted) *M_weighted = 0.5 * (M_w + M_w.transpose());
   }
 
  private:
@@ -484,17 +341,9 @@ void addPointTerms(const std::vector<PointMatch3D2D>& matches, JointProblem& pro
       ++sk.bad_covariance;
       continue;
     }
-    if (m.error_cov && (!m.error_cov->allFinite() || !isPsd<3>(*m.error_cov))) {
-      ++sk.bad_covariance;
-      continue;
-    }
     PointTerm T;
     T.P = m.P_prev.p;
     T.cov = m.P_prev.cov;
-    if (m.error_cov) {
-      T.has_error_cov = true;
-      T.error_cov = *m.error_cov;
-    }
     T.px = m.px_curr;
     T.var_px2 = m.sigma_px * m.sigma_px;
     problem.points.push_back(T);
@@ -627,11 +476,11 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
 /// variances, the smallest relative eigenvalue of the Jacobi-scaled information).
 void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
                         const PoseEstimatorOptions& o, PoseEstimate& est) {
-  Matrix6d H, M, M_w;
+  Matrix6d H, M;
   // The whitened point and line residuals spread by the robust scale s (>= 1, MAD): their
   // covariance is s^2 Sigma_r, not Sigma_r (on real images s ~ 1.5; 1 on synthetic ones).
   // (With family_robust_scales each family has its own s and weighs 1/s^2.)
-  problem.information(xi.data(), H, M, &M_w);
+  problem.information(xi.data(), H, M);
   Eigen::Matrix<double, 6, 1> dinv_sqrt;
   bool diag_ok = H.allFinite() && M.allFinite();
   for (int i = 0; i < 6; ++i) {
@@ -655,14 +504,8 @@ void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
         null_part.noalias() += kLargeVariance * y.normalized() * y.normalized().transpose();
       }
     }
-    const Matrix6d cov_w = (o.covariance_sandwich ? Matrix6d(Hinv * M_w * Hinv) : Hinv) + null_part;
-    // Points whose error covariance differs from their weighting one (error_cov) add the
-    // difference, propagated like the sandwich's middle term (with eq. 21 too).
-    const Matrix6d cov = cov_w + Hinv * (M - M_w) * Hinv;
+    const Matrix6d cov = (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
     if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
-    if (cov_w.allFinite()) est.covariance_weighted = 0.5 * (cov_w + cov_w.transpose());
-  } else {
-    est.covariance_weighted = est.covariance;
   }
   est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
   est.max_rotation_variance = maxRotationVariance(est.covariance);
@@ -675,11 +518,9 @@ EstimateStatus classify(const PoseEstimate& est, bool solver_failed, int rows,
   if (solver_failed || !est.T_curr_prev.matrix().allFinite()) return EstimateStatus::kSolverFailure;
   if (rows < std::max(6, o.min_residuals)) return EstimateStatus::kTooFewConstraints;
   if (est.min_relative_eigenvalue < o.min_relative_eigenvalue) return EstimateStatus::kDegenerate;
-  // The thresholds detect weak geometry (collinear points, near-parallel planes) and were set
-  // on the covariance the weights state: points' error_cov (errors the weights cannot see,
-  // e.g. a keyframe's fused landmarks) is published, not tested here.
-  if (!(maxTranslationVariance(est.covariance_weighted) <= o.max_translation_variance_m2) ||
-      !(maxRotationVariance(est.covariance_weighted) <= o.max_rotation_variance)) {
+  // The thresholds detect weak geometry (collinear points, near-parallel planes).
+  if (!(maxTranslationVariance(est.covariance) <= o.max_translation_variance_m2) ||
+      !(maxRotationVariance(est.covariance) <= o.max_rotation_variance)) {
     return EstimateStatus::kUncertain;
   }
   return EstimateStatus::kOk;
@@ -690,8 +531,7 @@ EstimateStatus classify(const PoseEstimate& est, bool solver_failed, int rows,
 // ---------------------------------------------------------------------------------------------
 
 Correspondences buildCorrespondences(const FrameFeatures& prev, const FrameFeatures& curr,
-                                     const FeatureMatches& matches, const PoseEstimatorOptions& o,
-                                     const std::vector<Eigen::Matrix3d>* prev_point_error_cov) {
+                                     const FeatureMatches& matches, const PoseEstimatorOptions& o) {
   Correspondences out;
   auto inRange = [](int i, size_t n) { return i >= 0 && static_cast<size_t>(i) < n; };
   out.points.reserve(matches.points.size());
@@ -710,9 +550,6 @@ Correspondences buildCorrespondences(const FrameFeatures& prev, const FrameFeatu
     m.P_prev = fp.point;
     m.px_curr = fc.px;
     m.sigma_px = o.point_sigma_px * std::pow(o.octave_sigma_scale, std::max(0, fc.octave));
-    if (prev_point_error_cov && static_cast<size_t>(ip) < prev_point_error_cov->size()) {
-      m.error_cov = (*prev_point_error_cov)[ip];
-    }
     out.points.push_back(m);
   }
   for (const auto& [ip, ic] : matches.lines) {
@@ -755,7 +592,6 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
   PoseEstimate est;
   est.skipped = in.skipped;
   est.covariance = kLargeVariance * Matrix6d::Identity();
-  est.covariance_weighted = est.covariance;
   est.max_translation_variance_m2 = kLargeVariance;
   est.max_rotation_variance = kLargeVariance;
   const Pose3 guess = isValidPose(T_curr_prev_guess, 1e-4) ? T_curr_prev_guess : Pose3::Identity();

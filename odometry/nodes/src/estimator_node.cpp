@@ -40,8 +40,8 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
   if (msg.stage != pplvo_msgs::features_t::STAGE_2D) {
     throw msgs::MessageError("features_t on the 2D channel is not STAGE_2D");
   }
-  const int64_t last = odometry_.lastSeq();
-  if (last >= 0 && msg.seq <= last) {
+  const std::optional<int64_t> last = odometry_.lastPosed();
+  if (last && msg.seq <= *last) {
     ++counters_.frames_skipped;
     counters_.last_warning = "features of frame " + std::to_string(msg.seq) + " came too late";
     return;
@@ -51,7 +51,7 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
     ScopedStageTimer t(timings_, "decode");
     frame = msgs::fromMsg(msg);
   }
-  if (last < 0) {  // first frame of the stream: the origin of the world frame
+  if (!last) {  // first frame of the stream: the origin of the world frame
     const TrackerOutput out = odometry_.initialise(frame);
     publish(out, frame, {});
     return;
@@ -76,11 +76,11 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
     counters_.frames_dropped += static_cast<int64_t>(waiting_.size()) - 1;
     waiting_.clear();
     ++counts_.restarts_missing_reference;
-    const int64_t awaited =
-        odometry_.awaitedLifted() >= 0 ? odometry_.awaitedLifted() : odometry_.lastSeq();
+    const int64_t awaited = awaiting_lifted_.value_or(odometry_.lastPosed().value_or(-1));
     counters_.last_warning = "no 3D features for frame " + std::to_string(awaited) +
                              ": tracking restarted at " + std::to_string(newest.seq);
     TrackerOutput out = odometry_.restart(newest);
+    awaiting_lifted_.reset();
     drops_without_reference_ = 0;
     publish(out, newest, {});
   }
@@ -91,14 +91,15 @@ void EstimatorNode::handleFeatures3d(const pplvo_msgs::features_t& msg) {
     throw msgs::MessageError("features_t on the 3D channel is not STAGE_3D");
   }
   if (!odometry_.wantsLifted(msg.seq)) {
-    if (odometry_.lastSeq() >= 0 && msg.seq <= odometry_.lastSeq()) {
+    const std::optional<int64_t> last = odometry_.lastPosed();
+    if (last && msg.seq <= *last) {
       ++counts_.lifted_unused;  // its successor was posed without it
       return;
     }
     // Only the last posed frame (a reference) and frames whose landmark fusion is due serve.
     ++counters_.frames_skipped;
     counters_.last_warning = "3D features of frame " + std::to_string(msg.seq) +
-                             " are not needed (last posed " + std::to_string(odometry_.lastSeq()) +
+                             " are not needed (last posed " + std::to_string(last.value_or(-1)) +
                              ")";
     return;
   }
@@ -113,21 +114,22 @@ void EstimatorNode::handleFeatures3d(const pplvo_msgs::features_t& msg) {
 
 void EstimatorNode::processWaiting() {
   while (!waiting_.empty()) {
-    pipeline::FrameOdometryStats stats;
-    const std::optional<TrackerOutput> out = odometry_.tryTrack(waiting_.front(), &stats);
-    if (!out) return;  // a 3D stage it needs is not in yet (odometry_.awaitedLifted())
+    const tracking::TrackingStep step = odometry_.step(waiting_.front());
+    awaiting_lifted_ = step.awaiting_lifted;
+    if (!step.posed()) return;  // a 3D stage it needs is not in yet
+    const tracking::TrackingStats& stats = step.stats;
     FrameFeatures current = std::move(waiting_.front());
     waiting_.pop_front();
-    counts_.keyframes = odometry_.keyframeCount();
+    counts_.keyframes = odometry_.keyframes().insertedCount();
     if (stats.new_keyframe) ++counts_.keyframe_reasons[static_cast<int>(stats.keyframe_reason)];
     if (stats.keyframe_fallback) ++counts_.keyframe_fallbacks;
     drops_without_reference_ = 0;
-    publish(*out, current, stats);
+    publish(*step.pose, current, stats);
   }
 }
 
 void EstimatorNode::publish(const TrackerOutput& out, const FrameFeatures& frame,
-                            const pipeline::FrameOdometryStats& stats) {
+                            const tracking::TrackingStats& stats) {
   last_pose_utime_ = std::max(newest_utime_, frame.utime);
   FramePose pose = toFramePose(out);
   pose.utime = frame.utime;
@@ -135,23 +137,7 @@ void EstimatorNode::publish(const TrackerOutput& out, const FrameFeatures& frame
   pose.stamp = frame.stamp;
   pose.reference = odometry_.referenceRole(frame.seq);
   (void)stats;  // pose_t carries the inliers the estimate used (toFramePose)
-  switch (pose.status) {
-    case TrackingStatus::kFirstFrame:
-      ++counts_.first;
-      break;
-    case TrackingStatus::kTracking:
-      ++counts_.tracking;
-      break;
-    case TrackingStatus::kVelocityModel:
-      ++counts_.velocity_model;
-      break;
-    case TrackingStatus::kLost:
-      ++counts_.lost;
-      break;
-    case TrackingStatus::kReinitialised:
-      ++counts_.reinitialised;
-      break;
-  }
+  counts_.add(pose.status);
   {
     ScopedStageTimer t(timings_, "encode");
     const pplvo_msgs::pose_t m = msgs::toMsg(pose);

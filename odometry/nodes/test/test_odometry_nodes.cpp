@@ -426,7 +426,7 @@ TEST(EstimatorNode, RestartsHoldingThePoseWhenTheReferenceNeverComes) {
   o.max_drops_without_reference = 1;
   // Frame to frame: every frame needs the previous one's 3D features (with keyframes a
   // frame is posed against the keyframe without them: KeyframesPoseWithoutThePreviousFrame).
-  o.odometry.reference = pipeline::TrackingReference::kFrame;
+  o.odometry.reference = tracking::TrackingReference::kFrame;
   EstimatorNode node(o, lcm);
   Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
   lcm.publish(channels::kFeatures, &fs.f2d[0]);
@@ -468,7 +468,7 @@ TEST(EstimatorNode, RestartsWhenNoPoseCouldBeMadeForTheTimeBound) {
     o.max_reference_wait_ms = wait_ms;
     // Frame to frame: every frame needs the previous one's 3D features (with keyframes a
     // frame is posed against the keyframe without them: KeyframesPoseWithoutThePreviousFrame).
-    o.odometry.reference = pipeline::TrackingReference::kFrame;
+    o.odometry.reference = tracking::TrackingReference::kFrame;
     EstimatorNode node(o, lcm);
     Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
     lcm.publish(channels::kFeatures, &fs.f2d[0]);

@@ -38,14 +38,7 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
   const DepthWithVariance* fused = &depth;
   if (options_.depth_filter.model == depth_filter::DepthModel::kOgm) {
     ScopedStageTimer t(depth_timings_, "ogm");
-    if (r.pose.status == TrackingStatus::kLost || r.pose.status == TrackingStatus::kReinitialised) {
-      ogm_.reset();  // poses across a tracking loss cannot register the window
-    }
-    for (const WindowUncertainty& w : r.pose.window) {
-      ogm_.setWindowUncertainty(w.seq, w.max_translation_variance_m2);
-    }
-    ogm_.addFrame(frame.seq, frame.camera, depth);
-    ogm_.fuse(frame.seq, r.pose.T_w_c, &fused_);
+    ogm_.fuseOnPose(frame.seq, r.pose, frame.camera, depth, &fused_);
     if (fused_.ok) fused = &fused_.depth;
   }
   r.fused_window_length = fused->window_length;

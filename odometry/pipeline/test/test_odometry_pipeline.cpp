@@ -108,7 +108,7 @@ TEST(OdometryPipeline, KeyframeTrackingHoldsAndTakesKeyframes) {
   // The hand-held synthetic sequence against keyframes: every frame tracked, keyframes taken
   // along the motion, the drift within the frame-to-frame test's bounds.
   PipelineOptions o;
-  o.odometry.reference = TrackingReference::kKeyframe;
+  o.odometry.reference = tracking::TrackingReference::kKeyframe;
   OdometryPipeline pipe(o);
   const auto& f = frames();
   int tracking = 0, keyframes = 0, against_older = 0;
@@ -117,7 +117,7 @@ TEST(OdometryPipeline, KeyframeTrackingHoldsAndTakesKeyframes) {
     const PipelineFrameResult r = pipe.process(f[i].frame);
     if (r.pose.status == TrackingStatus::kTracking) ++tracking;
     if (r.odometry.new_keyframe) ++keyframes;
-    if (i > 0 && r.odometry.reference_seq >= 0 && r.odometry.reference_seq < f[i].frame.seq - 1)
+    if (i > 0 && r.odometry.reference_seq && *r.odometry.reference_seq < f[i].frame.seq - 1)
       ++against_older;
     const Pose3 truth = f[0].T_w_c.inverse() * f[i].T_w_c;
     max_t = std::max(max_t, (truth.inverse() * r.pose.T_w_c).translation().norm());
@@ -137,7 +137,7 @@ TEST(OdometryPipeline, FusedPlanesAreFittedOnlyForFramesTrackedAgainst) {
   // none here): the planes of the fused depth are fitted for those frames alone, and the poses
   // are those of fitting them for every frame.
   PipelineOptions only, every;
-  only.odometry.reference = every.odometry.reference = TrackingReference::kKeyframe;
+  only.odometry.reference = every.odometry.reference = tracking::TrackingReference::kKeyframe;
   every.frontend.fused_planes_only_for_references = false;
   OdometryPipeline a(only), b(every);
   const auto& f = frames();
@@ -163,7 +163,7 @@ TEST(OdometryPipeline, FusedPlanesAreFittedOnlyForFramesTrackedAgainst) {
 
   // Frame to frame every frame is the next one's reference.
   PipelineOptions frame_mode;
-  frame_mode.odometry.reference = TrackingReference::kFrame;
+  frame_mode.odometry.reference = tracking::TrackingReference::kFrame;
   OdometryPipeline frame_to_frame(frame_mode);
   for (int i = 0; i < 4; ++i) {
     EXPECT_EQ(frame_to_frame.process(f[i].frame).pose.reference, ReferenceRole::kReference);
@@ -186,7 +186,7 @@ TEST(OdometryPipeline, KeyframeTrackingSurvivesTurningAwayAndBack) {
   };
   const synth::SyntheticSequence seq(so);
   PipelineOptions o;
-  o.odometry.reference = TrackingReference::kKeyframe;
+  o.odometry.reference = tracking::TrackingReference::kKeyframe;
   OdometryPipeline pipe(o);
   int not_tracking = 0, keyframes = 0;
   Pose3 first = Pose3::Identity(), last = Pose3::Identity(), est = Pose3::Identity();
@@ -257,7 +257,7 @@ TEST(OdometryPipeline, DepthCapturedBeforeColourIsMovedToTheColourInstant) {
   ASSERT_EQ(offset.render(3).frame.depth_utime - offset.render(3).frame.utime, -16000);
 
   PipelineOptions o;
-  o.odometry.reference = TrackingReference::kFrame;  // every pair its own estimate
+  o.odometry.reference = tracking::TrackingReference::kFrame;  // every pair its own estimate
   // Planes at the paper's weight: the plane weights from their residuals would see the
   // misaligned depth's planes disagree and weigh them less (0.77 mm as captured), hiding
   // what this test is about, the depth moved to the colour instant.

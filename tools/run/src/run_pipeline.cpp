@@ -39,23 +39,7 @@ class PoseCollector {
       result_.trajectory.push_back(s);
       result_.frame_poses.push_back(p);
       ++result_.poses;
-      switch (p.status) {
-        case TrackingStatus::kFirstFrame:
-          ++result_.first;
-          break;
-        case TrackingStatus::kTracking:
-          ++result_.tracking;
-          break;
-        case TrackingStatus::kVelocityModel:
-          ++result_.velocity_model;
-          break;
-        case TrackingStatus::kLost:
-          ++result_.lost;
-          break;
-        case TrackingStatus::kReinitialised:
-          ++result_.reinitialised;
-          break;
-      }
+      result_.add(p.status);
     });
   }
   const msgs::NodeCounters& counters() const { return counters_; }
@@ -191,7 +175,7 @@ RunResult runPipeline(const RunOptions& options) {
     df.filter.overload.backlog =
         0;  // every frame fused over the full window (in_flight is bounded)
     // The fusion of frame k runs on a worker while frame k+1 is posed on this thread
-    // (FrameOdometry::tryTrack needs frame k's 3D features only for a keyframe or a fallback).
+    // (FrameTracker::step needs frame k's 3D features only for a keyframe or a fallback).
     df.fuse_on_worker = true;
     // Off the loop, the fusion is what the loop waits for on every other frame (a frame's
     // landmark fusion is due two frames later): with "auto" threads it takes two bands, so the
@@ -265,9 +249,9 @@ RunResult runPipeline(const RunOptions& options) {
         {nodes::EstimatorNode::kName, estimator.counters(), estimator.allTimings()});
     result.keyframes = estimator.counts().keyframes;
     result.keyframe_fallbacks = estimator.counts().keyframe_fallbacks;
-    for (int r = 1; r < pipeline::kKeyframeReasons; ++r) {
+    for (int r = 1; r < tracking::kKeyframeReasons; ++r) {
       result.keyframe_reasons += (r > 1 ? ", " : "");
-      result.keyframe_reasons += pipeline::toString(static_cast<pipeline::KeyframeReason>(r));
+      result.keyframe_reasons += tracking::toString(static_cast<tracking::KeyframeReason>(r));
       result.keyframe_reasons += " " + std::to_string(estimator.counts().keyframe_reasons[r]);
     }
     if (recorder && recorder->counters().errors > 0) {

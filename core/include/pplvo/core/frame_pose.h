@@ -17,6 +17,12 @@ enum class TrackingStatus : int8_t {
 };
 const char* toString(TrackingStatus status);
 
+/// How many poses had each status (the estimator node and pplvo-run count the same way).
+struct TrackingStatusCounts {
+  int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
+  void add(TrackingStatus status);
+};
+
 /// Whether later frames are tracked against a frame's 3D features (pose_t.reference).
 enum class ReferenceRole : int8_t {
   kUnknown = 0,       ///< not said: treated as kReference

@@ -9,6 +9,7 @@
 
 #include "pplvo/core/camera.h"
 #include "pplvo/core/config_schema.h"
+#include "pplvo/core/frame_pose.h"
 #include "pplvo/core/geometry.h"
 #include "pplvo/core/rgbd_frame.h"
 
@@ -60,9 +61,9 @@ struct OgmOptions {
   /// horizontal bands, each accumulating the points that land in it in the serial order.
   /// 1 = serial; 0 = one fewer than the machine's hardware threads (at least 1), since in the
   /// pipeline the frontend extracts the next frame on one while a frame is fused: on two cores
-  /// a second band only adds its share of re-projected rows and a hand-off (docs/pipeline.md,
-  /// "Speed"). pplvo-run, which fuses on a worker beside the pose loop, resolves 0 to two
-  /// bands instead. The results (depth, variance, stats) do not depend on it, bit for bit.
+  /// a second band only adds its share of re-projected rows and a hand-off
+  /// (docs/decisions/0006). pplvo-run, which fuses on a worker beside the pose loop, resolves 0 to
+  /// two bands instead. The results (depth, variance, stats) do not depend on it, bit for bit.
   int threads = 0;
 };
 
@@ -146,6 +147,13 @@ class OgmFusion {
 
   /// Empties the window (e.g. after tracking loss).
   void reset();
+
+  /// One frame's O-GM step on the estimator's pose of it, as every caller runs it (the depth
+  /// filter process on pose_t, OdometryPipeline): the window is reset after a tracking loss
+  /// (poses across it cannot register the window), takes the window uncertainties the pose
+  /// carries, receives the frame's depth (stage 2 output) and is fused into frame `seq`.
+  void fuseOnPose(int64_t seq, const FramePose& pose, const PinholeCamera& camera,
+                  const DepthWithVariance& depth, OgmResult* result, int window_limit = 0);
 
   /// Frames currently stored.
   int windowSize() const;

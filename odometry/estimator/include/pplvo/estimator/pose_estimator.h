@@ -28,11 +28,6 @@ struct PointMatch3D2D {
   Point3WithCov P_prev;                               ///< prev camera frame, m / m^2
   Eigen::Vector2d px_curr = Eigen::Vector2d::Zero();  ///< undistorted pixel
   double sigma_px = std::sqrt(1.0 / 12.0);            ///< std of each pixel coordinate
-  /// The covariance of the 3D point's error that the pose covariance propagates, when it
-  /// differs from P_prev.cov (which weighs the residual): a keyframe landmark refined by
-  /// observations registered to the landmarks themselves (docs/estimator.md, "Keyframe
-  /// landmarks"). Unset: P_prev.cov.
-  std::optional<Eigen::Matrix3d> error_cov;
 };
 
 /// 3D segment of the previous frame matched to a 2D line a u + b v + c = 0 of the current
@@ -138,8 +133,7 @@ struct PoseEstimatorOptions {
   double min_relative_eigenvalue = 1e-9;
   /// Largest eigenvalue of the translation block of Sigma_xi (m^2), paper Sec. "Pose
   /// Uncertainty". 1e-4 m^2 = (1 cm)^2; see docs/estimator.md for the values seen on synthetic
-  /// data (well-conditioned frames: ~1e-7..1e-5 m^2). Both tests are on
-  /// PoseEstimate::covariance_weighted (points' error_cov is not a weakness of the geometry).
+  /// data (well-conditioned frames: ~1e-7..1e-5 m^2).
   double max_translation_variance_m2 = 1e-4;
   /// Largest eigenvalue of the q_xyz block (q_xyz ~ half the rotation angle in rad):
   /// 2.5e-5 = (0.005)^2, i.e. ~0.57 deg std of the rotation angle.
@@ -223,9 +217,6 @@ struct PoseEstimate {
   double max_translation_variance_m2 = 0;
   double max_rotation_variance = 0;
   double min_relative_eigenvalue = 0;  ///< of the Jacobi-scaled J^T W J
-  /// The covariance with each point's error as its weighting covariance states it
-  /// (PointMatch3D2D::error_cov ignored); equal to `covariance` when none is given.
-  Matrix6d covariance_weighted = Matrix6d::Identity();
 
   // Diagnostics.
   int n_points_in = 0, n_lines_in = 0, n_planes_in = 0;        ///< after validation
@@ -249,12 +240,9 @@ constexpr double kLargeVariance = 1e6;
 /// (prev index, curr index). Points and lines need has_3d in prev; the current point pixel
 /// and line equation are used. Matches with bad indices or without 3D are counted in
 /// `skipped`; values are validated again by PoseEstimator::estimate.
-/// `prev_point_error_cov`, when given, holds PointMatch3D2D::error_cov of prev's points by
-/// index (points beyond its size get none).
-Correspondences buildCorrespondences(
-    const FrameFeatures& prev, const FrameFeatures& curr, const FeatureMatches& matches,
-    const PoseEstimatorOptions& options,
-    const std::vector<Eigen::Matrix3d>* prev_point_error_cov = nullptr);
+Correspondences buildCorrespondences(const FrameFeatures& prev, const FrameFeatures& curr,
+                                     const FeatureMatches& matches,
+                                     const PoseEstimatorOptions& options);
 
 /// Single-frame pose estimator (stateless apart from its options).
 class PoseEstimator {

@@ -1,5 +1,5 @@
 #pragma once
-/// pplvo-estimator: frame-to-frame odometry (pplvo::pipeline::FrameOdometry) as an LCM process.
+/// pplvo-estimator: the tracking policy (pplvo::tracking::FrameTracker) as an LCM process.
 ///
 /// | channel (default)   | type          | direction | content                                   |
 /// |---------------------|---------------|-----------|-------------------------------------------|
@@ -11,7 +11,7 @@
 /// Frame k is tracked against the 3D features of the frame tracked last, which come back only
 /// after its pose went round the depth filter and the frontend; with keyframes it waits for
 /// them only when that frame is the next keyframe or the keyframe's estimate is rejected (and
-/// for the 3D features of frame k-2, whose landmark fusion is due: FrameOdometry::tryTrack),
+/// for the 3D features of frame k-2, whose landmark fusion is due: FrameTracker::step),
 /// so that frame k is posed while frame k-1 is fused and lifted. Frames that arrive meanwhile
 /// wait (at most max_waiting; the oldest are dropped, counted, and the next one is matched to
 /// the same reference over a longer motion). If the reference never comes (an upstream
@@ -20,6 +20,7 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <lcm/lcm-cpp.hpp>
 #include <pplvo_msgs/features_t.hpp>
 #include <string>
@@ -28,7 +29,7 @@
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
-#include "pplvo/pipeline/frame_odometry.h"
+#include "pplvo/tracking/frame_tracker.h"
 
 namespace pplvo::nodes {
 
@@ -51,12 +52,11 @@ struct EstimatorNodeOptions {
   /// sparsely, so drops alone could take long. A slow loop that still delivers its references
   /// is never cut. 0 = no time bound. Lockstep never reaches it.
   int max_reference_wait_ms = 1000;
-  pipeline::FrameOdometryOptions odometry;
+  tracking::TrackingOptions odometry;
 };
 
-/// Tracking outcome counts (per status), for summaries and tests.
-struct EstimatorCounts {
-  int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
+/// Tracking outcome counts (per status, and why keyframes changed), for summaries and tests.
+struct EstimatorCounts : TrackingStatusCounts {
   int64_t restarts_missing_reference = 0;
   /// 3D features that came after every frame that could use them was posed (posed against the
   /// keyframe, with no landmark fusion due): normal with keyframes, not an error.
@@ -64,8 +64,8 @@ struct EstimatorCounts {
   /// Keyframe tracking (odometry.reference: keyframe): keyframes chosen, and frames whose
   /// keyframe estimate failed so that the previous frame served.
   int64_t keyframes = 0, keyframe_fallbacks = 0;
-  /// Keyframes chosen, by pipeline::KeyframeReason.
-  std::array<int64_t, pipeline::kKeyframeReasons> keyframe_reasons{};
+  /// Keyframes chosen, by tracking::KeyframeReason.
+  std::array<int64_t, tracking::kKeyframeReasons> keyframe_reasons{};
 };
 
 class EstimatorNode {
@@ -93,12 +93,14 @@ class EstimatorNode {
   /// Tracks waiting frames while the reference they need is in.
   void processWaiting();
   void publish(const TrackerOutput& out, const FrameFeatures& frame,
-               const pipeline::FrameOdometryStats& stats);
+               const tracking::TrackingStats& stats);
 
   EstimatorNodeOptions options_;
   msgs::Bus bus_;
   std::vector<msgs::BusSubscription> subscriptions_;
-  pipeline::FrameOdometry odometry_;
+  tracking::FrameTracker odometry_;
+  /// The frame whose 3D stage the last step waited for, if it waited.
+  std::optional<int64_t> awaiting_lifted_;
   std::deque<FrameFeatures> waiting_;  ///< stage 2D, oldest first
   int drops_without_reference_ = 0;
   int64_t newest_utime_ = -1;     ///< stamp of the newest stage-2D features received

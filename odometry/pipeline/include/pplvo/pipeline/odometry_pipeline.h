@@ -18,7 +18,7 @@ struct PipelineFrameResult {
   TrackerOutput tracking;
   FramePose pose;  ///< published form (utime, seq, stamp of the frame)
   FrontendStats frontend;
-  FrameOdometryStats odometry;
+  tracking::TrackingStats odometry;
   int fused_window_length = 1;  ///< frames fused into this frame's depth
 };
 
@@ -42,7 +42,7 @@ class OdometryPipeline {
   depth_filter::OgmFusion ogm_;
   depth_filter::OgmResult fused_;
   Frontend frontend_;
-  FrameOdometry odometry_;
+  tracking::FrameTracker odometry_;
   std::optional<FrameFeatures> reference_;
   StageTimings depth_timings_;
 };

@@ -6,8 +6,8 @@
 #include <string>
 
 #include "pplvo/depth_filter/depth_filter_options.h"
-#include "pplvo/pipeline/frame_odometry.h"
 #include "pplvo/pipeline/frontend.h"
+#include "pplvo/tracking/frame_tracker.h"
 
 namespace pplvo::pipeline {
 
@@ -19,7 +19,7 @@ using DepthFilterOverloadOptions = depth_filter::DepthFilterOverloadOptions;
 struct PipelineOptions {
   DepthFilterOptions depth_filter;
   FrontendOptions frontend;
-  FrameOdometryOptions odometry;
+  tracking::TrackingOptions odometry;
 
   /// Feature families, set in the frontend and the estimator alike.
   FeatureFamilies families() const { return frontend.families; }

@@ -47,14 +47,13 @@ struct NodeReport {
   StageTimings timings;
 };
 
-struct RunResult {
+struct RunResult : TrackingStatusCounts {
   Trajectory trajectory;  ///< T_w_c per posed frame, stamps verbatim from the dataset
   /// Every published pose as received (stamp, status, T_prev_curr and its covariance), for
   /// --covariance (pplvo/eval/pose_records.h).
   std::vector<FramePose> frame_poses;
   int64_t frames_published = 0, frames_skipped = 0;
   int64_t poses = 0;
-  int64_t first = 0, tracking = 0, velocity_model = 0, lost = 0, reinitialised = 0;
   int64_t keyframes = 0, keyframe_fallbacks = 0;  ///< the estimator's (reference: keyframe)
   std::string keyframe_reasons;  ///< "overlap N, uncertainty N, ..." (chosen keyframes)
   double elapsed_s = 0.0;        ///< wall time of the run (reading the dataset included)

@@ -1,4 +1,4 @@
-// Frame-to-keyframe tracking (FrameOdometry with TrackingReference::kKeyframe) on fabricated
+// Frame-to-keyframe tracking (FrameTracker with TrackingReference::kKeyframe) on fabricated
 // point features with known truth: a world of landmarks with binary descriptors, observed
 // with pixel noise in 2D and lifted with depth noise in 3D, independently in every frame.
 // Keyframes are taken where the rule says, drift stays bounded where frame-to-frame
@@ -13,9 +13,9 @@
 
 #include "pplvo/estimator/pose_parameterisation.h"
 #include "pplvo/fixtures/cameras.h"
-#include "pplvo/pipeline/frame_odometry.h"
+#include "pplvo/tracking/frame_tracker.h"
 
-namespace pplvo::pipeline {
+namespace pplvo::tracking {
 namespace {
 
 using fixtures::kinectVgaCamera;
@@ -108,8 +108,8 @@ Pose3 poseOf(const Eigen::Vector3d& t, double yaw_rad, double pitch_rad = 0.0) {
   return T;
 }
 
-FrameOdometryOptions pointsOnly(TrackingReference reference) {
-  FrameOdometryOptions o;
+TrackingOptions pointsOnly(TrackingReference reference) {
+  TrackingOptions o;
   o.reference = reference;
   o.tracker.estimator.use_lines = false;
   o.tracker.estimator.use_planes = false;
@@ -118,22 +118,22 @@ FrameOdometryOptions pointsOnly(TrackingReference reference) {
 
 struct RunResult {
   std::vector<TrackerOutput> outputs;
-  std::vector<FrameOdometryStats> stats;
+  std::vector<TrackingStats> stats;
   std::vector<int64_t> keyframe_seq;  ///< active keyframe after each frame
   double final_error_m = 0, max_error_m = 0, max_error_deg = 0;
   int64_t keyframes = 0;
   int fallbacks = 0, lost = 0, not_tracking = 0;
 };
 
-RunResult run(const FrameOdometryOptions& options, const std::vector<Pose3>& truth,
+RunResult run(const TrackingOptions& options, const std::vector<Pose3>& truth,
               uint64_t seed = 7) {
   LandmarkWorld world(seed);
-  FrameOdometry odometry(options);
+  FrameTracker odometry(options);
   RunResult r;
   FrameFeatures reference;
   for (int k = 0; k < static_cast<int>(truth.size()); ++k) {
     auto [f2, f3] = world.observe(k, truth[k]);
-    FrameOdometryStats s;
+    TrackingStats s;
     const TrackerOutput out = k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2, &s);
     reference = std::move(f3);
     const Pose3 expected = truth[0].inverse() * truth[k];
@@ -147,15 +147,15 @@ RunResult run(const FrameOdometryOptions& options, const std::vector<Pose3>& tru
     if (k > 0 && out.status != TrackingStatus::kTracking) ++r.not_tracking;
     r.outputs.push_back(out);
     r.stats.push_back(s);
-    r.keyframe_seq.push_back(odometry.keyframeSeq());
+    r.keyframe_seq.push_back(odometry.keyframes().activeSeq().value_or(-1));
     if (std::getenv("PPLVO_TEST_VERBOSE")) {
       std::printf("%d status %d ref %lld fb %d new %d pm %d rows %d est %s err %.1f mm\n", k,
-                  static_cast<int>(out.status), static_cast<long long>(s.reference_seq),
+                  static_cast<int>(out.status), static_cast<long long>(s.reference_seq.value_or(-1)),
                   s.keyframe_fallback, s.new_keyframe, s.point_matches, out.estimate.n_residuals,
                   toString(out.estimate.status), 1e3 * r.final_error_m);
     }
   }
-  r.keyframes = odometry.keyframeCount();
+  r.keyframes = odometry.keyframes().insertedCount();
   return r;
 }
 
@@ -194,7 +194,7 @@ TEST(Keyframes, NewKeyframesFollowTheMotionBound) {
   // off, only the translation bound (0.3 m) takes keyframes: one per ~15 frames.
   std::vector<Pose3> truth;
   for (int k = 0; k < 120; ++k) truth.push_back(poseOf({0.02 * k - 1.2, 0, 0}, 0));
-  FrameOdometryOptions o = pointsOnly(TrackingReference::kKeyframe);
+  TrackingOptions o = pointsOnly(TrackingReference::kKeyframe);
   o.keyframe.min_inlier_fraction = 0;
   o.keyframe.max_variance_growth = 1e9;
   const RunResult r = run(o, truth);
@@ -203,7 +203,7 @@ TEST(Keyframes, NewKeyframesFollowTheMotionBound) {
   EXPECT_LE(r.keyframes, 9);
   for (size_t k = 1; k < truth.size(); ++k) {
     // The frame a pose was estimated from is never farther than the bound plus one step.
-    const int64_t ref = r.stats[k].reference_seq;
+    const int64_t ref = r.stats[k].reference_seq.value_or(-1);
     ASSERT_GE(ref, 0);
     EXPECT_LE((truth[ref].translation() - truth[k].translation()).norm(), 0.3 + 0.021) << k;
   }
@@ -214,7 +214,7 @@ TEST(Keyframes, OverlapRuleTakesAKeyframeBeforeTheViewIsGone) {
   // the overlap rule (half of the first frame's inlier rows) takes a keyframe well before.
   std::vector<Pose3> truth;
   for (int k = 0; k < 120; ++k) truth.push_back(poseOf({0, 0, 0}, k * M_PI / 180.0));
-  FrameOdometryOptions o = pointsOnly(TrackingReference::kKeyframe);
+  TrackingOptions o = pointsOnly(TrackingReference::kKeyframe);
   o.keyframe.max_variance_growth = 1e9;
   o.keyframe.max_rotation_deg = 180;
   const RunResult r = run(o, truth);
@@ -222,7 +222,7 @@ TEST(Keyframes, OverlapRuleTakesAKeyframeBeforeTheViewIsGone) {
   EXPECT_EQ(r.fallbacks, 0);
   EXPECT_GE(r.keyframes, 3);
   for (size_t k = 1; k < truth.size(); ++k) {
-    const int64_t ref = r.stats[k].reference_seq;
+    const int64_t ref = r.stats[k].reference_seq.value_or(-1);
     EXPECT_LT(k - ref, 45u) << k;  // half the view is 31 deg of turn
   }
 }
@@ -258,7 +258,7 @@ TEST(Keyframes, LostKeyframeFallsBackToThePreviousFrame) {
     const double deg = 50.0 * (1.0 - std::cos(2 * M_PI * k / 100.0));
     truth.push_back(poseOf({0.01 * std::sin(k * 0.1), 0, 0}, deg * M_PI / 180.0));
   }
-  FrameOdometryOptions o = pointsOnly(TrackingReference::kKeyframe);
+  TrackingOptions o = pointsOnly(TrackingReference::kKeyframe);
   o.keyframe.min_inlier_fraction = 0;
   o.keyframe.max_variance_growth = 1e9;
   o.keyframe.max_translation_m = 1e3;
@@ -277,83 +277,6 @@ TEST(Keyframes, LostKeyframeFallsBackToThePreviousFrame) {
   EXPECT_LT(r.max_error_deg, 2.0);
 }
 
-/// Mean NEES (6 dof) and share inside the chi-square(6) 95 % bound of the published relative
-/// poses of the frames estimated through a keyframe, against the truth.
-struct Consistency {
-  double mean = 0, inside = 0;
-  int pairs = 0;
-};
-
-Consistency relativePoseConsistency(const FrameOdometryOptions& options,
-                                    const std::vector<Pose3>& truth, uint64_t seed) {
-  const RunResult r = run(options, truth, seed);
-  Consistency c;
-  double sum = 0;
-  int inside = 0;
-  for (size_t k = 2; k < r.outputs.size(); ++k) {
-    const TrackerOutput& out = r.outputs[k];
-    if (out.status != TrackingStatus::kTracking) continue;
-    if (r.stats[k].reference_seq == static_cast<int64_t>(k) - 1) continue;  // frame to frame
-    const Vector6d e = poseToXi(out.T_prev_curr) - poseToXi(truth[k - 1].inverse() * truth[k]);
-    const double nees = e.dot(out.covariance_prev_curr.ldlt().solve(e));
-    sum += nees;
-    if (nees < 12.592) ++inside;  // chi-square(6), 95 %
-    ++c.pairs;
-  }
-  if (c.pairs > 0) {
-    c.mean = sum / c.pairs;
-    c.inside = static_cast<double>(inside) / c.pairs;
-  }
-  return c;
-}
-
-TEST(Keyframes, FusedLandmarksKeepThePublishedCovarianceConsistent) {
-  // A slow sway (keyframes serve tens of frames, each fusing its points into the keyframe's):
-  // the fused landmarks carry the error of the poses that moved their observations, which
-  // were estimated from the landmarks. With their fused covariance in the pose covariance the
-  // published relative poses are over-confident; with the covariance from before fusion they
-  // are consistent (issue 18's bands: mean NEES in [3, 12], 85-99 % inside).
-  std::vector<Pose3> truth;
-  for (int k = 0; k < 150; ++k) {
-    const double s = std::sin(2 * M_PI * k / 90.0), c = std::cos(2 * M_PI * k / 70.0);
-    truth.push_back(poseOf({0.08 * s, 0.03 * c, 0.05 * s * c}, 3.0 * M_PI / 180.0 * c));
-  }
-  FrameOdometryOptions o = pointsOnly(TrackingReference::kKeyframe);
-  o.tracker.frame_error_sigma_t_m = 0;  // fabricated frames share no per-frame error
-  o.tracker.frame_error_sigma_rot_deg = 0;
-  ASSERT_TRUE(o.keyframe.fuse_landmarks);
-  o.keyframe.unfused_landmark_covariance = true;  // off by default (docs/estimator.md)
-  FrameOdometryOptions fused = o;
-  fused.keyframe.unfused_landmark_covariance = false;
-  FrameOdometryOptions no_fusion = o;
-  no_fusion.keyframe.fuse_landmarks = false;
-  Consistency with{}, without{};
-  for (uint64_t seed : {7u, 8u, 9u}) {
-    const Consistency a = relativePoseConsistency(o, truth, seed);
-    const Consistency b = relativePoseConsistency(fused, truth, seed);
-    const Consistency n = relativePoseConsistency(no_fusion, truth, seed);
-    std::printf(
-        "seed %llu: covariance before fusion NEES %.2f, %.3f inside (%d pairs); fused "
-        "NEES %.2f, %.3f inside; no fusion NEES %.2f, %.3f inside\n",
-        static_cast<unsigned long long>(seed), a.mean, a.inside, a.pairs, b.mean, b.inside, n.mean,
-        n.inside);
-    with.mean += a.mean / 3;
-    with.inside += a.inside / 3;
-    without.mean += b.mean / 3;
-    without.inside += b.inside / 3;
-  }
-  // Measured: 3.43-3.85 and 0.99-1.00 inside with the covariance from before fusion, 12.4-13.9
-  // and 0.51-0.55 with the fused one; without fusion 6.5-7.8 and 0.80-0.90. The relative pose
-  // chained through the fixed T_kf_prev is conservative here (the two frames' errors against
-  // the keyframe share its landmarks' error), so the share is at the band's upper end.
-  EXPECT_GE(with.mean, 3.0);
-  EXPECT_LE(with.mean, 12.0);
-  EXPECT_GE(with.inside, 0.85);
-  // The fused covariance is what the option corrects.
-  EXPECT_LT(without.inside, 0.85);
-  EXPECT_GT(without.mean, 12.0);
-}
-
 long residentKiB() {
   std::ifstream statm("/proc/self/statm");
   long pages = 0, resident = 0;
@@ -369,7 +292,7 @@ TEST(Keyframes, StateStaysBoundedOver2000Frames) {
     truth.push_back(poseOf({1.5 * std::sin(a), 0.1 * std::sin(3 * a), 1.5 * std::cos(a)}, a));
   }
   LandmarkWorld world(11);
-  FrameOdometry odometry(pointsOnly(TrackingReference::kKeyframe));
+  FrameTracker odometry(pointsOnly(TrackingReference::kKeyframe));
   FrameFeatures reference;
   long rss_after_warmup = 0;
   int not_tracking = 0;
@@ -378,13 +301,13 @@ TEST(Keyframes, StateStaysBoundedOver2000Frames) {
     const TrackerOutput out = k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2);
     reference = std::move(f3);
     if (k > 0 && out.status != TrackingStatus::kTracking) ++not_tracking;
-    ASSERT_LE(k - odometry.keyframeSeq(), 60) << k;
+    ASSERT_LE(k - odometry.keyframes().activeSeq().value_or(-1), 60) << k;
     if (k == 200) rss_after_warmup = residentKiB();
   }
   EXPECT_EQ(not_tracking, 0);
-  EXPECT_GE(odometry.keyframeCount(), 20);
+  EXPECT_GE(odometry.keyframes().insertedCount(), 20);
   EXPECT_LT(residentKiB() - rss_after_warmup, 16 * 1024);
 }
 
 }  // namespace
-}  // namespace pplvo::pipeline
+}  // namespace pplvo::tracking

@@ -1,0 +1,190 @@
+#pragma once
+/// Visual odometry of a stream of frames (paper Sec. "Matching" and "Pose Estimation"): the
+/// tracking policy. Each frame's 2D features (points, lines, C-GM planes) are matched against
+/// 3D features lifted on fused depth, either the previous frame's (the paper) or the active
+/// keyframe's (docs/estimator.md, "Keyframes"), and the motion, its covariance and the window
+/// uncertainties the depth filter needs follow (OdometryTracker). No LCM.
+///
+/// The data lives apart from the policy: the keyframe and its landmarks in a KeyframeStore,
+/// the 3D stages that arrive after later frames' 2D stages in a LiftedStageBuffer. The policy
+/// decides what a frame is tracked against, when the previous frame must serve instead
+/// (fallback), when a new keyframe is taken (keyframe_rule.h) and when landmarks are fused.
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "pplvo/core/config_schema.h"
+#include "pplvo/core/features.h"
+#include "pplvo/core/frame_pose.h"
+#include "pplvo/core/stage_timer.h"
+#include "pplvo/estimator/odometry_tracker.h"
+#include "pplvo/estimator/pose_estimator.h"
+#include "pplvo/features/matching.h"
+#include "pplvo/geometry/plane_matching.h"
+#include "pplvo/tracking/keyframe_rule.h"
+#include "pplvo/tracking/keyframe_store.h"
+#include "pplvo/tracking/lifted_stage_buffer.h"
+
+namespace pplvo::tracking {
+
+/// What the current frame's 2D features are matched against.
+enum class TrackingReference {
+  kFrame,     ///< the previous frame (the paper)
+  kKeyframe,  ///< the active keyframe, the previous frame as fallback
+};
+bool parseTrackingReference(const std::string& text, TrackingReference* out);
+const char* toString(TrackingReference reference);
+
+struct TrackingOptions {
+  TrackingReference reference = TrackingReference::kKeyframe;
+  KeyframeOptions keyframe;
+  OdometryTrackerOptions tracker;  ///< tracker.estimator.use_* select the families
+  features::PointMatchOptions point_matching;
+  features::LineMatchOptions line_matching;
+  geometry::PlaneMatchOptions plane_matching;
+  /// Gate points around their position predicted by the constant-velocity model.
+  bool predict_point_positions = true;
+  /// Move the previous planes by the predicted motion before the plane gate.
+  bool predict_plane_positions = true;
+  /// Gate lines around the projection of their 3D segment under the predicted motion
+  /// (reference lines without 3D keep their own 2D equation).
+  bool predict_line_positions = true;
+};
+
+/// Schema of TrackingOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+template <class V>
+void visit(V& v, TrackingOptions& o) {
+  v.field("reference", o.reference,
+          "what a frame is tracked against: frame (the previous one, as in the paper) or "
+          "keyframe (the active keyframe, the previous frame as fallback; docs/estimator.md)");
+  v.section("keyframe", "When a new keyframe is taken (reference: keyframe)",
+            [&] { visit(v, o.keyframe); });
+  v.section("tracker", "Frame-to-frame tracking, pose estimation and window uncertainty",
+            [&] { visit(v, o.tracker); });
+  v.section("point_matching", "Point matching (Sec. 4.5)", [&] { visit(v, o.point_matching); });
+  v.section("line_matching", "Line matching (Sec. 4.5)", [&] { visit(v, o.line_matching); });
+  v.section("plane_matching", "Plane matching (Sec. 4.5)", [&] { visit(v, o.plane_matching); });
+  v.field("predict_point_positions", o.predict_point_positions,
+          "gate points around their position predicted by the constant-velocity model");
+  v.field("predict_plane_positions", o.predict_plane_positions,
+          "move the previous planes by the predicted motion before the plane gate");
+  v.field("predict_line_positions", o.predict_line_positions,
+          "gate lines around the projection of their 3D segment under the predicted motion");
+}
+
+/// What happened to one frame.
+struct TrackingStats {
+  int point_matches = 0, line_matches = 0, plane_matches = 0;
+  bool reinitialised = false;  ///< no usable reference: tracking restarted at this frame
+  /// The frame whose 3D features the pose was estimated from (unset: none).
+  std::optional<int64_t> reference_seq;
+  bool keyframe_fallback = false;  ///< the keyframe estimate failed; the previous frame served
+  bool new_keyframe = false;       ///< this frame becomes the next frame's keyframe
+  KeyframeReason keyframe_reason = KeyframeReason::kNone;  ///< why, if new_keyframe
+};
+
+/// The result of FrameTracker::step(): a pose, or the frame whose 3D stage it needs first.
+struct TrackingStep {
+  std::optional<TrackerOutput> pose;
+  TrackingStats stats;
+  /// Set when no pose was given: step() again after handing in this frame's 3D stage.
+  std::optional<int64_t> awaiting_lifted;
+  bool posed() const { return pose.has_value(); }
+};
+
+class FrameTracker {
+ public:
+  explicit FrameTracker(const TrackingOptions& options = {});
+
+  /// Starts (or restarts) tracking at `first`: FIRST_FRAME with T_w_c = identity.
+  TrackerOutput initialise(const FrameFeatures& first);
+
+  /// Restarts tracking at `current` without a motion estimate: the last pose is held and the
+  /// status is REINITIALISED (e.g. the reference never arrived).
+  TrackerOutput restart(const FrameFeatures& current);
+
+  /// Hands in the 3D stage of a posed frame, which a later step() may need. False (nothing
+  /// kept) when no later frame can use it: not the frame posed last, nor one whose landmark
+  /// fusion is due.
+  bool addLifted(FrameFeatures lifted) { return lifted_.add(std::move(lifted)); }
+  /// Whether addLifted() would keep the 3D stage of frame `seq` (checked before decoding).
+  bool wantsLifted(int64_t seq) const { return lifted_.wants(seq); }
+
+  /// Poses `current` (its 2D stage) when the 3D stages it needs are in; otherwise says which
+  /// frame's it waits for and changes nothing (step again after addLifted()). With keyframes a
+  /// frame is posed against the keyframe without the previous frame's 3D stage, unless that
+  /// frame is the next keyframe or the estimate is rejected (the previous frame then serves).
+  /// Landmark fusion runs one frame behind: the 3D stage of frame k refines the keyframe
+  /// before frame k+2 is posed, so that frame k+1 never waits for it; the result is the same
+  /// whatever the order of arrival (docs/estimator.md, "Poses ahead of the fused depth").
+  TrackingStep step(const FrameFeatures& current);
+
+  /// For callers that have every frame's 3D stage before the next frame: hands in
+  /// `reference` (the 3D stage of the frame posed last) and poses `current`. When `reference`
+  /// is not that frame (frames lost in between, or the stream restarted), tracking restarts
+  /// at `current` and stats->reinitialised is set.
+  TrackerOutput track(const FrameFeatures& reference, const FrameFeatures& current,
+                      TrackingStats* stats = nullptr);
+
+  /// Sequence number of the last frame given a pose, if any.
+  std::optional<int64_t> lastPosed() const { return lifted_.lastPosed(); }
+  /// Whether later frames will be tracked against the 3D features of `seq`, the frame given a
+  /// pose last: kReference for a new keyframe and for every frame when tracking frame to
+  /// frame, kFallbackOnly for the others (only a keyframe fallback would use them).
+  ReferenceRole referenceRole(int64_t seq) const;
+
+  const KeyframeStore& keyframes() const { return keyframes_; }
+  const OdometryTracker& tracker() const { return tracker_; }
+  const TrackingOptions& options() const { return options_; }
+  const StageTimings& timings() const { return timings_; }
+
+ private:
+  /// A frame chosen to become the next keyframe once its 3D stage is in.
+  struct PendingKeyframe {
+    int64_t seq;
+    KeyframeReason reason;
+  };
+
+  /// The matches of a reference and a current frame, gated around their positions predicted
+  /// by T_curr_ref.
+  FeatureMatches match(const FrameFeatures& reference, const FrameFeatures& current,
+                       const Pose3& T_curr_ref);
+  /// The estimate of T_curr_prev through the active keyframe, or nullopt when rejected.
+  std::optional<PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
+                                                   TrackingStats& stats);
+  /// Tracks `current` against `reference`, the previous frame's 3D stage.
+  TrackerOutput trackFromPrevious(const FrameFeatures& reference, const FrameFeatures& current,
+                                  TrackingStats& stats);
+  /// Fuses the observations whose 3D stage is due; the frame it waits for otherwise.
+  std::optional<int64_t> fuseDueObservations();
+  /// No active keyframe; with keyframes, `next` becomes one once its 3D stage is in.
+  void resetKeyframes(int64_t next, KeyframeReason reason);
+  /// Forgets the buffered 3D stages, observations and a rejected estimate.
+  void forgetPending();
+  /// Marks `current` posed and settles what it leaves for the next frame.
+  void finishStep(const FrameFeatures& current, TrackingStats& stats);
+
+  TrackingOptions options_;
+  OdometryTracker tracker_;
+  PoseEstimator estimator_;
+  KeyframeStore keyframes_;
+  LiftedStageBuffer lifted_;
+  std::optional<PendingKeyframe> pending_keyframe_;
+  /// The frame whose estimate against the keyframe was rejected while it waited for the
+  /// previous frame's 3D stage (the fallback): not estimated twice.
+  std::optional<int64_t> keyframe_rejected_seq_;
+  StageTimings timings_;
+};
+
+}  // namespace pplvo::tracking
+
+namespace pplvo::config {
+template <>
+struct EnumText<tracking::TrackingReference> {
+  static bool parse(const std::string& s, tracking::TrackingReference* out) {
+    return tracking::parseTrackingReference(s, out);
+  }
+  static std::string name(tracking::TrackingReference r) { return tracking::toString(r); }
+  static const char* choices() { return "frame, keyframe"; }
+};
+}  // namespace pplvo::config

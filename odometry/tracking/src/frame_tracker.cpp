@@ -1,0 +1,301 @@
+#include "pplvo/tracking/frame_tracker.h"
+
+#include <limits>
+
+#include "pplvo/core/enum_names.h"
+#include "pplvo/estimator/pose_parameterisation.h"
+#include "pplvo/features/line_extractor.h"
+
+namespace pplvo::tracking {
+
+namespace {
+
+constexpr EnumName<TrackingReference> kTrackingReferenceNames[] = {
+    {TrackingReference::kFrame, "frame"}, {TrackingReference::kKeyframe, "keyframe"}};
+
+void countMatches(const FeatureMatches& m, TrackingStats& s) {
+  s.point_matches = static_cast<int>(m.points.size());
+  s.line_matches = static_cast<int>(m.lines.size());
+  s.plane_matches = static_cast<int>(m.planes.size());
+}
+
+}  // namespace
+
+bool parseTrackingReference(const std::string& text, TrackingReference* out) {
+  return parseEnum(kTrackingReferenceNames, text, out);
+}
+
+const char* toString(TrackingReference reference) {
+  return enumName(kTrackingReferenceNames, reference);
+}
+
+FrameTracker::FrameTracker(const TrackingOptions& options)
+    : options_(options), tracker_(options.tracker), estimator_(options.tracker.estimator) {}
+
+void FrameTracker::forgetPending() {
+  lifted_.clearStages();
+  keyframe_rejected_seq_.reset();
+}
+
+void FrameTracker::resetKeyframes(int64_t next, KeyframeReason reason) {
+  keyframes_.clear();
+  lifted_.dropObservations();  // they would refine the keyframe dropped here
+  pending_keyframe_.reset();
+  if (options_.reference == TrackingReference::kKeyframe) pending_keyframe_ = {next, reason};
+}
+
+TrackerOutput FrameTracker::initialise(const FrameFeatures& first) {
+  forgetPending();
+  lifted_.setLastPosed(first.seq);
+  resetKeyframes(first.seq, KeyframeReason::kStart);
+  return tracker_.initialise(first.seq);
+}
+
+TrackerOutput FrameTracker::restart(const FrameFeatures& current) {
+  const Pose3 T_w_c = tracker_.T_w_c();
+  forgetPending();
+  lifted_.setLastPosed(current.seq);
+  resetKeyframes(current.seq, KeyframeReason::kStart);
+  TrackerOutput out = tracker_.initialise(current.seq, T_w_c);
+  out.status = TrackingStatus::kReinitialised;
+  return out;
+}
+
+FeatureMatches FrameTracker::match(const FrameFeatures& reference, const FrameFeatures& current,
+                                   const Pose3& T_curr_ref) {
+  const PoseEstimatorOptions& use = options_.tracker.estimator;
+  FeatureMatches m;
+  if (use.use_points && !reference.points.empty() && !current.points.empty()) {
+    ScopedStageTimer t(timings_, "match_points");
+    // Where the previous 3D point should appear under the predicted motion: the gate is then
+    // centred there (tight), which keeps fast rotations matchable.
+    std::vector<Eigen::Vector2d> predicted;
+    if (options_.predict_point_positions) {
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      predicted.assign(reference.points.size(), Eigen::Vector2d(nan, nan));
+      for (size_t i = 0; i < reference.points.size(); ++i) {
+        const PointFeature& p = reference.points[i];
+        if (!p.has_3d) continue;
+        const Eigen::Vector3d X = T_curr_ref * p.point.p;
+        if (X.z() > 1e-3) predicted[i] = current.camera.project(X);
+      }
+    }
+    m.points = features::matchPoints(reference, current, options_.point_matching, predicted).pairs;
+  }
+  if (use.use_lines && !reference.lines.empty() && !current.lines.empty()) {
+    ScopedStageTimer t(timings_, "match_lines");
+    if (options_.predict_line_positions) {
+      // The reference lines' 2D equations moved to where their 3D segments project under the
+      // predicted motion, so the gate is centred there (as for points).
+      std::vector<LineFeature> predicted = reference.lines;
+      for (LineFeature& l : predicted) {
+        if (!l.has_3d) continue;
+        const Eigen::Vector3d a = T_curr_ref * l.line.p1, b = T_curr_ref * l.line.p2;
+        if (a.z() <= 1e-3 || b.z() <= 1e-3) continue;
+        const Eigen::Vector3d eq =
+            features::lineEquation(current.camera.project(a), current.camera.project(b));
+        if (eq.allFinite()) l.eq = eq;
+      }
+      m.lines = features::matchLines(predicted, reference.line_descriptors, current.lines,
+                                     current.line_descriptors, options_.line_matching)
+                    .pairs;
+    } else {
+      m.lines = features::matchLines(reference, current, options_.line_matching).pairs;
+    }
+  }
+  if (use.use_planes && !reference.planes.empty() && !current.planes.empty()) {
+    ScopedStageTimer t(timings_, "match_planes");
+    std::optional<Pose3> prediction;
+    if (options_.predict_plane_positions) prediction = T_curr_ref;
+    m.planes =
+        geometry::matchPlanesWithStats(reference, current, options_.plane_matching, prediction)
+            .matches;
+  }
+  return m;
+}
+
+TrackerOutput FrameTracker::track(const FrameFeatures& reference, const FrameFeatures& current,
+                                  TrackingStats* stats) {
+  TrackingStats local;
+  TrackingStats& s = stats ? *stats : local;
+  s = TrackingStats{};
+  const std::optional<int64_t> last = lifted_.lastPosed();
+  if (!last || reference.seq != *last) {
+    // The reference is not the frame tracked last (frames were lost in between or the stream
+    // restarted): a motion from it would not chain onto T_w_c. Restart at this frame.
+    s.reinitialised = true;
+    return last ? restart(current) : initialise(current);
+  }
+  addLifted(reference);
+  TrackingStep step_result = step(current);
+  s = step_result.stats;
+  if (step_result.pose) return *step_result.pose;
+  // Only an observation's fusion can wait for a 3D stage other than `reference`; a caller of
+  // this form handed it in with the previous call, so this is a frame whose 3D stage was
+  // skipped.
+  s = TrackingStats{};
+  s.reinitialised = true;
+  return restart(current);
+}
+
+std::optional<int64_t> FrameTracker::fuseDueObservations() {
+  // Landmark fusion one frame behind: the frames posed before the previous one refine the
+  // keyframe now (their order of arrival does not matter, the result is the same).
+  while (const KeyframeObservation* due = lifted_.dueObservation()) {
+    const FrameFeatures* observed = lifted_.find(due->seq);
+    if (observed == nullptr) return due->seq;
+    if (keyframes_.active()) {
+      ScopedStageTimer t(timings_, "landmark_fusion");
+      keyframes_.fuse(*due, *observed, options_.keyframe.fusion_gate_chi2);
+    }
+    lifted_.popObservation();
+  }
+  return std::nullopt;
+}
+
+TrackingStep FrameTracker::step(const FrameFeatures& current) {
+  TrackingStep out;
+  TrackingStats& s = out.stats;
+  const std::optional<int64_t> last = lifted_.lastPosed();
+  if (!last) {
+    out.pose = initialise(current);
+    return out;
+  }
+  if (current.seq <= *last) {
+    // The stream restarted: a motion to an older frame would not chain onto T_w_c.
+    s.reinitialised = true;
+    out.pose = restart(current);
+    return out;
+  }
+  const bool keyframes = options_.reference == TrackingReference::kKeyframe;
+  if (const std::optional<int64_t> awaited = fuseDueObservations()) {
+    out.awaiting_lifted = awaited;
+    return out;
+  }
+  const FrameFeatures* previous = lifted_.find(*last);
+  auto restartOnOtherCamera = [&] {
+    s = TrackingStats{};
+    s.reinitialised = true;
+    out.pose = restart(current);
+    return out;
+  };
+  if (keyframes && pending_keyframe_ && pending_keyframe_->seq == *last) {
+    if (previous == nullptr) {
+      out.awaiting_lifted = *last;
+      return out;
+    }
+    if (current.camera != previous->camera) return restartOnOtherCamera();
+    // The previous frame was chosen as keyframe: its 3D features (lifted on its fused depth)
+    // are the keyframe's landmarks, its pose is the tracker's current one.
+    keyframes_.insert(*previous, tracker_.T_w_c());
+    pending_keyframe_.reset();
+    lifted_.dropObservations();  // they refine the keyframe replaced here
+  }
+  const Keyframe* keyframe = keyframes_.active();
+  if (keyframes && keyframe && keyframe->seq() != *last && keyframe_rejected_seq_ != current.seq) {
+    if (std::optional<PoseEstimate> through_keyframe = estimateFromKeyframe(current, s)) {
+      out.pose = tracker_.update(current.seq, *through_keyframe);
+      if (out.pose->status != TrackingStatus::kTracking) {
+        resetKeyframes(current.seq, KeyframeReason::kStart);
+      }
+      finishStep(current, s);
+      return out;
+    }
+    // The keyframe failed (matches lost, degenerate or too uncertain): the previous frame
+    // serves, and this frame starts a new keyframe.
+    keyframe_rejected_seq_ = current.seq;
+  }
+  if (previous == nullptr) {
+    out.awaiting_lifted = *last;
+    return out;
+  }
+  if (current.camera != previous->camera) return restartOnOtherCamera();
+  s = TrackingStats{};
+  s.keyframe_fallback = keyframe_rejected_seq_ == current.seq;
+  keyframe_rejected_seq_.reset();
+  out.pose = trackFromPrevious(*previous, current, s);
+  if (keyframes) {
+    const bool first_against_keyframe = keyframe && keyframe->seq() == previous->seq;
+    if (first_against_keyframe && out.pose->estimate.accepted() &&
+        out.pose->status == TrackingStatus::kTracking) {
+      // The keyframe's reference quality: what the next frames are compared with.
+      keyframes_.setBaseline(keyframeBaseline(out.pose->estimate));
+    } else {
+      resetKeyframes(current.seq,
+                     s.keyframe_fallback ? KeyframeReason::kFallback : KeyframeReason::kStart);
+    }
+  }
+  finishStep(current, s);
+  return out;
+}
+
+void FrameTracker::finishStep(const FrameFeatures& current, TrackingStats& stats) {
+  if (options_.reference == TrackingReference::kKeyframe) {
+    stats.new_keyframe = pending_keyframe_ && pending_keyframe_->seq == current.seq;
+    if (stats.new_keyframe) stats.keyframe_reason = pending_keyframe_->reason;
+  }
+  lifted_.setLastPosed(current.seq);
+  lifted_.prune();
+}
+
+TrackerOutput FrameTracker::trackFromPrevious(const FrameFeatures& reference,
+                                              const FrameFeatures& current, TrackingStats& stats) {
+  const Pose3 T_curr_prev_predicted = tracker_.predictedMotion();
+  const FeatureMatches matches = match(reference, current, T_curr_prev_predicted);
+  countMatches(matches, stats);
+  stats.reference_seq = reference.seq;
+  ScopedStageTimer t(timings_, "pose");
+  const PoseEstimate est = estimator_.estimate(
+      buildCorrespondences(reference, current, matches, options_.tracker.estimator), current.camera,
+      T_curr_prev_predicted);
+  return tracker_.update(current.seq, est);
+}
+
+ReferenceRole FrameTracker::referenceRole(int64_t seq) const {
+  if (options_.reference != TrackingReference::kKeyframe) return ReferenceRole::kReference;
+  return pending_keyframe_ && pending_keyframe_->seq == seq ? ReferenceRole::kReference
+                                                            : ReferenceRole::kFallbackOnly;
+}
+
+std::optional<PoseEstimate> FrameTracker::estimateFromKeyframe(const FrameFeatures& current,
+                                                               TrackingStats& stats) {
+  const Keyframe& keyframe = *keyframes_.active();
+  if (current.camera != keyframe.landmarks.camera) return std::nullopt;
+  // The tracker's pose is the previous frame's: T_prev_kf chains the prediction.
+  const Pose3 T_prev_kf = tracker_.T_w_c().inverse() * keyframe.T_w_kf;
+  const Pose3 T_curr_kf_predicted = tracker_.predictedMotion() * T_prev_kf;
+  const FeatureMatches matches = match(keyframe.landmarks, current, T_curr_kf_predicted);
+  countMatches(matches, stats);
+  stats.reference_seq = keyframe.seq();
+  PoseEstimate est;
+  {
+    ScopedStageTimer t(timings_, "pose");
+    est = estimator_.estimate(
+        buildCorrespondences(keyframe.landmarks, current, matches, options_.tracker.estimator),
+        current.camera, T_curr_kf_predicted);
+  }
+  if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
+    return std::nullopt;
+  }
+  const Pose3 T_curr_kf = est.T_curr_prev;
+  if (options_.keyframe.fuse_landmarks) {
+    lifted_.addObservation({current.seq, T_curr_kf.inverse(),
+                            invertedPoseCovariance(T_curr_kf, est.covariance), matches.points});
+  }
+  const KeyframeReason exhausted = keyframeExhausted(
+      options_.keyframe, keyframe.baseline.value_or(KeyframeBaseline{}), est, T_curr_kf);
+  if (exhausted != KeyframeReason::kNone) pending_keyframe_ = {current.seq, exhausted};
+  // The motion from the previous frame, T_curr_prev = T_curr_kf * T_kf_prev, with the
+  // previous frame's pose relative to the keyframe held fixed: its covariance is that of the
+  // estimate against the keyframe (conservative: the two frames' errors relative to the same
+  // keyframe are positively correlated, so their difference varies less).
+  const Pose3 T_kf_prev = T_prev_kf.inverse();
+  est.T_curr_prev = T_curr_kf * T_kf_prev;
+  est.covariance =
+      propagateCompositionCovariance(T_kf_prev, Matrix6d::Zero(), T_curr_kf, est.covariance);
+  est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
+  est.max_rotation_variance = maxRotationVariance(est.covariance);
+  return est;
+}
+
+}  // namespace pplvo::tracking

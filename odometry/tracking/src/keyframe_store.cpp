@@ -1,0 +1,71 @@
+#include "pplvo/tracking/keyframe_store.h"
+
+#include <Eigen/Cholesky>
+
+#include "pplvo/estimator/pose_parameterisation.h"
+
+namespace pplvo::tracking {
+
+void KeyframeStore::insert(FrameFeatures landmarks, const Pose3& T_w_kf) {
+  active_ = Keyframe{std::move(landmarks), T_w_kf, std::nullopt};
+  ++inserted_;
+}
+
+void KeyframeStore::reset() {
+  active_.reset();
+  inserted_ = 0;
+}
+
+std::optional<int64_t> KeyframeStore::activeSeq() const {
+  if (!active_) return std::nullopt;
+  return active_->seq();
+}
+
+void KeyframeStore::setBaseline(const KeyframeBaseline& baseline) {
+  if (active_) active_->baseline = baseline;
+}
+
+int KeyframeStore::fuse(const KeyframeObservation& observation, const FrameFeatures& observed,
+                        double gate_chi2) {
+  if (!active_) return 0;
+  std::vector<PointFeature>& landmarks = active_->landmarks.points;
+  const Pose3& T = observation.T_kf_frame;
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d q_xyz = poseToXi(T).tail<3>();
+  int fused = 0;
+  for (const auto& [i, j] : observation.points) {
+    if (i < 0 || j < 0 || i >= static_cast<int>(landmarks.size()) ||
+        j >= static_cast<int>(observed.points.size())) {
+      continue;
+    }
+    PointFeature& landmark = landmarks[i];
+    const PointFeature& seen = observed.points[j];
+    if (!landmark.has_3d || !seen.has_3d) continue;
+    // The observation in the keyframe, with the pose's uncertainty (first order in xi).
+    const Eigen::Vector3d p = T * seen.point.p;
+    Eigen::Matrix<double, 3, 6> J;
+    J.leftCols<3>().setIdentity();
+    J.rightCols<3>() = rotatedPointJacobian(q_xyz, seen.point.p);
+    const Eigen::Matrix3d C =
+        R * seen.point.cov * R.transpose() + J * observation.covariance * J.transpose();
+    const Eigen::Vector3d d = p - landmark.point.p;
+    const Eigen::Matrix3d S = landmark.point.cov + C;
+    const Eigen::LDLT<Eigen::Matrix3d> S_ldlt(S);
+    if (S_ldlt.info() != Eigen::Success || !(S_ldlt.vectorD().minCoeff() > 0)) continue;
+    const double chi2 = d.dot(S_ldlt.solve(d));
+    if (!(chi2 < gate_chi2)) continue;
+    // Information-weighted mean, in the update form that needs only S^-1:
+    // p' = p_L + C_L S^-1 d, C' = C_L - C_L S^-1 C_L.
+    const Eigen::Matrix3d K = S_ldlt.solve(landmark.point.cov).transpose();
+    const Eigen::Vector3d fused_p = landmark.point.p + K * d;
+    Eigen::Matrix3d fused_cov = landmark.point.cov - K * landmark.point.cov;
+    fused_cov = 0.5 * (fused_cov + fused_cov.transpose());
+    if (!fused_p.allFinite() || !fused_cov.allFinite()) continue;
+    landmark.point.p = fused_p;
+    landmark.point.cov = fused_cov;
+    ++fused;
+  }
+  return fused;
+}
+
+}  // namespace pplvo::tracking
