@@ -229,11 +229,12 @@ Accum benchLines(const BenchArgs& b, const std::string& lc, const SharedSequence
                  const DecodedFrames& f) {
   LineExtractorOptions lo;
   lo.detection_scale = std::atof(lc.c_str());
-  lo.describe_full_resolution = lc.find('f') != std::string::npos;
-  lo.use_opencv = lc.find('o') != std::string::npos;
   lo.max_lines = b.max_lines;
   lo.min_length_px = b.min_line_px;
-  LineExtractor ex(lo);
+  LineDetectorVariant variant;
+  variant.describe_full_resolution = lc.find('f') != std::string::npos;
+  variant.use_opencv = lc.find('o') != std::string::npos;
+  LineExtractor ex(lo, variant);
   LineMatchOptions mo;
   return benchSequence(
       seq, f, [&](const cv::Mat& gray) { return ex.extract(gray, seq.camera); },

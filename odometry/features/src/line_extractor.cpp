@@ -16,15 +16,17 @@ Eigen::Vector3d lineEquation(const Eigen::Vector2d& p1, const Eigen::Vector2d& p
   return l / n;
 }
 
-LineExtractor::LineExtractor(const LineExtractorOptions& options) : options_(options) {
+LineExtractor::LineExtractor(const LineExtractorOptions& options,
+                             const LineDetectorVariant& variant)
+    : options_(options), variant_(variant) {
   // pplvo's LSD and LBD unless OpenCV's are asked for or needed: LSD's refinements and LBD
   // over several octaves are OpenCV's only.
-  if (options_.use_opencv || options_.lsd_refine != cv::LSD_REFINE_NONE)
-    opencv_lsd_ = cv::createLineSegmentDetector(options_.lsd_refine, 1.0);
-  if (options_.use_opencv || options_.lbd_octaves > 1) {
+  if (variant_.use_opencv || variant_.lsd_refine != cv::LSD_REFINE_NONE)
+    opencv_lsd_ = cv::createLineSegmentDetector(variant_.lsd_refine, 1.0);
+  if (variant_.use_opencv || variant_.lbd_octaves > 1) {
     ld::BinaryDescriptor::Params params;
     params.widthOfBand_ = options_.lbd_band_width;
-    params.numOfOctave_ = std::max(1, options_.lbd_octaves);
+    params.numOfOctave_ = std::max(1, variant_.lbd_octaves);
     opencv_lbd_ = ld::BinaryDescriptor::createBinaryDescriptor(params);
   }
 }
@@ -126,7 +128,7 @@ LineExtraction LineExtractor::extract(const cv::Mat& image, const PinholeCamera&
     if (by_length.empty()) return result;
 
     // The kept segments in the coordinates of the image LBD runs on.
-    const cv::Mat& desc_img = options_.describe_full_resolution ? gray : small;
+    const cv::Mat& desc_img = variant_.describe_full_resolution ? gray : small;
     const float ds = static_cast<float>(desc_img.cols) / static_cast<float>(gray.cols);
     const float dd = ds == 1.f ? 0.f : 0.5f * ds - 0.5f;  // full-res centre -> desc_img
     const float w1 = desc_img.cols - 1.f, h1 = desc_img.rows - 1.f;

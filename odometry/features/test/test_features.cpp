@@ -458,7 +458,7 @@ TEST(Options, VisitListsEveryField) {
   LineExtractorOptions lo;
   c = FieldCounter();
   visit(c, lo);
-  EXPECT_EQ(c.n, 9);
+  EXPECT_EQ(c.n, 5);
   c = FieldCounter();
   PointMatchOptions pm;
   visit(c, pm);

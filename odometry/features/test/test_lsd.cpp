@@ -193,11 +193,12 @@ TEST(LineExtractor, OpenCvsLsdAndLbdRemainAvailable) {
   for (const bool use_opencv : {false, true}) {
     for (const int refine : {cv::LSD_REFINE_NONE, cv::LSD_REFINE_STD}) {
       for (const int octaves : {1, 2}) {
-        LineExtractorOptions o;
-        o.use_opencv = use_opencv;
-        o.lsd_refine = refine;
-        o.lbd_octaves = octaves;
-        const LineExtraction r = LineExtractor(o).extract(img, pplvo::fixtures::kinectVgaCamera());
+        LineDetectorVariant v;
+        v.use_opencv = use_opencv;
+        v.lsd_refine = refine;
+        v.lbd_octaves = octaves;
+        const LineExtraction r =
+            LineExtractor({}, v).extract(img, pplvo::fixtures::kinectVgaCamera());
         const std::string what = "opencv " + std::to_string(use_opencv) + " refine " +
                                  std::to_string(refine) + " octaves " + std::to_string(octaves);
         EXPECT_TRUE(r.stats.error.empty()) << what << ": " << r.stats.error;

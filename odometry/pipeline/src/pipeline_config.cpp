@@ -49,15 +49,24 @@ namespace {
 const std::vector<std::string> kFamilyFlags = {"odometry.tracker.estimator.use_points",
                                                "odometry.tracker.estimator.use_lines",
                                                "odometry.tracker.estimator.use_planes"};
+/// Copies of the sensor model (PipelineOptions::shareSensorModel), not settable on their own.
+const std::vector<std::string> kSensorModelCopies = {
+    "frontend.planes.noise.sigma_z_coeff_per_m", "frontend.lift.noise.sigma_z_coeff_per_m",
+    "frontend.planes.pixel_variance_px2"};
 
 /// The whole file: the modules' schemas (each declared beside its options struct) under their
 /// sections, plus the top-level `features` list, which sets frontend.families and the
-/// estimator's use_* together (those are therefore not settable on their own).
+/// estimator's use_* together (those are therefore not settable on their own); the sensor
+/// model's copies follow their source (depth_filter.sensor, frontend.lift) likewise.
 struct VisitPipeline {
   template <class V>
   void operator()(V& visitor, PipelineOptions& o) const {
-    config::ForbidPaths<V> v(visitor, kFamilyFlags,
-                             "the families are set once, by the top-level `features` list");
+    config::ForbidPaths<V> sensor(visitor, kSensorModelCopies,
+                                  "the sensor model is set once: "
+                                  "depth_filter.sensor.sigma_z_coeff_per_m and "
+                                  "frontend.lift.pixel_variance_px2");
+    config::ForbidPaths<config::ForbidPaths<V>> v(
+        sensor, kFamilyFlags, "the families are set once, by the top-level `features` list");
     FeatureFamilies families = o.frontend.families;
     v.field("features", families,
             "primitive families used for extraction, matching and estimation (the paper's "
@@ -71,6 +80,7 @@ struct VisitPipeline {
               "pose uncertainty",
               [&] { visit(v, o.odometry); });
     o.setFamilies(families);
+    o.shareSensorModel();
   }
 };
 
@@ -114,6 +124,12 @@ std::vector<std::string> crossModuleErrors(const PipelineOptions& o) {
   const FeatureFamilies& f = o.frontend.families;
   if (!f.points && !f.lines && !f.planes) errors.push_back("features: no feature family selected");
   if (!familiesAgree(o)) errors.push_back(familiesDisagreement(o));
+  if (!o.sensorModelShared()) {
+    errors.push_back(
+        "frontend: the planes' and the lifting's sensor model differ from "
+        "depth_filter.sensor.sigma_z_coeff_per_m / frontend.lift.pixel_variance_px2 (set them "
+        "with PipelineOptions::shareSensorModel)");
+  }
   if (o.depth_filter.model == depth_filter::DepthModel::kOgm &&
       o.odometry.tracker.window_length < o.depth_filter.ogm.max_window) {
     errors.push_back(

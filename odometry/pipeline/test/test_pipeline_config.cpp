@@ -58,6 +58,34 @@ std::vector<std::string> flattenedKeys(const PipelineOptions& o) {
   return keys;
 }
 
+/// config/minimal.yaml: the keys a user sets, at their defaults; its commented ablation block
+/// is valid configuration once uncommented.
+TEST(PipelineConfig, MinimalFileHoldsDefaultsAndItsAblationsParse) {
+  const std::string path = sourceDir() + "/config/minimal.yaml";
+  const PipelineOptions defaults;
+  const PipelineOptions loaded = loadPipelineConfig(path);
+  EXPECT_TRUE(diffPipelineOptions(loaded, defaults).empty())
+      << join(diffPipelineOptions(loaded, defaults));
+  std::vector<std::string> keys;
+  leafKeys(YAML::LoadFile(path), "", &keys);
+  EXPECT_GE(keys.size(), 8u);
+  EXPECT_LE(keys.size(), 15u);  // minimal: the full list is config/pplvo.yaml
+  // The ablation block: every line after its heading, "# " removed, up to a trailing comment.
+  std::ifstream f(path);
+  std::string line, ablations;
+  bool in_block = false;
+  while (std::getline(f, line)) {
+    if (line.find("--- Ablations") != std::string::npos) in_block = true;
+    if (!in_block || line.rfind("# ", 0) != 0) continue;
+    const std::string text = line.substr(2);
+    if (text.find(':') == std::string::npos) continue;  // prose
+    ablations += text.substr(0, text.find("  #")) + "\n";
+  }
+  ASSERT_NE(ablations.find("reference: keyframe"), std::string::npos) << ablations;
+  const PipelineOptions parsed = parsePipelineConfig(ablations);
+  EXPECT_TRUE(diffPipelineOptions(parsed, defaults).empty()) << ablations;
+}
+
 TEST(PipelineConfig, DefaultFileEqualsCodeDefaults) {
   const std::string path = sourceDir() + "/config/pplvo.yaml";
   const PipelineOptions defaults;
@@ -144,7 +172,7 @@ TEST(PipelineConfig, DumpParseRoundTripWithNonDefaultValues) {
   o.frontend.points.oversample = 1.0 / 3.0;
   o.frontend.points.oversample = 1.5;
   o.frontend.lines.detection_scale = 0.5;
-  o.frontend.lines.lsd_refine = 1;
+  o.frontend.lines.lbd_band_width = 5;
   o.frontend.planes.cell_size_px = 16;
   o.frontend.planes.noise.sigma_z_floor_m = 3e-5;
   o.frontend.planes.fit.outlier_sigma = 0.0;
@@ -161,6 +189,11 @@ TEST(PipelineConfig, DumpParseRoundTripWithNonDefaultValues) {
   o.odometry.line_matching.max_angle_deg = 7.5;
   o.odometry.plane_matching.min_overlap_fraction = 0.25;
   o.odometry.predict_plane_positions = false;
+  // The sensor model's copies are not in the file: set in code, they must agree.
+  EXPECT_FALSE(validatePipelineOptions(o).empty());
+  o.shareSensorModel();
+  EXPECT_EQ(o.frontend.lift.noise.sigma_z_coeff_per_m, 0.1 + 0.2);
+  EXPECT_EQ(o.frontend.planes.noise.sigma_z_coeff_per_m, 0.1 + 0.2);
   ASSERT_TRUE(validatePipelineOptions(o).empty()) << join(validatePipelineOptions(o));
 
   const std::string dump = dumpPipelineConfig(o);

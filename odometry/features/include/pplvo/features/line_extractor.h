@@ -20,26 +20,29 @@ struct LineExtractorOptions {
   /// QVGA (0.5) for real time; 0.4 keeps the same accuracy on the shared data and is ~30 %
   /// faster (docs/features.md). Endpoints are returned in full resolution.
   double detection_scale = 0.4;
-  /// Compute LBD on the full-resolution image instead of the resized one (about twice the
-  /// descriptor cost; see docs/features.md).
-  bool describe_full_resolution = false;
   /// Segments shorter than this (full-resolution pixels, VGA) are dropped.
   double min_length_px = 25.0;
   /// Keep at most this many segments, longest first.
   int max_lines = 150;
-  /// LSD refinement: cv::LSD_REFINE_NONE (default: pplvo's LSD, pplvo/features/lsd.h) or
-  /// cv::LSD_REFINE_STD / cv::LSD_REFINE_ADV (OpenCV's LSD, which splits curved segments and,
-  /// with ADV, validates them; about 3x slower before refining).
-  int lsd_refine = cv::LSD_REFINE_NONE;
-  /// LBD band width (LBD's and OpenCV's 7) and number of pyramid octaves (1: the detection
-  /// image only, pplvo's LBD; more: OpenCV's BinaryDescriptor).
+  /// LBD band width (rows per band, LBD's and OpenCV's 7).
   int lbd_band_width = 7;
-  int lbd_octaves = 1;
-  /// LSD and LBD from OpenCV instead of pplvo's own (pplvo/features/lsd.h, lbd.h), for
-  /// comparison: the same algorithms, several times slower (docs/features.md).
-  bool use_opencv = false;
   /// Images smaller than this on either side give no lines.
   int min_image_side_px = 32;
+};
+
+/// Alternatives to pplvo's own LSD and LBD (pplvo/features/lsd.h, lbd.h), for the comparison
+/// in features_bench and the tests only: not configuration, since they measured slower and no
+/// more accurate (docs/features.md). The defaults are pplvo's own.
+struct LineDetectorVariant {
+  /// LSD and LBD from OpenCV: the same algorithms, several times slower.
+  bool use_opencv = false;
+  /// OpenCV's LSD refinement: cv::LSD_REFINE_STD / ADV split curved segments and, with ADV,
+  /// validate them (about 3x slower before refining); anything but NONE means OpenCV's LSD.
+  int lsd_refine = cv::LSD_REFINE_NONE;
+  /// LBD pyramid octaves: more than 1 means OpenCV's BinaryDescriptor.
+  int lbd_octaves = 1;
+  /// LBD on the full-resolution image instead of the resized one (about twice the cost).
+  bool describe_full_resolution = false;
 };
 
 /// Schema of LineExtractorOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
@@ -49,20 +52,11 @@ void visit(V& v, LineExtractorOptions& o) {
           "LSD and LBD run on the image resized by this factor (Sec. 5.3 suggests QVGA = 0.5 "
           "for real time; 0.4 keeps the accuracy, docs/features.md)",
           config::openClosed(0, 1));
-  v.field("describe_full_resolution", o.describe_full_resolution,
-          "compute LBD on the full-resolution image");
   v.field("min_length_px", o.min_length_px, "shorter segments are dropped (px, VGA)",
           config::atLeast(0));
   v.field("max_lines", o.max_lines, "segments kept per frame, longest first", config::atLeast(1));
-  v.field("lsd_refine", o.lsd_refine,
-          "LSD refinement: 0 none (pplvo's LSD), 1 standard, 2 advanced (OpenCV's)",
-          config::between(0, 2));
   v.field("lbd_band_width", o.lbd_band_width, "LBD band width (rows per band, LBD's 7)",
           config::between(1, 64));
-  v.field("lbd_octaves", o.lbd_octaves,
-          "LBD pyramid octaves (1 = one resolution, pplvo's LBD; more: OpenCV's)",
-          config::atLeast(1));
-  v.field("use_opencv", o.use_opencv, "LSD and LBD from OpenCV instead of pplvo's (slower)");
   v.field("min_image_side_px", o.min_image_side_px, "smaller images give no lines (px)",
           config::atLeast(1));
 }
@@ -91,7 +85,8 @@ std::vector<cv::line_descriptor::KeyLine> toKeyLines(const std::vector<cv::Vec4f
 /// Not thread-safe (holds OpenCV objects): use one instance per thread.
 class LineExtractor {
  public:
-  explicit LineExtractor(const LineExtractorOptions& options = {});
+  explicit LineExtractor(const LineExtractorOptions& options = {},
+                         const LineDetectorVariant& variant = {});
 
   /// `image`: CV_8UC1 grey or CV_8UC3 BGR at full resolution.
   LineExtraction extract(const cv::Mat& image, const PinholeCamera& camera) const;
@@ -105,8 +100,9 @@ class LineExtractor {
   cv::Mat describeWithOpenCv(const cv::Mat& image, const std::vector<cv::Vec4f>& segments) const;
 
   LineExtractorOptions options_;
-  cv::Ptr<cv::LineSegmentDetector> opencv_lsd_;                ///< use_opencv or a refinement
-  cv::Ptr<cv::line_descriptor::BinaryDescriptor> opencv_lbd_;  ///< use_opencv or octaves > 1
+  LineDetectorVariant variant_;
+  cv::Ptr<cv::LineSegmentDetector> opencv_lsd_;                ///< OpenCV's LSD (variant_)
+  cv::Ptr<cv::line_descriptor::BinaryDescriptor> opencv_lbd_;  ///< OpenCV's LBD (variant_)
 };
 
 }  // namespace pplvo::features

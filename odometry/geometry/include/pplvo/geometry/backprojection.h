@@ -36,7 +36,7 @@ template <class V>
 void visit(V& v, DepthNoiseModel& o) {
   v.field("sigma_z_coeff_per_m", o.sigma_z_coeff_per_m,
           "fallback depth std sigma_z = coeff * z^2 where the depth map has no variance "
-          "(paper eq. 1: 1.425e-3 per m; keep equal to depth_filter.sensor)",
+          "(paper eq. 1: 1.425e-3 per m; in the pipeline, depth_filter.sensor's)",
           config::positive());
   v.field("sigma_z_floor_m", o.sigma_z_floor_m, "smallest depth std used (m), keeps weights finite",
           config::positive());

@@ -24,7 +24,27 @@ struct PipelineOptions {
   /// Feature families, set in the frontend and the estimator alike.
   FeatureFamilies families() const { return frontend.families; }
   void setFamilies(const FeatureFamilies& f);
+  /// The sensor model has one source: the depth filter's sigma_z coefficient (paper eq. 1) and
+  /// the lifting's pixel variance (Sec. 4.2) are copied to the frontend's other users (the
+  /// planarity tests' fallback noise, the lifting's fallback noise, the plane fit).
+  void shareSensorModel();
+  /// Whether every copy of the sensor model equals its source.
+  bool sensorModelShared() const;
 };
+
+inline void PipelineOptions::shareSensorModel() {
+  const double coeff = depth_filter.sensor.sigma_z_coeff_per_m;
+  frontend.planes.noise.sigma_z_coeff_per_m = coeff;
+  frontend.lift.noise.sigma_z_coeff_per_m = coeff;
+  frontend.planes.pixel_variance_px2 = frontend.lift.pixel_variance_px2;
+}
+
+inline bool PipelineOptions::sensorModelShared() const {
+  const double coeff = depth_filter.sensor.sigma_z_coeff_per_m;
+  return frontend.planes.noise.sigma_z_coeff_per_m == coeff &&
+         frontend.lift.noise.sigma_z_coeff_per_m == coeff &&
+         frontend.planes.pixel_variance_px2 == frontend.lift.pixel_variance_px2;
+}
 
 inline void PipelineOptions::setFamilies(const FeatureFamilies& f) {
   frontend.families = f;
