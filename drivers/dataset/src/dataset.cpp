@@ -1,13 +1,15 @@
 // Frame loading and sequential reading.
 #include "pplvo/dataset/dataset.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 
+#include "pplvo/core/image_header.h"
 #include "pplvo/core/opencv_codecs.h"
-
 #include "pplvo/dataset/jpeg_decode.h"
 #include "pplvo/dataset/png_decode.h"
 
@@ -16,18 +18,59 @@ namespace fs = std::filesystem;
 namespace pplvo::dataset {
 namespace {
 
-std::vector<uchar> readBytes(const std::string& path) {
+/// The most bytes an encoded image of `width` x `height` can take: twice its largest raw size
+/// (16-bit RGBA, which a PNG may store uncompressed) plus room for metadata chunks. A JPEG of
+/// any quality stays well under it.
+uint64_t maxEncodedBytes(int64_t width, int64_t height) {
+  constexpr uint64_t kLargestPixelBytes = 8, kMetadataBytes = 16ull << 20;
+  return 2 * static_cast<uint64_t>(width) * static_cast<uint64_t>(height) * kLargestPixelBytes +
+         kMetadataBytes;
+}
+
+/// An image of neither PNG nor JPEG format (left to OpenCV) whose size no camera gives.
+constexpr uint64_t kMaxUnknownImageBytes = 64ull << 20;
+
+/// The whole file, read once, after its size was checked against the image it can hold: the
+/// size `limits` expects (the camera's), else the one its PNG or JPEG header announces (itself
+/// checked against `limits`). A huge file is refused before anything is read or allocated.
+std::vector<uchar> readBytes(const std::string& path, const ImageLimits& limits) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw FrameLoadError(path, "missing image file");
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  const uintmax_t file_size = fs::file_size(path, ec);
+  if (ec) throw FrameLoadError(path, "cannot read the size of the image file");
+  if (file_size == 0) throw FrameLoadError(path, "empty image file");
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw FrameLoadError(path, "cannot open image file");
-  // One read of the whole file (copying through a stream iterator cost ~1 ms per frame).
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw FrameLoadError(path, "read error on image file");
-  if (size == 0) throw FrameLoadError(path, "empty image file");
-  std::vector<uchar> bytes(static_cast<size_t>(size));
-  in.seekg(0);
-  if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) {
+  // The header first: enough for PNG's IHDR and a JPEG's frame header behind its metadata.
+  std::vector<uchar> bytes(static_cast<size_t>(std::min<uintmax_t>(file_size, 64 * 1024)));
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())))
+    throw FrameLoadError(path, "read error on image file");
+  uint64_t bound = kMaxUnknownImageBytes;
+  std::string holds = "an image of unknown format";
+  std::optional<ImageHeader> header = readPngHeader(bytes.data(), bytes.size());
+  if (!header) header = readJpegHeader(bytes.data(), bytes.size());
+  if (header) {
+    const std::string problem = imageSizeProblem(header->width, header->height, limits, true);
+    if (!problem.empty()) throw FrameLoadError(path, problem);
+  }
+  if (!limits.expected.empty()) {
+    bound = maxEncodedBytes(limits.expected.width, limits.expected.height);
+    holds = "a " + std::to_string(limits.expected.width) + "x" +
+            std::to_string(limits.expected.height) + " image";
+  } else if (header) {
+    bound = maxEncodedBytes(header->width, header->height);
+    holds = "the " + std::to_string(header->width) + "x" + std::to_string(header->height) +
+            " image its header announces";
+  }
+  if (file_size > bound) {
+    throw FrameLoadError(path, "file of " + std::to_string(file_size) + " bytes is larger than " +
+                                   holds + " can be (at most " + std::to_string(bound) + " bytes)");
+  }
+  // One read of the rest (copying through a stream iterator cost ~1 ms per frame).
+  const size_t head = bytes.size();
+  bytes.resize(static_cast<size_t>(file_size));
+  if (file_size > head && !in.read(reinterpret_cast<char*>(bytes.data() + head),
+                                   static_cast<std::streamsize>(file_size - head))) {
     throw FrameLoadError(path, "read error on image file");
   }
   return bytes;
@@ -68,13 +111,13 @@ cv::Mat decode(const std::vector<uchar>& bytes, int flags, const std::string& pa
 RawFrame loadRawFrame(const DatasetEntry& entry, double depth_scale,
                       const FrameLoadOptions& options) {
   RawFrame f;
-  f.bgr = decode(readBytes(entry.rgb_path), cv::IMREAD_COLOR, entry.rgb_path,
+  f.bgr = decode(readBytes(entry.rgb_path, options.image_limits), cv::IMREAD_COLOR, entry.rgb_path,
                  options.image_limits);
   if (f.bgr.type() != CV_8UC3) throw FrameLoadError(entry.rgb_path, "colour image is not 8-bit");
   ImageLimits depth_limits;
   depth_limits.expected = options.depth_size.empty() ? f.bgr.size() : options.depth_size;
-  f.depth_units =
-      decode(readBytes(entry.depth_path), cv::IMREAD_UNCHANGED, entry.depth_path, depth_limits);
+  f.depth_units = decode(readBytes(entry.depth_path, depth_limits), cv::IMREAD_UNCHANGED,
+                         entry.depth_path, depth_limits);
   if (f.depth_units.type() != CV_16UC1) {
     throw FrameLoadError(entry.depth_path, "depth image is not a 16-bit single-channel PNG");
   }
@@ -117,9 +160,13 @@ Dataset Dataset::open(const std::string& dir, const DatasetOptions& options) {
   // Image size from the first frame that loads.
   std::string first_error;
   FrameLoadOptions first;
+  if (d.camera_.camera.width > 0 && d.camera_.camera.height > 0) {
+    // A camera file that names its size bounds every file before it is read.
+    first.image_limits.expected = cv::Size(d.camera_.camera.width, d.camera_.camera.height);
+  }
   if (d.camera_.depth_camera && d.camera_.depth_camera->camera.width > 0) {
-    first.depth_size = cv::Size(d.camera_.depth_camera->camera.width,
-                                d.camera_.depth_camera->camera.height);
+    first.depth_size =
+        cv::Size(d.camera_.depth_camera->camera.width, d.camera_.depth_camera->camera.height);
   }
   for (const auto& e : d.index_.entries) {
     try {

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -784,6 +785,75 @@ TEST(Frames, CorruptAndMissingFilesNameTheFileAndCanBeSkipped) {
   EXPECT_EQ(r.stats().frames_read, 1);
   EXPECT_EQ(r.stats().frames_skipped, 2);
   EXPECT_NE(r.stats().last_error.find("rgb/3.png"), std::string::npos);
+}
+
+long residentKiB() {
+  std::ifstream statm("/proc/self/statm");
+  long pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * (sysconf(_SC_PAGESIZE) / 1024);
+}
+
+// A file far larger than any image of the camera's size can be (10 GB, sparse: it takes no
+// disk) is refused from its size, before a byte of it is read: all zeros, and with a PNG
+// signature and header announcing the right size. Both at once, with bounded memory, whether
+// the size comes from the camera or only from the header.
+TEST(Frames, HugeFilesAreRefusedBeforeReading) {
+  TempDir t("huge");
+  const std::string icl = sharedData() + "/icl_living_room_kt0_short";
+  std::ostringstream a;
+  for (int i = 0; i < 3; ++i) {
+    const std::string n = std::to_string(i) + ".png";
+    fs::copy_file(icl + "/rgb/" + n, t.path / "rgb" / n);
+    fs::copy_file(icl + "/depth/" + n, t.path / "depth" / n);
+    a << i << " rgb/" << n << " " << i << " depth/" << n << "\n";
+  }
+  fs::copy_file(icl + "/calib_params.xml", t.path / "calib_params.xml");
+  writeText(t.path / "associations.txt", a.str());
+  constexpr uintmax_t kTenGb = 10ull << 30;
+  // Frame 1: all zeros. Frame 2: a real PNG's first bytes (signature, IHDR), then zeros.
+  { std::ofstream(t.path / "rgb" / "1.png", std::ios::binary | std::ios::trunc); }
+  fs::resize_file(t.path / "rgb" / "1.png", kTenGb);
+  fs::resize_file(t.path / "rgb" / "2.png", kTenGb);
+  const long rss_before = residentKiB();
+  const auto start = std::chrono::steady_clock::now();
+  const Dataset ds = Dataset::open(t.str());
+  ASSERT_EQ(ds.size(), 3u);
+  EXPECT_NO_THROW(ds.loadFrame(0));
+  for (size_t i : {1u, 2u}) {
+    try {
+      ds.loadFrame(i);
+      FAIL() << "a 10 GB file accepted at frame " << i;
+    } catch (const FrameLoadError& e) {
+      EXPECT_NE(std::string(e.what()).find("bytes is larger than a 640x480 image can be"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // Without a camera size, the PNG header's bounds the file.
+  DatasetEntry e = ds.entry(2);
+  try {
+    loadRawFrame(e, 5000.0);
+    FAIL() << "a 10 GB PNG accepted";
+  } catch (const FrameLoadError& err) {
+    EXPECT_NE(std::string(err.what()).find("the 640x480 image its header announces"),
+              std::string::npos)
+        << err.what();
+  }
+  // An unknown format without a size: the fixed bound.
+  e = ds.entry(1);
+  try {
+    loadRawFrame(e, 5000.0);
+    FAIL() << "a 10 GB file of unknown format accepted";
+  } catch (const FrameLoadError& err) {
+    EXPECT_NE(std::string(err.what()).find("an image of unknown format"), std::string::npos)
+        << err.what();
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("three 10 GB files refused in %.3f s, resident +%ld KiB\n", seconds,
+              residentKiB() - rss_before);
+  EXPECT_LT(residentKiB() - rss_before, 64 * 1024);  // nothing of the files was read
 }
 
 TEST(Frames, MaxDepthAndInvalidMarker) {
