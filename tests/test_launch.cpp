@@ -20,7 +20,11 @@
 #include <utility>
 
 #include "pplvo/core/trajectory.h"
-#include "pplvo/launch/launch.h"
+#include "pplvo/launch/isolation.h"
+#include "pplvo/launch/launch_args.h"
+#include "pplvo/launch/launch_report.h"
+#include "pplvo/launch/lcm_url.h"
+#include "pplvo/launch/process_specs.h"
 #include "pplvo/launch/supervisor.h"
 
 namespace fs = std::filesystem;
@@ -372,41 +376,49 @@ TEST(LaunchUrl, IsolatedScriptRoutesEqualTheLaunchLayout) {
 
 // ---------------------------------------------------------------- report pieces
 
-TEST(LaunchReport, DoneLines) {
-  const std::string log =
-      "[pplvo-frontend] PPLVO_RGBD + ...\n"
-      "[pplvo-frontend] done: in 30 out 29 dropped 1 skipped 0\n"
-      "stage table ...\n";
-  auto c = parseDoneLine(log, "pplvo-frontend");
-  ASSERT_TRUE(c.has_value());
-  EXPECT_EQ(c->frames_in, 30);
-  EXPECT_EQ(c->frames_out, 29);
-  EXPECT_EQ(c->frames_dropped, 1);
-  EXPECT_FALSE(parseDoneLine(log, "pplvo-estimator").has_value());
-  c = parseDoneLine(
-      "[pplvo-estimator] done: in 5 out 5 dropped 0 skipped 2; tracking 4 velocity 0 lost 0\n",
-      "pplvo-estimator");
-  ASSERT_TRUE(c.has_value());
-  EXPECT_EQ(c->frames_skipped, 2);
-  c = parseDoneLine("pplvo-player: published 251 frames, skipped 3, 15.36 s, 16.3 frames/s\n",
-                    "pplvo-player");
-  ASSERT_TRUE(c.has_value());
-  EXPECT_EQ(c->frames_out, 251);
-  EXPECT_EQ(c->frames_skipped, 3);
+// The counts come from each process's node_status_t (matched by pid), not from the text of its
+// log: a process whose last status was not its final one (killed) is marked.
+TEST(LaunchReport, CountsNotFinalAreMarked) {
+  LaunchReport r;
+  LaunchReport::Process p;
+  p.name = kFrontend;
+  p.has_counts = true;
+  p.counts.known = true;
+  p.counts.final = true;
+  p.counts.frames_in = 30;
+  p.exit = ExitInfo{true, 0, false, 0};
+  r.processes.push_back(p);
+  EXPECT_EQ(r.text().find("counts not final"), std::string::npos) << r.text();
+  r.processes[0].counts.final = false;
+  r.processes[0].exit = ExitInfo{false, 0, true, 9};
+  EXPECT_NE(r.text().find("counts not final"), std::string::npos) << r.text();
 }
 
-TEST(LaunchReport, OverloadLine) {
-  EXPECT_EQ(parseOverloadFusions("[pplvo-depth-filter] done: in 3 out 3 dropped 0 skipped 0\n"),
-            -1);
-  EXPECT_EQ(parseOverloadFusions("[pplvo-depth-filter] done: in 3 out 3 dropped 0 skipped 0\n"
-                                 "[pplvo-depth-filter] overload: 12 fusions over a shortened "
-                                 "window (more than 3 newer frames waiting: 2 frames shorter "
-                                 "per frame)\n"),
-            12);
+TEST(LaunchReport, OverloadFusions) {
   LaunchReport r;
   EXPECT_EQ(r.text().find("launch.overload_fusions"), std::string::npos);
   r.overload_fusions = 4;
   EXPECT_NE(r.text().find("launch.overload_fusions: 4"), std::string::npos) << r.text();
+}
+
+// Frames without a pose make a free-running launch "degraded" (not ok, not failed); a logger
+// that wrote fewer poses than the launch saw fails it.
+TEST(LaunchReport, DegradedAndLostPoses) {
+  LaunchReport r;
+  r.frames_published = 90;
+  r.poses_seen = 60;
+  r.trajectory_poses = 60;
+  r.checkLoggerKeptEveryPose();
+  EXPECT_TRUE(r.ok());
+  EXPECT_EQ(r.result(), "degraded");
+  EXPECT_NE(r.text().find("launch.result: degraded"), std::string::npos) << r.text();
+  r.trajectory_poses = r.frames_published = 90;
+  EXPECT_EQ(r.result(), "ok");
+  r.poses_seen = 92;
+  r.checkLoggerKeptEveryPose();
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.failures.back(), "the logger's trajectory has 90 of the 92 poses the launch saw");
+  EXPECT_NE(r.text().find("launch.result: FAILED"), std::string::npos);
 }
 
 TEST(LaunchReport, DrainRule) {

@@ -27,12 +27,15 @@ TEST(NodeProcess, ArgsExitCodes) {
 /// A node that stops the process on its first poll.
 struct StoppingNode {
   int polls = 0;
-  int statuses = 0;
+  int statuses = 0, final_statuses = 0;
   void poll() {
     ++polls;
     msgs::requestShutdown();
   }
-  void publishStatus(int64_t) { ++statuses; }
+  void publishStatus(int64_t, bool final = false) {
+    ++statuses;
+    final_statuses += final ? 1 : 0;
+  }
 };
 
 TEST(NodeProcess, RunsANodeUntilShutdown) {
@@ -52,13 +55,14 @@ TEST(NodeProcess, RunsANodeUntilShutdown) {
                 p, [](msgs::Bus) { return std::make_unique<StoppingNode>(); },
                 [&](const StoppingNode& n) {
                   seen = &n;
-                  return format("polls %d statuses %d\n", n.polls, n.statuses);
+                  return format("polls %d statuses %d final %d\n", n.polls, n.statuses,
+                                n.final_statuses);
                 }),
             0);
   EXPECT_NE(seen, nullptr);
   // Polled between messages until the shutdown; the status published by spin() on its way out
-  // and once more before the summary (as the processes always did).
-  EXPECT_EQ(testing::internal::GetCapturedStderr(), "polls 1 statuses 2\n");
+  // and once more, the final one, before the summary.
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "polls 1 statuses 2 final 1\n");
 }
 
 }  // namespace

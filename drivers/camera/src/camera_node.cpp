@@ -219,11 +219,11 @@ class CameraPublisher {
     });
   }
 
-  void publishStatus(int64_t backend_dropped) {
+  void publishStatus(int64_t backend_dropped, bool final = false) {
     pm::guarded(counters_, kNodeName, [&] {
       pm::NodeCounters c = counters_;
       c.frames_dropped += backend_dropped;
-      auto msg = pm::toStatusMsg(kNodeName, c, timings_, pplvo::hostUtime());
+      auto msg = pm::toStatusMsg(kNodeName, c, timings_, pplvo::hostUtime(), final);
       bus_.publish(options_.status_channel, &msg);
     });
   }
@@ -369,7 +369,7 @@ NodeRunResult runCameraNode(const NodeOptions& options, Backend& backend, pplvo:
     }
   }
   publisher.publishEvent(pplvo_msgs::stream_event_t::EVENT_END);
-  publisher.publishStatus(backend.droppedFrames());
+  publisher.publishStatus(backend.droppedFrames(), /*final=*/true);
   backend.close();
   std::fprintf(stderr, "[%s] %s after %lld frames\n", kNodeName,
                end_of_stream ? "end of stream" : "stopped",

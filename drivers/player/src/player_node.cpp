@@ -331,7 +331,9 @@ void PlayerNode::periodic(bool force) {
   const double now = nowS();
   if (force || now - last_status_s_ >= options_.status_period_s) {
     last_status_s_ = now;
-    const auto msg = msgs::toStatusMsg(options_.node_name, counters_, timings_, hostUtime());
+    // Forced only as the player ends: its final status.
+    const auto msg =
+        msgs::toStatusMsg(options_.node_name, counters_, timings_, hostUtime(), /*final=*/force);
     bus_.publish(options_.status_channel, &msg);
   }
   if (options_.progress && (force || now - last_progress_s_ >= 0.25)) {

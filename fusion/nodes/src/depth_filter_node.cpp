@@ -262,12 +262,12 @@ void DepthFilterNode::finishFusion() {
   startFusion();
 }
 
-void DepthFilterNode::publishStatus(int64_t utime) {
+void DepthFilterNode::publishStatus(int64_t utime, bool final) {
   msgs::guarded(counters_, kName, [&] {
     if (counters_.last_warning.empty() && !fusion_.valid() && !ogm_.stats().last_warning.empty()) {
       counters_.last_warning = ogm_.stats().last_warning;
     }
-    const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, timings_, utime);
+    const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, timings_, utime, final);
     bus_.publish(options_.status_channel, &m);
   });
 }

@@ -1,5 +1,7 @@
 #include "pplvo/msgs/convert.h"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstring>
 
@@ -539,8 +541,10 @@ DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& m) { return decodeDepth
 DepthWithVariance viewOfMsg(const pplvo_msgs::depth_map_t& m) { return decodeDepthMap(m, true); }
 
 pplvo_msgs::node_status_t toStatusMsg(const std::string& node, const NodeCounters& c,
-                                      const StageTimings& timings, int64_t utime) {
+                                      const StageTimings& timings, int64_t utime, bool final) {
   pplvo_msgs::node_status_t m;
+  m.pid = static_cast<int32_t>(::getpid());
+  m.at_exit = final;
   m.utime = utime;
   m.node = node;
   m.last_seq = c.last_seq;

@@ -150,9 +150,10 @@ StageTimings EstimatorNode::allTimings() const {
   return pipeline::mergeTimings({&timings_, &odometry_.timings()});
 }
 
-void EstimatorNode::publishStatus(int64_t utime) {
+void EstimatorNode::publishStatus(int64_t utime, bool final) {
   msgs::guarded(counters_, kName, [&] {
-    const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, allTimings(), utime);
+    const pplvo_msgs::node_status_t m =
+        msgs::toStatusMsg(kName, counters_, allTimings(), utime, final);
     bus_.publish(options_.status_channel, &m);
   });
 }

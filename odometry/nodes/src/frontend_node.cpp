@@ -276,9 +276,10 @@ StageTimings FrontendNode::allTimings() const {
   return pipeline::mergeTimings({&timings_, &frontend});
 }
 
-void FrontendNode::publishStatus(int64_t utime) {
+void FrontendNode::publishStatus(int64_t utime, bool final) {
   msgs::guarded(counters_, kName, [&] {
-    const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, allTimings(), utime);
+    const pplvo_msgs::node_status_t m =
+        msgs::toStatusMsg(kName, counters_, allTimings(), utime, final);
     bus_.publish(options_.status_channel, &m);
   });
 }

@@ -21,7 +21,11 @@
 #include <string>
 #include <vector>
 
-#include "pplvo/launch/launch.h"
+#include "pplvo/launch/isolation.h"
+#include "pplvo/launch/launch_args.h"
+#include "pplvo/launch/launch_report.h"
+#include "pplvo/launch/lcm_url.h"
+#include "pplvo/launch/process_specs.h"
 #include "pplvo/launch/supervisor.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/pipeline/pipeline_args.h"
@@ -34,6 +38,23 @@ using Clock = std::chrono::steady_clock;
 volatile sig_atomic_t g_interrupted = 0;
 void onSignal(int) { g_interrupted = 1; }
 
+/// The counts a node_status_t carries (the depth filter's shortened fusions: the count of its
+/// "ogm_shortened" stage).
+NodeCounts countsOf(const pplvo_msgs::node_status_t& m) {
+  NodeCounts c;
+  c.frames_in = m.frames_in;
+  c.frames_out = m.frames_out;
+  c.frames_dropped = m.frames_dropped;
+  c.frames_skipped = m.frames_skipped;
+  c.errors = m.errors;
+  c.known = true;
+  c.final = m.at_exit;
+  for (const pplvo_msgs::stage_timing_t& t : m.stages) {
+    if (t.name == "ogm_shortened") c.shortened_fusions = t.count;
+  }
+  return c;
+}
+
 /// What the launcher hears on the bus. Handlers only copy numbers (no throw possible).
 class BusMonitor {
  public:
@@ -43,14 +64,9 @@ class BusMonitor {
     lcm_.subscribe(pplvo::channels::kPose, &BusMonitor::onPose, this);
   }
   void onStatus(const lcm::ReceiveBuffer*, const std::string&, const pplvo_msgs::node_status_t* m) {
-    NodeCounts& c = status_[m->node];
-    c.frames_in = m->frames_in;
-    c.frames_out = m->frames_out;
-    c.frames_dropped = m->frames_dropped;
-    c.frames_skipped = m->frames_skipped;
-    c.errors = m->errors;
-    c.known = true;
-    c.source = "status";
+    const NodeCounts c = countsOf(*m);
+    status_[m->node] = c;
+    by_pid_[m->pid] = c;
     ++reports_[m->node];
   }
   void onStream(const lcm::ReceiveBuffer*, const std::string&,
@@ -80,6 +96,12 @@ class BusMonitor {
     if (it == status_.end()) return std::nullopt;
     return it->second;
   }
+  /// The last status of the process `pid` (its final one if it published that).
+  std::optional<NodeCounts> statusOf(pid_t pid) const {
+    auto it = by_pid_.find(static_cast<int32_t>(pid));
+    if (it == by_pid_.end()) return std::nullopt;
+    return it->second;
+  }
   int64_t poses() const { return poses_; }
   bool endSeen() const { return end_seen_; }
   int64_t endPublished() const { return end_published_; }
@@ -87,6 +109,7 @@ class BusMonitor {
  private:
   lcm::LCM& lcm_;
   std::map<std::string, NodeCounts> status_;
+  std::map<int32_t, NodeCounts> by_pid_;
   std::map<std::string, int64_t> reports_;
   int64_t poses_ = 0;
   bool start_seen_ = false, end_seen_ = false;
@@ -106,13 +129,6 @@ std::vector<std::string> pipelineArgErrors(const LaunchOptions& o) {
   pplvo::ArgParser parser;
   pplvo::pipeline::applyPipelineArgs(args, &options, &parser);
   return parser.errors();
-}
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 double secondsSince(Clock::time_point t0) {
@@ -431,8 +447,8 @@ class SupervisedRun {
     if (!named) failures_.push_back(faults_.kill_node + " was killed by --test-kill");
   }
 
-  /// Each process into the report: exit, faults, counts (the "done:" line of its log, else its
-  /// last status), and the failures not yet named.
+  /// Each process into the report: exit, faults, counts (its final node_status_t, else its last
+  /// one, marked as not final), and the failures not yet named.
   void reportProcesses() {
     for (const ChildState& c : sup_.children()) {
       LaunchReport::Process p;
@@ -444,16 +460,11 @@ class SupervisedRun {
       p.pauses = c.pauses;
       p.paused_s = c.paused_s;
       p.restarted = restarted_.count(&c - sup_.children().data()) > 0;
-      // A replaced process shares its log with its successor, whose counts those are.
-      if (p.restarted) p.has_counts = false;
+      // Each process's own statuses (by pid): a restarted stage's predecessor keeps its own.
       if (p.has_counts) {
-        const std::string log = readFile(c.spec.log_path);
-        if (auto d = parseDoneLine(log, c.spec.name)) p.counts = *d;
-        if (c.spec.name == kDepthFilter) report_.overload_fusions = parseOverloadFusions(log);
-        if (auto s = bus_.status(c.spec.name)) {
-          // The final status has errors too; the done line is the final word on the counts.
-          if (!p.counts.known) p.counts = *s;
-          p.counts.errors = s->errors;
+        if (auto s = bus_.statusOf(c.pid)) p.counts = *s;
+        if (c.spec.name == kDepthFilter && !p.restarted && p.counts.known) {
+          report_.overload_fusions = p.counts.shortened_fusions;
         }
       }
       if (c.killed && failures_.empty()) {
@@ -499,6 +510,7 @@ void finishReport(LaunchReport& report, const BusMonitor& bus, const std::string
   report.poses_seen = bus.poses();
   report.trajectory_poses = countTrajectoryLines(trajectory);
   report.checkFramesLostToFaults();
+  report.checkLoggerKeptEveryPose();
   report.wall_s = secondsSince(t0);
 }
 

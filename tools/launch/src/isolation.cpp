@@ -1,4 +1,6 @@
-// Private network namespace for pplvo-launch --isolated (see launch.h and docs/launch.md).
+// Private network namespace for pplvo-launch --isolated (see isolation.h and docs/launch.md).
+#include "pplvo/launch/isolation.h"
+
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <net/if.h>
@@ -12,8 +14,6 @@
 #include <cerrno>
 #include <cstring>
 #include <string>
-
-#include "pplvo/launch/launch.h"
 
 namespace pplvo::launch {
 

@@ -58,7 +58,7 @@ struct HasPollWait<N, std::void_t<decltype(std::declval<const N&>().pollWaitMs()
 /// handlers, opens the bus (URL and routes), builds the node with `make(bus)` (which may print
 /// its start-up line), handles messages, calling node.poll() between messages when the node
 /// has one (waiting at most node.pollWaitMs() for a message when it has that) and
-/// node.publishStatus() about once a second, publishes a last status and prints
+/// node.publishStatus() about once a second, publishes a final status and prints
 /// `summary(node)` on stderr. Any exception: "NAME: what" on stderr and exit code 1; else 0.
 template <class Node>
 int runLcmNode(const NodeProcess& process,
@@ -80,7 +80,7 @@ int runLcmNode(const NodeProcess& process,
           if constexpr (detail::HasPollWait<Node>::value) return node->pollWaitMs();
           return 50;
         });
-    node->publishStatus(hostUtime());
+    node->publishStatus(hostUtime(), /*final=*/true);
     std::fputs(summary(*node).c_str(), stderr);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: %s\n", process.name.c_str(), e.what());

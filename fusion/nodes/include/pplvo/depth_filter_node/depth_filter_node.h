@@ -84,7 +84,7 @@ class DepthFilterNode {
   DepthFilterNode& operator=(const DepthFilterNode&) = delete;
 
   /// Publishes node_status_t (counters, stage timings).
-  void publishStatus(int64_t utime);
+  void publishStatus(int64_t utime, bool final = false);
   /// Between messages (runLcmNode): releases frames that waited max_alignment_wait_ms and
   /// publishes finished fusions (fuse_on_worker).
   void poll();

@@ -91,7 +91,9 @@ struct NodeCounters {
   int64_t errors = 0;
   std::string last_warning;
 };
+/// The status of this process (pid = getpid()); `final` on the last one it publishes as it exits.
 pplvo_msgs::node_status_t toStatusMsg(const std::string& node, const NodeCounters& counters,
-                                      const StageTimings& timings, int64_t utime);
+                                      const StageTimings& timings, int64_t utime,
+                                      bool final = false);
 
 }  // namespace pplvo::msgs

@@ -77,7 +77,7 @@ class EstimatorNode {
   EstimatorNode(const EstimatorNode&) = delete;
   EstimatorNode& operator=(const EstimatorNode&) = delete;
 
-  void publishStatus(int64_t utime);
+  void publishStatus(int64_t utime, bool final = false);
   const msgs::NodeCounters& counters() const { return counters_; }
   const EstimatorCounts& counts() const { return counts_; }
   StageTimings allTimings() const;

@@ -74,7 +74,7 @@ class FrontendNode {
   FrontendNode(const FrontendNode&) = delete;
   FrontendNode& operator=(const FrontendNode&) = delete;
 
-  void publishStatus(int64_t utime);
+  void publishStatus(int64_t utime, bool final = false);
   /// Publishes a stage 2D that finished on its worker thread but still waits for the previous
   /// frame's fused depth (which may never come): call it from the idle loop. Never blocks.
   void poll();
