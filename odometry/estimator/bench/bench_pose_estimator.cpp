@@ -23,7 +23,7 @@
 #include "pplvo/core/trajectory.h"
 #include "pplvo/estimator/pose_estimator.h"
 
-namespace pplvo {
+namespace pplvo::estimator {
 namespace {
 
 struct Dataset {
@@ -223,6 +223,6 @@ void BM_IclOrbPoints(benchmark::State& state) {
 BENCHMARK(BM_IclOrbPoints)->Unit(benchmark::kMillisecond);
 
 }  // namespace
-}  // namespace pplvo
+}  // namespace pplvo::estimator
 
 BENCHMARK_MAIN();

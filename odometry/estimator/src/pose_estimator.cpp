@@ -12,7 +12,7 @@
 #include "pplvo/estimator/pose_parameterisation.h"
 #include "pplvo/estimator/residuals.h"
 
-namespace pplvo {
+namespace pplvo::estimator {
 
 namespace {
 constexpr EnumName<EstimateStatus> kEstimateStatusNames[] = {
@@ -48,17 +48,6 @@ bool isPsd(const Eigen::Matrix<double, N, N>& C) {
 // Terms of the joint cost E. Each keeps its data plus the weighting state that is fixed
 // during one Ceres solve (IRLS).
 
-using estimator::LineTerm;
-using estimator::Matrix23;
-using estimator::Matrix26;
-using estimator::Matrix36;
-using estimator::PlaneTerm;
-using estimator::PointTerm;
-using estimator::PoseEval;
-using estimator::Projector;
-using estimator::lineResidual;
-using estimator::planeResidual;
-using estimator::pointResidual;
 
 template <int N>
 bool whitening(const Eigen::Matrix<double, N, N>& Sigma, bool full,
@@ -630,4 +619,4 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
   return est;
 }
 
-}  // namespace pplvo
+}  // namespace pplvo::estimator

@@ -11,6 +11,11 @@
 
 namespace pplvo::testing {
 
+using estimator::Correspondences;
+using estimator::LineMatch3D2D;
+using estimator::PlaneMatch3D3D;
+using estimator::PointMatch3D2D;
+
 struct SceneConfig {
   int n_points = 300;
   int n_lines = 50;

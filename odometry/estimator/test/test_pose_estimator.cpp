@@ -7,7 +7,7 @@
 #include "pplvo/estimator/pose_parameterisation.h"
 #include "synthetic_scene.h"
 
-namespace pplvo {
+namespace pplvo::estimator {
 namespace {
 
 using testing::SceneConfig;
@@ -557,4 +557,4 @@ TEST(PoseEstimator, BuildCorrespondencesFromFeatures) {
 }
 
 }  // namespace
-}  // namespace pplvo
+}  // namespace pplvo::estimator

@@ -9,10 +9,10 @@
 #include <cstdlib>
 #include <random>
 
-#include "pplvo/estimator/odometry_tracker.h"
+#include "pplvo/estimator/motion_chain.h"
 #include "pplvo/fixtures/synthetic_sequence.h"
 
-namespace pplvo {
+namespace pplvo::estimator {
 namespace {
 
 constexpr int kFrames = 21;
@@ -155,9 +155,9 @@ struct TrackRun {
 TrackRun runTracker(const PoseEstimatorOptions& eo) {
   const Sequence& s = sequence();
   std::mt19937 rng(99);
-  OdometryTrackerOptions o;
+  MotionChainOptions o;
   o.estimator = eo;
-  OdometryTracker tracker(o);
+  MotionChain tracker(o);
   tracker.initialise(0);
   TrackRun r;
   for (int i = 1; i < static_cast<int>(s.frames.size()); ++i) {
@@ -165,7 +165,7 @@ TrackRun runTracker(const PoseEstimatorOptions& eo) {
     r.mean_points += c.points.size();
     r.mean_lines += c.lines.size();
     r.mean_planes += c.planes.size();
-    const TrackerOutput out = tracker.track(i, c, s.seq.camera());
+    const MotionChainOutput out = tracker.track(i, c, s.seq.camera());
     if (out.status == TrackingStatus::kTracking) ++r.tracking;
     if (std::getenv("PPLVO_DEBUG_SYNTH")) {
       std::printf(
@@ -225,4 +225,4 @@ TEST(EstimatorSynth, TracksEachFamilyAndAll) {
 }
 
 }  // namespace
-}  // namespace pplvo
+}  // namespace pplvo::estimator

@@ -52,7 +52,7 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
     frame = msgs::fromMsg(msg);
   }
   if (!last) {  // first frame of the stream: the origin of the world frame
-    const TrackerOutput out = odometry_.initialise(frame);
+    const estimator::MotionChainOutput out = odometry_.initialise(frame);
     publish(out, frame, {});
     return;
   }
@@ -79,7 +79,7 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
     const int64_t awaited = awaiting_lifted_.value_or(odometry_.lastPosed().value_or(-1));
     counters_.last_warning = "no 3D features for frame " + std::to_string(awaited) +
                              ": tracking restarted at " + std::to_string(newest.seq);
-    TrackerOutput out = odometry_.restart(newest);
+    estimator::MotionChainOutput out = odometry_.restart(newest);
     awaiting_lifted_.reset();
     drops_without_reference_ = 0;
     publish(out, newest, {});
@@ -128,15 +128,15 @@ void EstimatorNode::processWaiting() {
   }
 }
 
-void EstimatorNode::publish(const TrackerOutput& out, const FrameFeatures& frame,
+void EstimatorNode::publish(const estimator::MotionChainOutput& out, const FrameFeatures& frame,
                             const tracking::TrackingStats& stats) {
   last_pose_utime_ = std::max(newest_utime_, frame.utime);
-  FramePose pose = toFramePose(out);
+  FramePose pose = estimator::toFramePose(out);
   pose.utime = frame.utime;
   pose.seq = frame.seq;
   pose.stamp = frame.stamp;
   pose.reference = odometry_.referenceRole(frame.seq);
-  (void)stats;  // pose_t carries the inliers the estimate used (toFramePose)
+  (void)stats;  // pose_t carries the inliers the estimate used (estimator::toFramePose)
   counts_.add(pose.status);
   {
     ScopedStageTimer t(timings_, "encode");

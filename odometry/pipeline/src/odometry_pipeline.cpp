@@ -27,7 +27,7 @@ PipelineFrameResult OdometryPipeline::process(const RgbdFrame& frame) {
   FrameFeatures features = frontend_.extract2d(frame, depth, &r.frontend);
   r.tracking = reference_ ? odometry_.track(*reference_, features, &r.odometry)
                           : odometry_.initialise(features);
-  r.pose = toFramePose(r.tracking);
+  r.pose = estimator::toFramePose(r.tracking);
   r.pose.utime = frame.utime;
   r.pose.seq = frame.seq;
   r.pose.stamp = frame.stamp;

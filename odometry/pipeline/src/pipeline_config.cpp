@@ -95,12 +95,12 @@ const char* kHeader =
 
 bool familiesAgree(const PipelineOptions& o) {
   const FeatureFamilies& f = o.frontend.families;
-  const PoseEstimatorOptions& e = o.odometry.tracker.estimator;
+  const estimator::PoseEstimatorOptions& e = o.odometry.tracker.estimator;
   return f.points == e.use_points && f.lines == e.use_lines && f.planes == e.use_planes;
 }
 
 std::string familiesDisagreement(const PipelineOptions& o) {
-  const PoseEstimatorOptions& e = o.odometry.tracker.estimator;
+  const estimator::PoseEstimatorOptions& e = o.odometry.tracker.estimator;
   return "features: frontend.families " + configText(o.frontend.families) +
          " disagree with odometry.tracker.estimator.use_* " +
          configText(FeatureFamilies{e.use_points, e.use_lines, e.use_planes}) +
@@ -200,8 +200,8 @@ std::vector<std::string> diffPipelineOptions(const PipelineOptions& a, const Pip
   }
   // flatten() of two PipelineOptions always has the same keys; the estimator's use_* are
   // covered by `features` only when they agree with it, so compare them directly.
-  const PoseEstimatorOptions& xa = a.odometry.tracker.estimator;
-  const PoseEstimatorOptions& xb = b.odometry.tracker.estimator;
+  const estimator::PoseEstimatorOptions& xa = a.odometry.tracker.estimator;
+  const estimator::PoseEstimatorOptions& xb = b.odometry.tracker.estimator;
   const FeatureFamilies ua{xa.use_points, xa.use_lines, xa.use_planes};
   const FeatureFamilies ub{xb.use_points, xb.use_lines, xb.use_planes};
   if (configText(ua) != configText(ub))

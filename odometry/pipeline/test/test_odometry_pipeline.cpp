@@ -294,7 +294,7 @@ TEST(OdometryPipeline, PerFrameSharedErrorKeepsThePublishedCovarianceConsistent)
   PipelineOptions o;
   o.odometry.tracker.frame_error_sigma_t_m = 2e-3;
   o.odometry.tracker.frame_error_sigma_rot_deg = 0.06;
-  const Matrix6d two_q = frameErrorCovariance(o.odometry.tracker);
+  const Matrix6d two_q = estimator::frameErrorCovariance(o.odometry.tracker);
   OdometryPipeline pipe(o);
   Pose3 last_truth = Pose3::Identity();
   double sum_with = 0, sum_without = 0;

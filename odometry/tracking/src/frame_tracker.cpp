@@ -44,26 +44,26 @@ void FrameTracker::resetKeyframes(int64_t next, KeyframeReason reason) {
   if (options_.reference == TrackingReference::kKeyframe) pending_keyframe_ = {next, reason};
 }
 
-TrackerOutput FrameTracker::initialise(const FrameFeatures& first) {
+estimator::MotionChainOutput FrameTracker::initialise(const FrameFeatures& first) {
   forgetPending();
   lifted_.setLastPosed(first.seq);
   resetKeyframes(first.seq, KeyframeReason::kStart);
   return tracker_.initialise(first.seq);
 }
 
-TrackerOutput FrameTracker::restart(const FrameFeatures& current) {
+estimator::MotionChainOutput FrameTracker::restart(const FrameFeatures& current) {
   const Pose3 T_w_c = tracker_.T_w_c();
   forgetPending();
   lifted_.setLastPosed(current.seq);
   resetKeyframes(current.seq, KeyframeReason::kStart);
-  TrackerOutput out = tracker_.initialise(current.seq, T_w_c);
+  estimator::MotionChainOutput out = tracker_.initialise(current.seq, T_w_c);
   out.status = TrackingStatus::kReinitialised;
   return out;
 }
 
 FeatureMatches FrameTracker::match(const FrameFeatures& reference, const FrameFeatures& current,
                                    const Pose3& T_curr_ref) {
-  const PoseEstimatorOptions& use = options_.tracker.estimator;
+  const estimator::PoseEstimatorOptions& use = options_.tracker.estimator;
   FeatureMatches m;
   if (use.use_points && !reference.points.empty() && !current.points.empty()) {
     ScopedStageTimer t(timings_, "match_points");
@@ -114,7 +114,7 @@ FeatureMatches FrameTracker::match(const FrameFeatures& reference, const FrameFe
   return m;
 }
 
-TrackerOutput FrameTracker::track(const FrameFeatures& reference, const FrameFeatures& current,
+estimator::MotionChainOutput FrameTracker::track(const FrameFeatures& reference, const FrameFeatures& current,
                                   TrackingStats* stats) {
   TrackingStats local;
   TrackingStats& s = stats ? *stats : local;
@@ -193,7 +193,7 @@ TrackingStep FrameTracker::step(const FrameFeatures& current) {
   }
   const Keyframe* keyframe = keyframes_.active();
   if (keyframes && keyframe && keyframe->seq() != *last && keyframe_rejected_seq_ != current.seq) {
-    if (std::optional<PoseEstimate> through_keyframe = estimateFromKeyframe(current, s)) {
+    if (std::optional<estimator::PoseEstimate> through_keyframe = estimateFromKeyframe(current, s)) {
       out.pose = tracker_.update(current.seq, *through_keyframe);
       if (out.pose->status != TrackingStatus::kTracking) {
         resetKeyframes(current.seq, KeyframeReason::kStart);
@@ -238,15 +238,15 @@ void FrameTracker::finishStep(const FrameFeatures& current, TrackingStats& stats
   lifted_.prune();
 }
 
-TrackerOutput FrameTracker::trackFromPrevious(const FrameFeatures& reference,
+estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures& reference,
                                               const FrameFeatures& current, TrackingStats& stats) {
   const Pose3 T_curr_prev_predicted = tracker_.predictedMotion();
   const FeatureMatches matches = match(reference, current, T_curr_prev_predicted);
   countMatches(matches, stats);
   stats.reference_seq = reference.seq;
   ScopedStageTimer t(timings_, "pose");
-  const PoseEstimate est = estimator_.estimate(
-      buildCorrespondences(reference, current, matches, options_.tracker.estimator), current.camera,
+  const estimator::PoseEstimate est = estimator_.estimate(
+      estimator::buildCorrespondences(reference, current, matches, options_.tracker.estimator), current.camera,
       T_curr_prev_predicted);
   return tracker_.update(current.seq, est);
 }
@@ -257,7 +257,7 @@ ReferenceRole FrameTracker::referenceRole(int64_t seq) const {
                                                             : ReferenceRole::kFallbackOnly;
 }
 
-std::optional<PoseEstimate> FrameTracker::estimateFromKeyframe(const FrameFeatures& current,
+std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(const FrameFeatures& current,
                                                                TrackingStats& stats) {
   const Keyframe& keyframe = *keyframes_.active();
   if (current.camera != keyframe.landmarks.camera) return std::nullopt;
@@ -267,11 +267,11 @@ std::optional<PoseEstimate> FrameTracker::estimateFromKeyframe(const FrameFeatur
   const FeatureMatches matches = match(keyframe.landmarks, current, T_curr_kf_predicted);
   countMatches(matches, stats);
   stats.reference_seq = keyframe.seq();
-  PoseEstimate est;
+  estimator::PoseEstimate est;
   {
     ScopedStageTimer t(timings_, "pose");
     est = estimator_.estimate(
-        buildCorrespondences(keyframe.landmarks, current, matches, options_.tracker.estimator),
+        estimator::buildCorrespondences(keyframe.landmarks, current, matches, options_.tracker.estimator),
         current.camera, T_curr_kf_predicted);
   }
   if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {

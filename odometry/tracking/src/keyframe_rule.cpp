@@ -23,7 +23,7 @@ constexpr EnumName<KeyframeReason> kKeyframeReasonNames[] = {
 /// the robust scale s^2 on the point and line terms (pose_estimator.h), which is the same for
 /// an estimate against the keyframe and one against any other frame; the keyframe rule
 /// compares what the geometry (overlap, parallax, depth of the landmarks) does to it.
-double geometricVariance(const PoseEstimate& estimate, double variance) {
+double geometricVariance(const estimator::PoseEstimate& estimate, double variance) {
   const double s = std::max(1.0, estimate.robust_scale);
   return variance / (s * s);
 }
@@ -32,14 +32,14 @@ double geometricVariance(const PoseEstimate& estimate, double variance) {
 
 const char* toString(KeyframeReason reason) { return enumName(kKeyframeReasonNames, reason); }
 
-KeyframeBaseline keyframeBaseline(const PoseEstimate& first_against_keyframe) {
-  const PoseEstimate& e = first_against_keyframe;
+KeyframeBaseline keyframeBaseline(const estimator::PoseEstimate& first_against_keyframe) {
+  const estimator::PoseEstimate& e = first_against_keyframe;
   return {e.n_residuals, geometricVariance(e, e.max_translation_variance_m2),
           geometricVariance(e, e.max_rotation_variance)};
 }
 
 KeyframeReason keyframeExhausted(const KeyframeOptions& options, const KeyframeBaseline& baseline,
-                                 const PoseEstimate& against_keyframe, const Pose3& T_curr_kf) {
+                                 const estimator::PoseEstimate& against_keyframe, const Pose3& T_curr_kf) {
   if (against_keyframe.n_residuals < options.min_inlier_fraction * baseline.rows) {
     return KeyframeReason::kOverlap;
   }

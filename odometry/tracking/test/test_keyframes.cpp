@@ -117,7 +117,7 @@ TrackingOptions pointsOnly(TrackingReference reference) {
 }
 
 struct RunResult {
-  std::vector<TrackerOutput> outputs;
+  std::vector<estimator::MotionChainOutput> outputs;
   std::vector<TrackingStats> stats;
   std::vector<int64_t> keyframe_seq;  ///< active keyframe after each frame
   double final_error_m = 0, max_error_m = 0, max_error_deg = 0;
@@ -134,7 +134,7 @@ RunResult run(const TrackingOptions& options, const std::vector<Pose3>& truth,
   for (int k = 0; k < static_cast<int>(truth.size()); ++k) {
     auto [f2, f3] = world.observe(k, truth[k]);
     TrackingStats s;
-    const TrackerOutput out = k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2, &s);
+    const estimator::MotionChainOutput out = k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2, &s);
     reference = std::move(f3);
     const Pose3 expected = truth[0].inverse() * truth[k];
     const Pose3 err = expected.inverse() * out.T_w_c;
@@ -298,7 +298,7 @@ TEST(Keyframes, StateStaysBoundedOver2000Frames) {
   int not_tracking = 0;
   for (int k = 0; k < static_cast<int>(truth.size()); ++k) {
     auto [f2, f3] = world.observe(k, truth[k], 2);
-    const TrackerOutput out = k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2);
+    const estimator::MotionChainOutput out = k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2);
     reference = std::move(f3);
     if (k > 0 && out.status != TrackingStatus::kTracking) ++not_tracking;
     ASSERT_LE(k - odometry.keyframes().activeSeq().value_or(-1), 60) << k;

@@ -21,7 +21,7 @@
 #include "pplvo/core/geometry.h"
 #include "pplvo/core/primitives.h"
 
-namespace pplvo {
+namespace pplvo::estimator {
 
 /// 3D point of the previous frame matched to an undistorted pixel of the current frame.
 struct PointMatch3D2D {
@@ -265,4 +265,4 @@ class PoseEstimator {
   PoseEstimatorOptions options_;
 };
 
-}  // namespace pplvo
+}  // namespace pplvo::estimator

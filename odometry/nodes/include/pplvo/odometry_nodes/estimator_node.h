@@ -92,7 +92,7 @@ class EstimatorNode {
   void handleFeatures3d(const pplvo_msgs::features_t& msg);
   /// Tracks waiting frames while the reference they need is in.
   void processWaiting();
-  void publish(const TrackerOutput& out, const FrameFeatures& frame,
+  void publish(const estimator::MotionChainOutput& out, const FrameFeatures& frame,
                const tracking::TrackingStats& stats);
 
   EstimatorNodeOptions options_;

@@ -15,7 +15,7 @@
 namespace pplvo::pipeline {
 
 struct PipelineFrameResult {
-  TrackerOutput tracking;
+  estimator::MotionChainOutput tracking;
   FramePose pose;  ///< published form (utime, seq, stamp of the frame)
   FrontendStats frontend;
   tracking::TrackingStats odometry;

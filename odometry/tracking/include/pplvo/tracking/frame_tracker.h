@@ -3,7 +3,7 @@
 /// tracking policy. Each frame's 2D features (points, lines, C-GM planes) are matched against
 /// 3D features lifted on fused depth, either the previous frame's (the paper) or the active
 /// keyframe's (docs/estimator.md, "Keyframes"), and the motion, its covariance and the window
-/// uncertainties the depth filter needs follow (OdometryTracker). No LCM.
+/// uncertainties the depth filter needs follow (MotionChain). No LCM.
 ///
 /// The data lives apart from the policy: the keyframe and its landmarks in a KeyframeStore,
 /// the 3D stages that arrive after later frames' 2D stages in a LiftedStageBuffer. The policy
@@ -17,7 +17,7 @@
 #include "pplvo/core/features.h"
 #include "pplvo/core/frame_pose.h"
 #include "pplvo/core/stage_timer.h"
-#include "pplvo/estimator/odometry_tracker.h"
+#include "pplvo/estimator/motion_chain.h"
 #include "pplvo/estimator/pose_estimator.h"
 #include "pplvo/features/matching.h"
 #include "pplvo/geometry/plane_matching.h"
@@ -38,7 +38,7 @@ const char* toString(TrackingReference reference);
 struct TrackingOptions {
   TrackingReference reference = TrackingReference::kKeyframe;
   KeyframeOptions keyframe;
-  OdometryTrackerOptions tracker;  ///< tracker.estimator.use_* select the families
+  estimator::MotionChainOptions tracker;  ///< tracker.estimator.use_* select the families
   features::PointMatchOptions point_matching;
   features::LineMatchOptions line_matching;
   geometry::PlaneMatchOptions plane_matching;
@@ -85,7 +85,7 @@ struct TrackingStats {
 
 /// The result of FrameTracker::step(): a pose, or the frame whose 3D stage it needs first.
 struct TrackingStep {
-  std::optional<TrackerOutput> pose;
+  std::optional<estimator::MotionChainOutput> pose;
   TrackingStats stats;
   /// Set when no pose was given: step() again after handing in this frame's 3D stage.
   std::optional<int64_t> awaiting_lifted;
@@ -97,11 +97,11 @@ class FrameTracker {
   explicit FrameTracker(const TrackingOptions& options = {});
 
   /// Starts (or restarts) tracking at `first`: FIRST_FRAME with T_w_c = identity.
-  TrackerOutput initialise(const FrameFeatures& first);
+  estimator::MotionChainOutput initialise(const FrameFeatures& first);
 
   /// Restarts tracking at `current` without a motion estimate: the last pose is held and the
   /// status is REINITIALISED (e.g. the reference never arrived).
-  TrackerOutput restart(const FrameFeatures& current);
+  estimator::MotionChainOutput restart(const FrameFeatures& current);
 
   /// Hands in the 3D stage of a posed frame, which a later step() may need. False (nothing
   /// kept) when no later frame can use it: not the frame posed last, nor one whose landmark
@@ -123,7 +123,7 @@ class FrameTracker {
   /// `reference` (the 3D stage of the frame posed last) and poses `current`. When `reference`
   /// is not that frame (frames lost in between, or the stream restarted), tracking restarts
   /// at `current` and stats->reinitialised is set.
-  TrackerOutput track(const FrameFeatures& reference, const FrameFeatures& current,
+  estimator::MotionChainOutput track(const FrameFeatures& reference, const FrameFeatures& current,
                       TrackingStats* stats = nullptr);
 
   /// Sequence number of the last frame given a pose, if any.
@@ -134,7 +134,7 @@ class FrameTracker {
   ReferenceRole referenceRole(int64_t seq) const;
 
   const KeyframeStore& keyframes() const { return keyframes_; }
-  const OdometryTracker& tracker() const { return tracker_; }
+  const estimator::MotionChain& tracker() const { return tracker_; }
   const TrackingOptions& options() const { return options_; }
   const StageTimings& timings() const { return timings_; }
 
@@ -150,10 +150,10 @@ class FrameTracker {
   FeatureMatches match(const FrameFeatures& reference, const FrameFeatures& current,
                        const Pose3& T_curr_ref);
   /// The estimate of T_curr_prev through the active keyframe, or nullopt when rejected.
-  std::optional<PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
+  std::optional<estimator::PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
                                                    TrackingStats& stats);
   /// Tracks `current` against `reference`, the previous frame's 3D stage.
-  TrackerOutput trackFromPrevious(const FrameFeatures& reference, const FrameFeatures& current,
+  estimator::MotionChainOutput trackFromPrevious(const FrameFeatures& reference, const FrameFeatures& current,
                                   TrackingStats& stats);
   /// Fuses the observations whose 3D stage is due; the frame it waits for otherwise.
   std::optional<int64_t> fuseDueObservations();
@@ -165,8 +165,8 @@ class FrameTracker {
   void finishStep(const FrameFeatures& current, TrackingStats& stats);
 
   TrackingOptions options_;
-  OdometryTracker tracker_;
-  PoseEstimator estimator_;
+  estimator::MotionChain tracker_;
+  estimator::PoseEstimator estimator_;
   KeyframeStore keyframes_;
   LiftedStageBuffer lifted_;
   std::optional<PendingKeyframe> pending_keyframe_;

@@ -70,11 +70,11 @@ constexpr int kKeyframeReasons = 6;
 const char* toString(KeyframeReason reason);
 
 /// The baseline a keyframe's first tracked frame sets (its rows and geometric variances).
-KeyframeBaseline keyframeBaseline(const PoseEstimate& first_against_keyframe);
+KeyframeBaseline keyframeBaseline(const estimator::PoseEstimate& first_against_keyframe);
 
 /// Whether the keyframe is exhausted for the next frame, given an accepted estimate against
 /// it (`T_curr_kf` its pose) and the keyframe's baseline; kNone if it still serves.
 KeyframeReason keyframeExhausted(const KeyframeOptions& options, const KeyframeBaseline& baseline,
-                                 const PoseEstimate& against_keyframe, const Pose3& T_curr_kf);
+                                 const estimator::PoseEstimate& against_keyframe, const Pose3& T_curr_kf);
 
 }  // namespace pplvo::tracking

@@ -1,11 +1,11 @@
-#include "pplvo/estimator/odometry_tracker.h"
+#include "pplvo/estimator/motion_chain.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "pplvo/estimator/pose_parameterisation.h"
 
-namespace pplvo {
+namespace pplvo::estimator {
 
 namespace {
 
@@ -29,7 +29,7 @@ Pose3 vectorToMotion(const Vector6d& v) {
 
 }  // namespace
 
-Matrix6d frameErrorCovariance(const OdometryTrackerOptions& o) {
+Matrix6d frameErrorCovariance(const MotionChainOptions& o) {
   const double var_t = o.frame_error_sigma_t_m * o.frame_error_sigma_t_m;
   const double half_angle = 0.5 * o.frame_error_sigma_rot_deg * M_PI / 180.0;  // q_xyz
   Matrix6d C = Matrix6d::Zero();
@@ -38,10 +38,10 @@ Matrix6d frameErrorCovariance(const OdometryTrackerOptions& o) {
   return C;
 }
 
-OdometryTracker::OdometryTracker(OdometryTrackerOptions options)
+MotionChain::MotionChain(MotionChainOptions options)
     : options_(std::move(options)), estimator_(options_.estimator) {}
 
-TrackerOutput OdometryTracker::initialise(int64_t seq, const Pose3& T_w_c0) {
+MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
   initialised_ = true;
   status_ = TrackingStatus::kFirstFrame;
   T_w_c_ = isValidPose(T_w_c0, 1e-6) ? T_w_c0 : Pose3::Identity();
@@ -56,27 +56,27 @@ TrackerOutput OdometryTracker::initialise(int64_t seq, const Pose3& T_w_c0) {
   return makeOutput(seq);
 }
 
-Pose3 OdometryTracker::predictedMotion() const {
+Pose3 MotionChain::predictedMotion() const {
   if (!options_.predict_from_velocity) return Pose3::Identity();
   // The next frame after k rejections would move by decay^(k+1) * velocity.
   const double scale = std::pow(options_.velocity_decay, consecutive_rejections_);
   return vectorToMotion(scale * velocity_);
 }
 
-TrackerOutput OdometryTracker::track(int64_t seq, const Correspondences& correspondences,
+MotionChainOutput MotionChain::track(int64_t seq, const Correspondences& correspondences,
                                      const PinholeCamera& camera) {
   if (!initialised_) return initialise(seq);
   const PoseEstimate est = estimator_.estimate(correspondences, camera, predictedMotion());
   return update(seq, est);
 }
 
-TrackerOutput OdometryTracker::track(const FrameFeatures& prev, const FrameFeatures& curr,
+MotionChainOutput MotionChain::track(const FrameFeatures& prev, const FrameFeatures& curr,
                                      const FeatureMatches& matches) {
   return track(curr.seq, buildCorrespondences(prev, curr, matches, options_.estimator),
                curr.camera);
 }
 
-TrackerOutput OdometryTracker::update(int64_t seq, const PoseEstimate& est) {
+MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
   if (!initialised_) return initialise(seq);
   const bool good =
       est.accepted() && isValidPose(est.T_curr_prev, 1e-6) && est.covariance.allFinite();
@@ -119,12 +119,12 @@ TrackerOutput OdometryTracker::update(int64_t seq, const PoseEstimate& est) {
   } else {
     propagateWindow(seq, T_curr_prev, Q);
   }
-  TrackerOutput out = makeOutput(seq);
+  MotionChainOutput out = makeOutput(seq);
   out.estimate = est;
   return out;
 }
 
-void OdometryTracker::propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q) {
+void MotionChain::propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q) {
   // Every entry held T^(k|j) and Sigma^(k|j); the last one is the previous frame (identity).
   for (WindowEntry& e : window_) {
     e.covariance = propagateCompositionCovariance(e.T_curr_frame, e.covariance, T_curr_prev, Q);
@@ -144,7 +144,7 @@ void OdometryTracker::propagateWindow(int64_t seq, const Pose3& T_curr_prev, con
   }
 }
 
-FramePose toFramePose(const TrackerOutput& out) {
+FramePose toFramePose(const MotionChainOutput& out) {
   FramePose p;
   p.seq = out.seq;
   p.status = out.status;
@@ -164,8 +164,8 @@ FramePose toFramePose(const TrackerOutput& out) {
   return p;
 }
 
-TrackerOutput OdometryTracker::makeOutput(int64_t seq) const {
-  TrackerOutput out;
+MotionChainOutput MotionChain::makeOutput(int64_t seq) const {
+  MotionChainOutput out;
   out.seq = seq;
   out.status = status_;
   out.T_w_c = T_w_c_;
@@ -180,4 +180,4 @@ TrackerOutput OdometryTracker::makeOutput(int64_t seq) const {
   return out;
 }
 
-}  // namespace pplvo
+}  // namespace pplvo::estimator

@@ -12,11 +12,11 @@
 #include "pplvo/core/geometry.h"
 #include "pplvo/estimator/pose_estimator.h"
 
-namespace pplvo {
+namespace pplvo::estimator {
 
 // TrackingStatus (values equal the pose_t STATUS_* constants) and FramePose: core/frame_pose.h
 
-struct OdometryTrackerOptions {
+struct MotionChainOptions {
   PoseEstimatorOptions estimator;
   /// Per-frame decay of the constant-velocity model while estimates are rejected: the k-th
   /// consecutive rejected frame moves by decay^k times the last good motion (on se(3)).
@@ -45,9 +45,9 @@ struct OdometryTrackerOptions {
   double frame_error_sigma_rot_deg = 0.057;
 };
 
-/// Schema of OdometryTrackerOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
+/// Schema of MotionChainOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
 template <class V>
-void visit(V& v, OdometryTrackerOptions& o) {
+void visit(V& v, MotionChainOptions& o) {
   v.section("estimator", "Pose estimation and its uncertainty (Sec. 4.6, eqs. 19-25)",
             [&] { visit(v, o.estimator); });
   v.field("velocity_decay", o.velocity_decay,
@@ -78,7 +78,7 @@ void visit(V& v, OdometryTrackerOptions& o) {
 
 /// 2 Q of a relative pose between two frames that each carry the per-frame shared error of
 /// `o` (frame_error_sigma_*), as a covariance of xi = [t; q_xyz].
-Matrix6d frameErrorCovariance(const OdometryTrackerOptions& o);
+Matrix6d frameErrorCovariance(const MotionChainOptions& o);
 
 /// One frame of the window: the transform from that frame to the current one.
 struct WindowEntry {
@@ -89,7 +89,7 @@ struct WindowEntry {
   double max_translation_variance_m2 = 0;
 };
 
-struct TrackerOutput {
+struct MotionChainOutput {
   int64_t seq = -1;
   TrackingStatus status = TrackingStatus::kFirstFrame;
   Pose3 T_w_c = Pose3::Identity();         ///< world = first camera frame
@@ -109,15 +109,15 @@ struct TrackerOutput {
 /// The published form (pose_t via FramePose): T_prev_curr and the covariance of its xi,
 /// counts and iterations of the estimate, and the window entries older than the current frame
 /// (oldest first). utime and stamp are left to the caller.
-FramePose toFramePose(const TrackerOutput& out);
+FramePose toFramePose(const MotionChainOutput& out);
 
-class OdometryTracker {
+class MotionChain {
  public:
-  explicit OdometryTracker(OdometryTrackerOptions options = {});
-  const OdometryTrackerOptions& options() const { return options_; }
+  explicit MotionChain(MotionChainOptions options = {});
+  const MotionChainOptions& options() const { return options_; }
 
   /// Starts (or restarts) tracking at frame `seq` with T_w_c = T_w_c0.
-  TrackerOutput initialise(int64_t seq, const Pose3& T_w_c0 = Pose3::Identity());
+  MotionChainOutput initialise(int64_t seq, const Pose3& T_w_c0 = Pose3::Identity());
 
   /// Prediction of T_curr_prev for the next frame (constant velocity).
   Pose3 predictedMotion() const;
@@ -125,14 +125,14 @@ class OdometryTracker {
   /// Estimates the motion from the previous frame to `seq` and updates the state. The
   /// previous frame is the one of the last call (or initialise()). If not initialised yet,
   /// this initialises at `seq`.
-  TrackerOutput track(int64_t seq, const Correspondences& correspondences,
+  MotionChainOutput track(int64_t seq, const Correspondences& correspondences,
                       const PinholeCamera& camera);
-  TrackerOutput track(const FrameFeatures& prev, const FrameFeatures& curr,
+  MotionChainOutput track(const FrameFeatures& prev, const FrameFeatures& curr,
                       const FeatureMatches& matches);
 
   /// The state machine alone, given an estimate (used by track(); public for tests and for
   /// callers that run the estimator themselves).
-  TrackerOutput update(int64_t seq, const PoseEstimate& estimate);
+  MotionChainOutput update(int64_t seq, const PoseEstimate& estimate);
 
   bool initialised() const { return initialised_; }
   TrackingStatus status() const { return status_; }
@@ -140,9 +140,9 @@ class OdometryTracker {
 
  private:
   void propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q);
-  TrackerOutput makeOutput(int64_t seq) const;
+  MotionChainOutput makeOutput(int64_t seq) const;
 
-  OdometryTrackerOptions options_;
+  MotionChainOptions options_;
   PoseEstimator estimator_;
   bool initialised_ = false;
   TrackingStatus status_ = TrackingStatus::kFirstFrame;
@@ -154,4 +154,4 @@ class OdometryTracker {
   std::deque<WindowEntry> window_;
 };
 
-}  // namespace pplvo
+}  // namespace pplvo::estimator

@@ -3,11 +3,11 @@
 #include <cmath>
 
 #include "pplvo/core/config_visitor.h"
-#include "pplvo/estimator/odometry_tracker.h"
+#include "pplvo/estimator/motion_chain.h"
 #include "pplvo/estimator/pose_parameterisation.h"
 #include "synthetic_scene.h"
 
-namespace pplvo {
+namespace pplvo::estimator {
 namespace {
 
 PoseEstimate goodEstimate(const Pose3& T) {
@@ -31,13 +31,13 @@ void expectPoseNear(const Pose3& a, const Pose3& b, double tol = 1e-9) {
   EXPECT_LT((a.matrix() - b.matrix()).norm(), tol) << a.matrix() << "\n" << b.matrix();
 }
 
-TEST(OdometryTracker, StateMachineAndDecayingVelocity) {
-  OdometryTrackerOptions opts;
+TEST(MotionChain, StateMachineAndDecayingVelocity) {
+  MotionChainOptions opts;
   opts.velocity_decay = 0.5;
   opts.max_velocity_model_frames = 3;
-  OdometryTracker tracker(opts);
+  MotionChain tracker(opts);
   const Pose3 M = testing::typicalMotion();  // T_curr_prev of every good frame
-  TrackerOutput out = tracker.initialise(0);
+  MotionChainOutput out = tracker.initialise(0);
   EXPECT_EQ(out.status, TrackingStatus::kFirstFrame);
   Pose3 T_w_c = Pose3::Identity();
   int64_t seq = 1;
@@ -84,14 +84,14 @@ TEST(OdometryTracker, StateMachineAndDecayingVelocity) {
   expectPoseNear(tracker.predictedMotion(), M, 1e-12);
 }
 
-TEST(OdometryTracker, WindowCovarianceGrowsWithAgeAndMatchesDirectPropagation) {
-  OdometryTrackerOptions opts;
+TEST(MotionChain, WindowCovarianceGrowsWithAgeAndMatchesDirectPropagation) {
+  MotionChainOptions opts;
   opts.window_length = 10;
-  OdometryTracker tracker(opts);
+  MotionChain tracker(opts);
   tracker.initialise(100);
   const Pose3 M = testing::typicalMotion();
   const PoseEstimate good = goodEstimate(M);
-  TrackerOutput out;
+  MotionChainOutput out;
   for (int64_t s = 101; s <= 115; ++s) out = tracker.update(s, good);
   ASSERT_EQ(out.window.size(), 10u);
   EXPECT_EQ(out.window.front().seq, 106);
@@ -121,29 +121,29 @@ TEST(OdometryTracker, WindowCovarianceGrowsWithAgeAndMatchesDirectPropagation) {
   }
 }
 
-TEST(OdometryTracker, RelativePoseForMessagesIsPrevCurr) {
-  OdometryTrackerOptions opts;
+TEST(MotionChain, RelativePoseForMessagesIsPrevCurr) {
+  MotionChainOptions opts;
   opts.frame_error_sigma_t_m = opts.frame_error_sigma_rot_deg = 0;  // the estimate's alone
-  OdometryTracker tracker(opts);
+  MotionChain tracker(opts);
   tracker.initialise(0);
   const Pose3 M = testing::typicalMotion();
-  const TrackerOutput out = tracker.update(1, goodEstimate(M));
+  const MotionChainOutput out = tracker.update(1, goodEstimate(M));
   expectPoseNear(out.T_prev_curr, M.inverse(), 1e-12);
   EXPECT_TRUE(out.covariance_prev_curr.allFinite());
   EXPECT_NEAR(out.covariance_prev_curr.trace(), out.covariance.trace(),
               0.2 * out.covariance.trace());
 }
 
-TEST(OdometryTracker, PerFrameSharedErrorEntersThePublishedCovarianceOnce) {
+TEST(MotionChain, PerFrameSharedErrorEntersThePublishedCovarianceOnce) {
   // Each frame's pose has its own error (2 mm, 0.06 deg per axis): a relative pose gains it
   // from both frames (2 Q), and so does every window transform, without accumulating along
   // the chain; the estimate's own covariance (the EKF's Q) and the pose do not change.
-  OdometryTrackerOptions plain, with_error;
+  MotionChainOptions plain, with_error;
   plain.frame_error_sigma_t_m = plain.frame_error_sigma_rot_deg = 0;
   with_error.frame_error_sigma_t_m = 2e-3;
   with_error.frame_error_sigma_rot_deg = 0.06;
-  OdometryTracker a(plain), b(with_error);
-  TrackerOutput out_a = a.initialise(0), out_b = b.initialise(0);
+  MotionChain a(plain), b(with_error);
+  MotionChainOutput out_a = a.initialise(0), out_b = b.initialise(0);
   EXPECT_EQ(out_b.covariance_prev_curr, Matrix6d::Zero());  // first frame: no relative pose
   const Pose3 M = testing::typicalMotion();
   for (int64_t s = 1; s <= 6; ++s) {
@@ -174,15 +174,15 @@ TEST(OdometryTracker, PerFrameSharedErrorEntersThePublishedCovarianceOnce) {
 
 // End to end: synthetic correspondences through track(); degenerate frames hand over to the
 // velocity model without NaN, and tracking resumes.
-TEST(OdometryTracker, TrackSyntheticWithDegenerateFrames) {
+TEST(MotionChain, TrackSyntheticWithDegenerateFrames) {
   const PinholeCamera cam = testing::testCamera();
   testing::SceneConfig cfg;
   testing::SceneGenerator gen(cam, cfg, 91);
-  OdometryTracker tracker;
+  MotionChain tracker;
   tracker.initialise(0);
   const Pose3 M = testing::typicalMotion();
   Pose3 T_w_true = Pose3::Identity();
-  TrackerOutput out;
+  MotionChainOutput out;
   for (int64_t s = 1; s <= 12; ++s) {
     const bool degenerate = (s == 6 || s == 7);
     Correspondences c;
@@ -206,12 +206,12 @@ TEST(OdometryTracker, TrackSyntheticWithDegenerateFrames) {
   EXPECT_LT((out.T_w_c.translation() - T_w_true.translation()).norm(), 0.03);
 }
 
-TEST(OdometryTracker, FramePoseForPublishing) {
-  OdometryTracker tracker;
+TEST(MotionChain, FramePoseForPublishing) {
+  MotionChain tracker;
   tracker.initialise(10);
   const Pose3 M = testing::typicalMotion();
   tracker.update(11, goodEstimate(M));
-  const TrackerOutput out = tracker.update(12, goodEstimate(M));
+  const MotionChainOutput out = tracker.update(12, goodEstimate(M));
   const FramePose p = toFramePose(out);
   EXPECT_EQ(p.seq, 12);
   EXPECT_EQ(p.status, TrackingStatus::kTracking);
@@ -222,22 +222,22 @@ TEST(OdometryTracker, FramePoseForPublishing) {
   EXPECT_GT(p.window[0].max_translation_variance_m2, p.window[1].max_translation_variance_m2);
 }
 
-TEST(OdometryTracker, OptionsRoundTripThroughYaml) {
-  OdometryTrackerOptions o;
+TEST(MotionChain, OptionsRoundTripThroughYaml) {
+  MotionChainOptions o;
   o.velocity_decay = 0.5;
   o.estimator.use_lines = false;
   o.estimator.max_translation_variance_m2 = 3e-4;
-  const auto tracker = [](auto& v, OdometryTrackerOptions& x) {
+  const auto tracker = [](auto& v, MotionChainOptions& x) {
     v.section("tracker", "tracker", [&] { visit(v, x); });
   };
   const std::string dump = config::dumpConfig(o, tracker, "");
-  OdometryTrackerOptions back;
+  MotionChainOptions back;
   EXPECT_TRUE(config::readConfig(YAML::Load(dump), &back, tracker).empty());
   EXPECT_EQ(back.velocity_decay, 0.5);
   EXPECT_FALSE(back.estimator.use_lines);
   EXPECT_EQ(back.estimator.max_translation_variance_m2, 3e-4);
 
-  OdometryTrackerOptions ignored;
+  MotionChainOptions ignored;
   EXPECT_EQ(config::readConfig(YAML::Load("tracker: {velocity_decay: x, no_such_key: 1}"), &ignored,
                                tracker)
                 .size(),
@@ -245,4 +245,4 @@ TEST(OdometryTracker, OptionsRoundTripThroughYaml) {
 }
 
 }  // namespace
-}  // namespace pplvo
+}  // namespace pplvo::estimator
