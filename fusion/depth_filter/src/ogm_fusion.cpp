@@ -111,7 +111,7 @@ bool OgmFusion::contains(int64_t seq) const {
 
 namespace {
 
-/// One row of addFrame: depth and range weight 1 / sigma_r^2 (eq. 6) of the valid points (0
+/// One row of addFrame: depth and range weight 1 / sigma_r^2 (eq. 7) of the valid points (0
 /// elsewhere), the row's depth range (both 0 without a point) and the count of invalid
 /// non-zero samples. Compiled for AVX2 and for baseline x86-64, chosen at load time; the same
 /// float operations either way, so the stored window is bit for bit the same.

@@ -1,4 +1,4 @@
-// C-GM (paper eqs. 2-5) on hand-computed 3x3 cases, and the stage-1 sensor model.
+// C-GM (paper eqs. 2-6) on hand-computed 3x3 cases, and the stage-1 sensor model.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// O-GM temporal fusion (paper eqs. 6-7, section 3.4) on exact small cases and on an analytic
+// O-GM temporal fusion (paper eqs. 7-8, section 3.4) on exact small cases and on an analytic
 // noisy scene with known true depth.
 #include <gtest/gtest.h>
 
@@ -54,7 +54,7 @@ TEST(OgmFusion, InverseVarianceMeanAndGmVarianceEq7) {
   const double var = ((4.0 + a) / a + (2.1 * 2.1 + b) / b) / sw - r * r;
   EXPECT_NEAR(res.depth.depth_m.at<float>(2, 2), r, 1e-5);
   EXPECT_NEAR(res.depth.var_m2.at<float>(2, 2), var, 1e-6);
-  // Off-centre pixel: depth -> range with 1/cos, variance with 1/cos^2 (eq. 6), and back.
+  // Off-centre pixel: depth -> range with 1/cos, variance with 1/cos^2 (eq. 7), and back.
   EXPECT_NEAR(res.depth.depth_m.at<float>(0, 0), r, 1e-4);
 }
 
@@ -112,7 +112,7 @@ TEST(OgmFusion, VarianceStaysHonestWhenDepthErrorsAreCorrelatedOverTime) {
   // same in every frame (a sensor's fixed pattern) and partly fresh, each input reported with
   // its full sensor variance s^2. Ten frames fused as independent measurements would claim
   // s^2 / 10; with rho = 1 the error of their mean is still s. O-GM's mixture variance
-  // (eq. 7: the spread of the window around its mean plus the inputs' variance) must cover
+  // (eq. 8: the spread of the window around its mean plus the inputs' variance) must cover
   // the actual error at every rho (issue 18).
   PinholeCamera cam;
   cam.width = cam.height = 60;

@@ -247,7 +247,7 @@ class JointProblem {
   }
 
   /// H = J^T W J at xi over the inlier terms with the inverse-variance weights and alpha on
-  /// the planes (Tukey weights only select the inliers): the information of eq. 21. M is the
+  /// the planes (Tukey weights only select the inliers): the information of eq. 23. M is the
   /// same sum with alpha^2, for the sandwich covariance H^-1 M H^-1; the point and line terms
   /// weigh point_weight / line_weight in both, and count their variance scale in M: their
   /// residuals' actual covariance is that factor times the modelled Sigma_r (the robust
@@ -459,7 +459,7 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
   return out;
 }
 
-// --- covariance (eq. 21) --------------------------------------------------------------------
+// --- covariance (eq. 23) --------------------------------------------------------------------
 
 /// The pose covariance at `xi` into `est` (covariance, its largest translation and rotation
 /// variances, the smallest relative eigenvalue of the Jacobi-scaled information).
@@ -612,7 +612,7 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
   est.n_planes_used = rw.n_planes;
   est.n_residuals = rw.rows;
 
-  // Its covariance (eq. 21), then the rejection tests; a failed solve returns the guess.
+  // Its covariance (eq. 23), then the rejection tests; a failed solve returns the guess.
   estimateCovariance(problem, xi, o, est);
   est.status = classify(est, irls.solver_failed, rw.rows, o);
   if (est.status == EstimateStatus::kSolverFailure) est.T_curr_prev = xiToPose(poseToXi(guess));

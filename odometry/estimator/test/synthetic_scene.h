@@ -56,7 +56,7 @@ class SceneGenerator {
 
   Eigen::Vector3d gauss3() { return {n_(rng_), n_(rng_), n_(rng_)}; }
 
-  /// Backprojection covariance (paper eq. 10) of pixel (u, v) at depth z.
+  /// Backprojection covariance (paper eq. 11) of pixel (u, v) at depth z.
   Eigen::Matrix3d backprojectionCov(double u, double v, double z) const {
     Eigen::Matrix3d J;  // d(X, Y, Z) / d(u, v, z)
     J << z / cam_.fx, 0, (u - cam_.cx) / cam_.fx, 0, z / cam_.fy, (v - cam_.cy) / cam_.fy, 0, 0, 1;

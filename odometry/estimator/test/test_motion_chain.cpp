@@ -103,7 +103,7 @@ TEST(MotionChain, WindowCovarianceGrowsWithAgeAndMatchesDirectPropagation) {
   }
   // Frame 114 -> 115: exactly the last estimate's covariance.
   EXPECT_LT((out.window[8].covariance - good.covariance).norm(), 1e-15);
-  // Oldest entry (106 -> 115, 9 steps) equals the eq. 22 recursion done here.
+  // Oldest entry (106 -> 115, 9 steps) equals the eq. 24 recursion done here.
   Pose3 T = M;
   Matrix6d P = good.covariance;
   for (int k = 1; k < 9; ++k) {

@@ -171,7 +171,7 @@ TEST(PoseEstimator, ConsistentWithPaperAlpha) {
   std::printf("alpha 0.02 sandwich: mean NEES %.2f\n", r.mean_nees);
 }
 
-// The paper's literal eq. 21 with alpha = 0.02 in W over-states the plane directions: the
+// The paper's literal eq. 23 with alpha = 0.02 in W over-states the plane directions: the
 // covariance is conservative (mean NEES well below 6) on the same scenes.
 // Planes alone make the difference visible (with points, alpha = 0.02 makes the plane terms
 // negligible in both forms).

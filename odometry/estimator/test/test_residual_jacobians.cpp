@@ -1,5 +1,5 @@
 // Every Jacobian of the pose estimator checked against central differences: the residuals of
-// the points (eq. 18), lines (eq. 19) and planes (eq. 20) with respect to the pose xi, the
+// the points (eq. 19), lines (eq. 20) and planes (eq. 21) with respect to the pose xi, the
 // derivative of a rotated point with respect to q_xyz, and the Jacobians with respect to the
 // primitives that propagate their covariances into Sigma_r.
 #include <gtest/gtest.h>

@@ -27,7 +27,7 @@ Point3WithCov interpolateLineEndpoint(const Eigen::Vector3d& O, const Eigen::Mat
 
 namespace {
 
-// M = sum w_i (|P'_i|^2 I - P'_i P'_i^T), so that E = theta^T M theta / 2 (eq. 12).
+// M = sum w_i (|P'_i|^2 I - P'_i P'_i^T), so that E = theta^T M theta / 2 (eq. 13).
 Eigen::Matrix3d crossMoment(const std::vector<Eigen::Vector3d>& Pp, const std::vector<double>& w) {
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
   for (size_t i = 0; i < Pp.size(); ++i) {

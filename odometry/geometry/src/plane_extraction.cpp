@@ -593,7 +593,7 @@ PlaneFitResult PlaneExtractor::fitSegment(const DepthWithVariance& depth, const 
   return fitPlaneWls(P, C, V, options_.fit);
 }
 
-// 6) WLS fit (eqs. 10-11) on a regular subsample of each segment's pixels; order by size.
+// 6) WLS fit (eqs. 11-12) on a regular subsample of each segment's pixels; order by size.
 void PlaneExtractor::fitSegments(const DepthWithVariance& depth, const LabelStats& ls, int np,
                                  PlaneExtractionResult* res) {
   PlaneExtractionStats& st = res->stats;

@@ -94,7 +94,7 @@ PlaneFitResult fitPlaneWls(const std::vector<Eigen::Vector3d>& points,
     res.status = FitStatus::kDegenerate;
     return res;
   }
-  // Corrected weights: 1 / Sigma_ri, Sigma_ri = theta_m^T Sigma_Pi theta_m (residual of eq. 10).
+  // Corrected weights: 1 / Sigma_ri, Sigma_ri = theta_m^T Sigma_Pi theta_m (residual of eq. 11).
   const auto corrected = [&](size_t i) {
     const double s = theta_m.dot(covs[i] * theta_m);
     return 1.0 / std::max(s, 1e-300);

@@ -64,7 +64,7 @@ PlaneMatchResult matchPlanesWithStats(const FrameFeatures& prev, const FrameFeat
       cands.push_back({dist, i, j});
     }
   }
-  // One-to-one: accept candidates by increasing eq. 17 distance.
+  // One-to-one: accept candidates by increasing eq. 18 distance.
   std::stable_sort(cands.begin(), cands.end(),
                    [](const Cand& a, const Cand& b) { return a.dist < b.dist; });
   std::vector<char> used_p(np, 0), used_c(nc, 0);

@@ -17,7 +17,7 @@ struct Samples {
 };
 
 // n points uniformly along the true segment A-B, measured with pixel and depth noise
-// (sigma_z = coeff z^2) drawn from the model of eqs. 8-9.
+// (sigma_z = coeff z^2) drawn from the model of eqs. 9-10.
 Samples sampleLine(const PinholeCamera& cam, const Eigen::Vector3d& A, const Eigen::Vector3d& B,
                    int n, std::mt19937& rng, double coeff = 1.425e-3) {
   std::normal_distribution<double> N(0.0, 1.0);
@@ -116,7 +116,7 @@ TEST(LineFit, CovarianceIsConsistentNees) {
     const NeesOut o = neesExperiment(c.A, c.B, c.n);
     std::printf("line NEES: direction %.3f, centroid %.3f, endpoints %.3f %.3f (dof 2)\n", o.dir,
                 o.centroid, o.end1, o.end2);
-    // Direction and centroid: [0.8, 1.25] x dof. Endpoints: [0.8, 1.6] x dof, because eq. 16
+    // Direction and centroid: [0.8, 1.25] x dof. Endpoints: [0.8, 1.6] x dof, because eq. 17
     // propagates Sigma_O and Sigma_theta as independent (paper) while O (weights 1/sigma_z^2)
     // and theta (residual-covariance weights) are correlated when depth varies along the line
     // (receding line: measured ~1.5 x dof at the near end). Documented in docs/geometry.md.

@@ -8,7 +8,7 @@ namespace pplvo {
 ///
 /// By default glibc serves such blocks with mmap and gives them back with munmap, so every
 /// frame pays a fresh page fault per 4 KiB touched; on a virtual machine that cost more than
-/// the C-GM filter itself (pplvo-run went from 11 to 24 frames/s with this, docs/benchmark.md).
+/// the C-GM filter itself (docs/decisions/0006).
 /// Here large blocks stay in the heap and freed memory is not trimmed back to the kernel, so
 /// the next frame reuses pages already mapped. Call once at the start of main(), before any
 /// thread starts. Returns false if the allocator refused a setting (other C libraries).

@@ -30,7 +30,7 @@ enum class ReferenceRole : int8_t {
   kFallbackOnly = 2,  ///< used only if the next frame cannot be tracked against the keyframe
 };
 
-/// Transform uncertainty from an earlier frame to this one (paper eq. 22).
+/// Transform uncertainty from an earlier frame to this one (paper eq. 24).
 struct WindowUncertainty {
   int64_t seq = 0;
   double max_translation_variance_m2 = 0.0;

@@ -1,5 +1,5 @@
 #pragma once
-/// Stage 2 of the probabilistic depth filter (paper section 3.2, eqs. 2-5): convolution of
+/// Stage 2 of the probabilistic depth filter (paper section 3.2, eqs. 2-6): convolution of
 /// Gaussian mixtures (C-GM, after Dryanovski et al. 2013) over a 3x3 neighbourhood.
 #include <cstdint>
 #include <memory>

@@ -1,5 +1,5 @@
 #pragma once
-/// Stage 3 of the probabilistic depth filter (paper sections 3.3-3.4, eqs. 6-7): Optimal-GM
+/// Stage 3 of the probabilistic depth filter (paper sections 3.3-3.4, eqs. 7-8): Optimal-GM
 /// temporal fusion of the C-GM measurements of a sliding window of frames, with the
 /// consistency gate against occlusions and the window shortened by pose uncertainty.
 #include <cstdint>
@@ -100,13 +100,13 @@ void visit(V& v, OgmOptions& o) {
 }
 
 /// O-GM fusion. Each window frame is stored as its C-GM depth and range variance
-/// sigma_r^2 = sigma_z^2 / cos^2(alpha) (eq. 6, cosines precomputed from the intrinsics).
+/// sigma_r^2 = sigma_z^2 / cos^2(alpha) (eq. 7, cosines precomputed from the intrinsics).
 /// fuse(seq, T_w_c) moves the points of all window frames with a pose into the camera of
 /// `seq`, projects them to the nearest pixel NEWEST TO OLDEST (frame `seq` first, at its own
 /// pixels) and accumulates per pixel S_w = sum 1/s_i^2, S_wr = sum r_i/s_i^2,
 /// S_wq = sum (r_i^2 + s_i^2)/s_i^2 and the count. Once a pixel holds k points, a further point
 /// is accepted only if |r - r_bar| <= gate_sigma * sigma_r of the pixel's current state
-/// (section 3.4). The output range is r_bar = S_wr / S_w (eq. 7), its variance the GM variance
+/// (section 3.4). The output range is r_bar = S_wr / S_w (eq. 8), its variance the GM variance
 /// S_wq / S_w - r_bar^2 (eq. 5 with weights 1/s_i^2: intra- plus inter-group spread), and depth
 /// z = r_bar cos(alpha), var_z = var_r cos^2(alpha). Pixels without a current measurement but
 /// with projected points are filled. Memory: max_window frames of two float images plus one
@@ -168,7 +168,7 @@ class OgmFusion {
     int64_t seq = 0;
     Pose3 T_w_c = Pose3::Identity();
     cv::Mat depth_m;  ///< CV_32FC1, 0 = missing
-    cv::Mat weight;   ///< CV_32FC1 1 / sigma_r^2 (eq. 6), 1/m^2; 0 where missing
+    cv::Mat weight;   ///< CV_32FC1 1 / sigma_r^2 (eq. 7), 1/m^2; 0 where missing
     std::vector<float> row_zmin, row_zmax;  ///< depth range of each row's points (0: none)
   };
   /// One past frame of a fusion: its transform into the current camera (float, as projected).

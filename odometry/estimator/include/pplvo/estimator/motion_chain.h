@@ -2,7 +2,7 @@
 /// Frame-to-frame tracking state: accumulates T_w_c, falls back to a decaying constant-velocity
 /// model when an estimate is rejected (paper Sec. "Pose Uncertainty"), and propagates the
 /// transform uncertainty from each frame of the depth-filter window to the current one
-/// (EKF step, eq. 22).
+/// (EKF step, eq. 24).
 #include <cstdint>
 #include <deque>
 #include <vector>
@@ -27,7 +27,7 @@ struct MotionChainOptions {
   bool predict_from_velocity = true;
   /// Frames kept in the uncertainty window, the current one included (paper: 10).
   int window_length = 10;
-  /// Process noise Q (eq. 22) used for a velocity-model step: isotropic std of the
+  /// Process noise Q (eq. 24) used for a velocity-model step: isotropic std of the
   /// translation (m) and of q_xyz (~half-angle, rad). Large, so that the depth filter's
   /// threshold drops frames linked to the current one through a guessed motion.
   double velocity_model_sigma_t_m = 0.02;
@@ -84,7 +84,7 @@ Matrix6d frameErrorCovariance(const MotionChainOptions& o);
 struct WindowEntry {
   int64_t seq = -1;
   Pose3 T_curr_frame = Pose3::Identity();
-  Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_frame), eq. 22
+  Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_frame), eq. 24
   /// Of `covariance` plus the per-frame shared error of both frames (2 sigma_t^2).
   double max_translation_variance_m2 = 0;
 };
@@ -94,7 +94,7 @@ struct MotionChainOutput {
   TrackingStatus status = TrackingStatus::kFirstFrame;
   Pose3 T_w_c = Pose3::Identity();         ///< world = first camera frame
   Pose3 T_curr_prev = Pose3::Identity();   ///< the motion applied this frame
-  Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_prev) (Q of eq. 22)
+  Matrix6d covariance = Matrix6d::Zero();  ///< of xi(T_curr_prev) (Q of eq. 24)
   /// The same motion as T_prev_curr (pose_t.rel_*) and the covariance of its xi, the
   /// per-frame shared error of both frames included (frameErrorCovariance).
   Pose3 T_prev_curr = Pose3::Identity();

@@ -89,7 +89,7 @@ struct PoseEstimatorOptions {
   /// Pose covariance. true: sandwich H^-1 M H^-1 with H = J^T W J (alpha in W) and M the same
   /// with alpha^2: the first-order covariance of the estimate for any alpha (equal to the
   /// paper's (J^T W J)^-1 when alpha = 1, and independent of alpha for planes alone).
-  /// false: the paper's eq. 21, (J^T W J)^-1 with alpha in W (conservative on planes).
+  /// false: the paper's eq. 23, (J^T W J)^-1 with alpha in W (conservative on planes).
   bool covariance_sandwich = true;
   /// false (paper): w(r) = inverse diagonal of Sigma_r. true: full whitening Sigma_r^(-1/2),
   /// the Mahalanobis weight the diagonal approximates (Sigma_r of a point is anisotropic: the
@@ -211,7 +211,7 @@ struct PoseEstimate {
 
   /// The optimised pose (the initial guess when the solve could not run). Always finite.
   Pose3 T_curr_prev = Pose3::Identity();
-  /// Sigma_xi (eq. 21) over xi = [t; q_xyz] of T_curr_prev; finite. When the information is
+  /// Sigma_xi (eq. 23) over xi = [t; q_xyz] of T_curr_prev; finite. When the information is
   /// singular, the unobservable directions get a large variance (kLargeVariance).
   Matrix6d covariance = Matrix6d::Identity();
   double max_translation_variance_m2 = 0;

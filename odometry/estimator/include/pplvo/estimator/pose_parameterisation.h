@@ -1,6 +1,6 @@
 #pragma once
 /// The paper's minimal pose parameterisation and its EKF covariance propagation
-/// (Sec. "Pose Uncertainty", eqs. 21-22; derivations in docs/estimator.md).
+/// (Sec. "Pose Uncertainty", eqs. 23-25; derivations in docs/estimator.md).
 ///
 /// xi = [t_x t_y t_z q_x q_y q_z] of a rigid transform T = (R(q), t), with the unit quaternion
 /// q = [q_x q_y q_z, q_w], q_w = sqrt(1 - q_x^2 - q_y^2 - q_z^2) >= 0 (the sign of q is chosen
@@ -21,8 +21,8 @@ Pose3 xiToPose(const Vector6d& xi);
 Eigen::Matrix3d rotatedPointJacobian(const Eigen::Vector3d& v, const Eigen::Vector3d& p);
 
 /// Jacobians of the composition f(xi^(k|1), xi^(k+1|k)) = xi^(k+1|1) (the state transition f
-/// of eq. 22, LaTeX label eq:pose_comp): t = R^(k+1|k) t^(k|1) + t^(k+1|k), q = q^(k+1|k) (x)
-/// q^(k|1). T^(b|a) maps points of frame a into frame b (same convention as T_curr_prev).
+/// of eq. 24, which is eq. 25, eq:pose_comp): t = R^(k+1|k) t^(k|1) + t^(k+1|k),
+/// q = q^(k+1|k) (x) q^(k|1). T^(b|a) maps points of frame a into frame b (same convention as T_curr_prev).
 struct CompositionJacobians {
   Matrix6d F;  ///< d xi^(k+1|1) / d xi^(k|1)
   Matrix6d G;  ///< d xi^(k+1|1) / d xi^(k+1|k)

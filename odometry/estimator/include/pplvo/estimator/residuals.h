@@ -1,5 +1,5 @@
 #pragma once
-/// The residuals of the joint cost E (paper eqs. 18-20; docs/estimator.md) with their Jacobians
+/// The residuals of the joint cost E (paper eqs. 19-21; docs/estimator.md) with their Jacobians
 /// with respect to the pose xi = [t; q_xyz] (pose_parameterisation.h) and their covariances.
 /// The terms keep their data plus the weighting state that PoseEstimator fixes during one
 /// Ceres solve (IRLS). Inline: the estimator calls them in its innermost loops. Exposed so that
@@ -81,7 +81,7 @@ struct Projector {
   }
 };
 
-/// Residual (eq. 18) and its Jacobian w.r.t. xi; Sigma_r if requested.
+/// Residual (eq. 19) and its Jacobian w.r.t. xi; Sigma_r if requested.
 inline bool pointResidual(const PointTerm& T, const PoseEval& pose, const Projector& cam,
                           Eigen::Vector2d& r, Matrix26* J, Eigen::Matrix2d* Sigma_r) {
   const Eigen::Vector3d X = pose.R * T.P + pose.t;
@@ -100,7 +100,7 @@ inline bool pointResidual(const PointTerm& T, const PoseEval& pose, const Projec
   return true;
 }
 
-/// Residual (eq. 19): signed distances of the projected endpoints to l_curr.
+/// Residual (eq. 20): signed distances of the projected endpoints to l_curr.
 inline bool lineResidual(const LineTerm& T, const PoseEval& pose, const Projector& cam,
                          Eigen::Vector2d& r, Matrix26* J, Eigen::Vector2d* var_r) {
   for (int i = 0; i < 2; ++i) {
@@ -122,7 +122,7 @@ inline bool lineResidual(const LineTerm& T, const PoseEval& pose, const Projecto
   return true;
 }
 
-/// Residual (eq. 20, our form): the previous plane moved into the current frame,
+/// Residual (eq. 21, our form): the previous plane moved into the current frame,
 /// {n_c = R N, d_c = d - n_c . t} (PlaneWithCov::transformed), compared with the current plane
 /// through their plane "points": r = d_c n_c - d' N'.
 inline void planeResidual(const PlaneTerm& T, const PoseEval& pose, Eigen::Vector3d& r, Matrix36* J,

@@ -17,8 +17,8 @@ namespace pplvo::features {
 
 struct LineExtractorOptions {
   /// LSD and LBD work on the image resized by this factor (area averaging). The paper suggests
-  /// QVGA (0.5) for real time; 0.4 keeps the same accuracy on the shared data and is ~30 %
-  /// faster (docs/features.md). Endpoints are returned in full resolution.
+  /// QVGA (0.5) for real time; 0.4 keeps the same accuracy on the shared data and is faster
+  /// (docs/features.md). Endpoints are returned in full resolution.
   double detection_scale = 0.4;
   /// Segments shorter than this (full-resolution pixels, VGA) are dropped.
   double min_length_px = 25.0;

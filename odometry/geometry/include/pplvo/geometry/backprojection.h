@@ -1,5 +1,5 @@
 #pragma once
-/// Point backprojection with first-order covariance (paper eqs. 8-9) and the depth noise model
+/// Point backprojection with first-order covariance (paper eqs. 9-10) and the depth noise model
 /// used as a fallback when no per-pixel variance is available. Camera frame, metres.
 #include <Eigen/Core>
 #include <cmath>
@@ -42,7 +42,7 @@ void visit(V& v, DepthNoiseModel& o) {
           config::positive());
 }
 
-/// Jacobian of eq. 8, P = Z [(u-cx)/fx, (v-cy)/fy, 1], with respect to (u, v, Z).
+/// Jacobian of eq. 9, P = Z [(u-cx)/fx, (v-cy)/fy, 1], with respect to (u, v, Z).
 /// Uses the signed focal lengths (fy < 0 for ICL-NUIM).
 inline Eigen::Matrix3d backprojectionJacobian(const PinholeCamera& cam, double u, double v,
                                               double z_m) {

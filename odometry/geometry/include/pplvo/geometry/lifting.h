@@ -1,6 +1,6 @@
 #pragma once
-/// Lifting 2D features to 3D with uncertainty: points by backprojection (eqs. 8-9), lines by
-/// depth sampling + RANSAC + WLS line fitting (eqs. 12-16). Camera frame of the features.
+/// Lifting 2D features to 3D with uncertainty: points by backprojection (eqs. 9-10), lines by
+/// depth sampling + RANSAC + WLS line fitting (eqs. 13-17). Camera frame of the features.
 #include <cstdint>
 #include <string>
 
@@ -22,8 +22,8 @@ struct LiftOptions {
   /// surface, or be a T-junction of both): a point is not lifted when the valid depths within
   /// point_discontinuity_radius_px span more than this fraction of the nearest one
   /// (max/min - 1). 0 disables the test. On the ICL-NUIM excerpt, whose corners lie mostly on
-  /// object outlines, such points biased the translation to 0.83 of the true one (RPE 21 ->
-  /// 11 mm/s, docs/pipeline.md); 0.2 keeps slanted surfaces (< 3 %/px) and removes depth steps.
+  /// object outlines, such points biased the translation (docs/pipeline.md, "ICL-NUIM"); 0.2
+  /// keeps slanted surfaces (< 3 %/px) and removes depth steps.
   double point_max_depth_spread = 0.2;
   int point_discontinuity_radius_px = 3;
   /// Lines: at most this many depth pixels sampled uniformly along the segment (paper: 100).

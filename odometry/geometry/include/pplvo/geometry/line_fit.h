@@ -1,5 +1,5 @@
 #pragma once
-/// Analytic weighted least-squares 3D line fitting (paper eqs. 12-16): centroid O, direction
+/// Analytic weighted least-squares 3D line fitting (paper eqs. 13-17): centroid O, direction
 /// theta with one entry fixed to 1, corrected covariance, interpolated endpoints.
 /// Derivations: docs/geometry.md.
 #include <Eigen/Core>
@@ -53,7 +53,7 @@ struct LineFitResult {
   Eigen::Vector3d theta = Eigen::Vector3d::UnitX();        ///< direction with theta(fixed_dim) = 1
   Eigen::Matrix3d cov_theta = Eigen::Matrix3d::Zero();     ///< zero row/col at fixed_dim
   int fixed_dim = 0;
-  Line3WithCov line;  ///< endpoints O + lambda theta (eq. 16) with covariances
+  Line3WithCov line;  ///< endpoints O + lambda theta (eq. 17) with covariances
 };
 
 /// Fits a line to points P_i (camera frame, m) with covariances Sigma_Pi and depth variances
@@ -64,7 +64,7 @@ LineFitResult fitLineWls(const std::vector<Eigen::Vector3d>& points,
                          const std::vector<double>& var_z_m2, const Eigen::Vector3d& end1,
                          const Eigen::Vector3d& end2, const LineFitOptions& options = {});
 
-/// Endpoint of eq. 16, P_hat = O + lambda theta with lambda = theta^T (P_end - O) / |theta|^2,
+/// Endpoint of eq. 17, P_hat = O + lambda theta with lambda = theta^T (P_end - O) / |theta|^2,
 /// and its covariance J_O Sigma_O J_O^T + J_theta Sigma_theta J_theta^T.
 Point3WithCov interpolateLineEndpoint(const Eigen::Vector3d& O, const Eigen::Matrix3d& cov_O,
                                       const Eigen::Vector3d& theta,

@@ -2,7 +2,7 @@
 /// Fast plane segmentation of an organised point cloud, CAPE-style (Proenca & Gao 2018):
 /// per-cell moments, a planarity test tied to the depth noise model, a histogram of cell normals
 /// to pick seeds, region growing over cells, O(1) merging of adjacent segments by moment
-/// addition, pixel refinement of boundary cells, then the WLS plane fit (eqs. 10-11) on the
+/// addition, pixel refinement of boundary cells, then the WLS plane fit (eqs. 11-12) on the
 /// pixels of each segment. Camera frame, metres. Details: docs/geometry.md.
 #include <opencv2/core.hpp>
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-/// Weighted least-squares plane fitting with the corrected covariance (paper eqs. 10-11 and the
+/// Weighted least-squares plane fitting with the corrected covariance (paper eqs. 11-12 and the
 /// Hessian-form recovery with its Jacobian). Derivations: docs/geometry.md.
 #include <Eigen/Core>
 #include <string>
@@ -60,7 +60,7 @@ struct PlaneFitResult {
 };
 
 /// Fits a plane to points P_i (camera frame, m) with covariances Sigma_Pi and depth variances
-/// var_z_i (initial weights w_i = 1/var_z_i, eq. 10). Returns a status instead of throwing.
+/// var_z_i (initial weights w_i = 1/var_z_i, eq. 11). Returns a status instead of throwing.
 PlaneFitResult fitPlaneWls(const std::vector<Eigen::Vector3d>& points,
                            const std::vector<Eigen::Matrix3d>& covs,
                            const std::vector<double>& var_z_m2,

@@ -1,7 +1,7 @@
 #pragma once
 /// Plane matching between successive frames (paper, "Matching Points, Lines and Planes";
 /// Proenca & Gao 2017): candidates by projection overlap and a geometric gate, best candidate by
-/// the plane-to-plane distance ||d' N' - d N|| (eq. 17), one-to-one.
+/// the plane-to-plane distance ||d' N' - d N|| (eq. 18), one-to-one.
 #include <optional>
 #include <utility>
 #include <vector>
@@ -44,13 +44,13 @@ struct PlaneMatchStats {
 
 struct PlaneMatchResult {
   std::vector<std::pair<int, int>> matches;  ///< (index in prev.planes, index in curr.planes)
-  std::vector<double> distances_m;           ///< eq. 17 for each match
+  std::vector<double> distances_m;           ///< eq. 18 for each match
   PlaneMatchStats stats;
 };
 
 /// Matches prev.planes to curr.planes using prev.plane_labels / curr.plane_labels.
 /// If `T_curr_prev` is given, previous planes are moved into the current frame
-/// (PlaneWithCov::transformed) before the geometric gate and eq. 17; the overlap test still
+/// (PlaneWithCov::transformed) before the geometric gate and eq. 18; the overlap test still
 /// compares the label images as they are (valid for small inter-frame motion).
 PlaneMatchResult matchPlanesWithStats(const FrameFeatures& prev, const FrameFeatures& curr,
                                       const PlaneMatchOptions& options = {},

@@ -42,7 +42,7 @@ struct EstimatorNodeOptions {
   std::string status_channel = channels::kStatus;
   /// Frames waiting for their reference; beyond this the oldest is dropped. As deep as the
   /// frontend's max_unlifted: at 30 Hz it absorbs a late loop of up to ~5 frame periods
-  /// (measured: fewer drops than 3 at 34.5 Hz, docs/launch.md).
+  /// (docs/launch.md).
   int max_waiting = 5;
   /// Consecutive drops while the reference is missing before tracking restarts.
   int max_drops_without_reference = 3;

@@ -52,7 +52,7 @@ struct FrontendNodeOptions {
   /// frame is dropped before extraction, counted: the loop through the estimator and the depth
   /// filter is behind, and the estimator would drop it anyway. 0 = never. Never drops in
   /// lockstep with up to max_unlifted frames in flight; 5 absorbs a loop late by a few frame
-  /// periods at 30 Hz (fewer drops than 3, docs/launch.md) and bounds the latency to ~170 ms.
+  /// periods at 30 Hz (docs/launch.md) and bounds the latency to ~170 ms.
   int max_unlifted = 5;
   /// The same wait bounded by time: when max_unlifted frames wait and no fused depth has come
   /// for this much stream time (frame stamps), the loop lost them: they are dropped, counted,
