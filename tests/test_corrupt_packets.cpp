@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -26,8 +27,13 @@ namespace {
 
 constexpr int kFrames = 12;
 
+/// The synthetic sequence, written once and removed when the test program ends.
 const std::string& sequenceDir() {
-  static const std::string dir = [] {
+  struct Folder {
+    std::string path;
+    ~Folder() { fs::remove_all(path); }
+  };
+  static const Folder dir = [] {
     const fs::path d =
         fs::temp_directory_path() / ("pplvo_corrupt_test_" + std::to_string(::getpid()));
     fs::remove_all(d);
@@ -35,9 +41,9 @@ const std::string& sequenceDir() {
     o.frames = kFrames;
     o.seed = 5;
     synth::writeTumFolder(synth::SyntheticSequence(o), d.string());
-    return d.string();
+    return Folder{d.string()};
   }();
-  return dir;
+  return dir.path;
 }
 
 void putInt32(std::vector<uint8_t>& bytes, size_t at, uint32_t value) {
@@ -116,6 +122,46 @@ class Corrupter {
   std::map<std::string, int64_t> published_;
 };
 
+/// A stray publisher on PPLVO_RGBD (issue 39): a second player of the same folder started with
+/// the first (every frame again, right after the real one), and once one well-formed frame
+/// whose seq is 10^12. Both are to be counted and skipped by the nodes that read frames.
+class StrayPublisher {
+ public:
+  explicit StrayPublisher(lcm::LCM& lcm) : lcm_(lcm) {
+    sub_ = lcm_.subscribe(channels::kRgbd, &StrayPublisher::onFrame, this);
+  }
+  ~StrayPublisher() { lcm_.unsubscribe(sub_); }
+  void onFrame(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const auto* p = static_cast<const uint8_t*>(rbuf->data);
+    std::vector<uint8_t> bytes(p, p + rbuf->data_size);
+    auto own = sent_.find(bytes);
+    if (own != sent_.end()) {
+      sent_.erase(own);
+      return;
+    }
+    publish(channel, bytes);  // the second player
+    if (++real_ == 4) {
+      // seq (int64, big-endian) follows hash, utime and depth_utime.
+      for (int i = 0; i < 8; ++i) bytes.at(24 + i) = 0;
+      const uint64_t forged = 1'000'000'000'000ull;
+      for (int i = 0; i < 8; ++i) bytes.at(24 + i) = static_cast<uint8_t>(forged >> (56 - 8 * i));
+      publish(channel, bytes);
+    }
+  }
+  int64_t published = 0;
+
+ private:
+  void publish(const std::string& channel, const std::vector<uint8_t>& bytes) {
+    sent_.insert(bytes);
+    ++published;
+    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  }
+  lcm::LCM& lcm_;
+  lcm::Subscription* sub_ = nullptr;
+  std::multiset<std::vector<uint8_t>> sent_;
+  int real_ = 0;
+};
+
 struct PipelineRun {
   std::vector<std::vector<uint8_t>> poses;
   std::map<std::string, int64_t> corrupted;
@@ -123,7 +169,7 @@ struct PipelineRun {
   player::PlayerResult player;
 };
 
-PipelineRun runPipeline(bool corrupt) {
+PipelineRun runPipeline(bool corrupt, bool stray = false) {
   lcm::LCM lcm("memq://");
   EXPECT_TRUE(lcm.good());
   nodes::DepthFilterNodeOptions df;
@@ -132,6 +178,8 @@ PipelineRun runPipeline(bool corrupt) {
   nodes::FrontendNode frontend(nodes::FrontendNodeOptions{}, lcm);
   nodes::EstimatorNode estimator(nodes::EstimatorNodeOptions{}, lcm);
   Corrupter corrupter(lcm, corrupt);
+  std::optional<StrayPublisher> strays;
+  if (stray) strays.emplace(lcm);
   player::PlayerOptions po;
   po.dataset_dir = sequenceDir();
   po.rate = 0.0;
@@ -143,6 +191,7 @@ PipelineRun runPipeline(bool corrupt) {
   run.player = player.run();
   run.poses = corrupter.poses;
   run.corrupted = corrupter.corrupted;
+  if (strays) run.corrupted["stray frames"] = strays->published;
   run.counters[player::PlayerOptions{}.node_name] = player.counters();
   run.counters[nodes::DepthFilterNode::kName] = depth_filter.counters();
   run.counters[nodes::FrontendNode::kName] = frontend.counters();
@@ -181,7 +230,22 @@ TEST(CorruptPackets, AreCountedSkipsAndThePosesStayByteIdentical) {
     EXPECT_EQ(c.errors, 0) << name << ": " << c.last_warning;
     EXPECT_EQ(c.frames_out, clean.counters.at(name).frames_out) << name;
   }
-  fs::remove_all(sequenceDir());
+}
+
+TEST(StrayPublisher, FramesOfASecondSourceOrAForgedSeqAreSkippedAndThePosesStayByteIdentical) {
+  const PipelineRun clean = runPipeline(false);
+  ASSERT_EQ(clean.poses.size(), static_cast<size_t>(kFrames));
+  const PipelineRun stray = runPipeline(false, true);
+  ASSERT_FALSE(stray.player.failed) << stray.player.error;
+  EXPECT_EQ(stray.corrupted.at("stray frames"), kFrames + 1);
+  EXPECT_EQ(stray.poses, clean.poses);  // every frame posed, byte for byte
+  for (const char* node : {nodes::DepthFilterNode::kName, nodes::FrontendNode::kName}) {
+    const msgs::NodeCounters& c = stray.counters.at(node);
+    EXPECT_EQ(c.frames_skipped, kFrames + 1) << node << ": " << c.last_warning;
+    EXPECT_EQ(c.frames_dropped, 0) << node << ": " << c.last_warning;  // no "lost" frames
+    EXPECT_EQ(c.frames_in, 2 * kFrames + 1) << node;
+    EXPECT_NE(c.last_warning.find("stray frame"), std::string::npos) << c.last_warning;
+  }
 }
 
 }  // namespace

@@ -394,6 +394,21 @@ TEST(LaunchReport, CountsNotFinalAreMarked) {
   EXPECT_NE(r.text().find("counts not final"), std::string::npos) << r.text();
 }
 
+TEST(LaunchReport, StrayFramesAreAFault) {
+  LaunchReport r;
+  LaunchReport::Process p;
+  p.name = kDepthFilter;
+  p.has_counts = true;
+  p.counts.known = p.counts.final = true;
+  p.exit = ExitInfo{true, 0, false, 0};
+  r.processes.push_back(p);
+  EXPECT_TRUE(r.faults().empty());
+  r.processes[0].counts.stray_frames = 2;
+  ASSERT_EQ(r.faults().size(), 1u);
+  EXPECT_NE(r.faults()[0].find("pplvo-depth-filter skipped 2 stray frame(s)"), std::string::npos);
+  EXPECT_NE(r.text().find("launch.fault: pplvo-depth-filter skipped 2 stray"), std::string::npos);
+}
+
 TEST(LaunchReport, OverloadFusions) {
   LaunchReport r;
   EXPECT_EQ(r.text().find("launch.overload_fusions"), std::string::npos);

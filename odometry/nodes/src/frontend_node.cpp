@@ -57,23 +57,41 @@ void FrontendNode::warn(const std::string& what) { counters_.last_warning = what
 
 void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   ++counters_.frames_in;
+  RgbdFrame frame;
+  try {
+    {
+      ScopedStageTimer t(timings_, "decode");
+      // Only the colour: the frontend takes depth from the depth filter. MessageError ->
+      // counted skip.
+      frame = msgs::fromMsg(msg, 65535, msgs::FrameImages::kColour);
+    }
+    if (frame.bgr.empty() || frame.bgr.rows != frame.camera.height ||
+        frame.bgr.cols != frame.camera.width) {
+      throw msgs::MessageError("rgbd_frame_t: colour image size disagrees with camera_info");
+    }
+  } catch (const msgs::MessageError&) {
+    // A bad frame of the followed stream still arrived: not a lost one (counted skip).
+    if (source_guard_.wouldFollow(msg.source, msg.seq, msg.utime)) {
+      msgs::noteFrameSequence(counters_, msg.seq);
+    }
+    throw;
+  }
+  // A valid frame of a stray publisher (a forged seq or stamp, a second source) is counted and
+  // skipped before it can make the followed stream's frames look old (msgs::FrameSourceGuard).
+  std::string why;
+  if (source_guard_.judge(msg.source, msg.seq, msg.utime, &why) == msgs::FrameVerdict::kStray) {
+    ++counters_.frames_skipped;
+    timings_.add("stray_frame", 0.0);
+    msgs::reportProblem(counters_, kName,
+                        "stray frame " + std::to_string(msg.seq) + " skipped: " + why);
+    return;
+  }
   msgs::noteFrameSequence(counters_, msg.seq);
   newest_frame_utime_ = msg.utime;
   if (msg.seq <= last_extracted_seq_) {
     ++counters_.frames_skipped;
     warn("frame " + std::to_string(msg.seq) + " is older than one already handled");
     return;
-  }
-  RgbdFrame frame;
-  {
-    ScopedStageTimer t(timings_, "decode");
-    // Only the colour: the frontend takes depth from the depth filter. MessageError ->
-    // counted skip.
-    frame = msgs::fromMsg(msg, 65535, msgs::FrameImages::kColour);
-  }
-  if (frame.bgr.empty() || frame.bgr.rows != frame.camera.height ||
-      frame.bgr.cols != frame.camera.width) {
-    throw msgs::MessageError("rgbd_frame_t: colour image size disagrees with camera_info");
   }
   frames_.push_back(std::move(frame));
   if (const int64_t n = trim(frames_, options_.max_pending)) {

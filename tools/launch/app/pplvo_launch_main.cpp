@@ -51,6 +51,7 @@ NodeCounts countsOf(const pplvo_msgs::node_status_t& m) {
   c.final = m.at_exit;
   for (const pplvo_msgs::stage_timing_t& t : m.stages) {
     if (t.name == "ogm_shortened") c.shortened_fusions = t.count;
+    if (t.name == "stray_frame") c.stray_frames = t.count;
   }
   return c;
 }

@@ -113,6 +113,10 @@ std::vector<std::string> LaunchReport::faults() const {
                     p.pauses, p.paused_s);
       f.push_back(buf);
     }
+    if (p.has_counts && p.counts.stray_frames > 0) {
+      f.push_back(p.name + " skipped " + std::to_string(p.counts.stray_frames) +
+                  " stray frame(s) (forged, or a second source on the frame channel)");
+    }
     if (p.exit && !p.stop_requested && !p.exit->clean()) {
       f.push_back(p.name + " ended early (" + p.exit->text() + ")" +
                   (p.restarted ? ", restarted" : ""));

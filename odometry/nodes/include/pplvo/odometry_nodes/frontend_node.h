@@ -29,6 +29,7 @@
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/frame_source_guard.h"
 #include "pplvo/pipeline/frontend.h"
 
 namespace pplvo::nodes {
@@ -165,6 +166,7 @@ class FrontendNode {
   InFlight in_flight_;
   msgs::NodeCounters counters_;
   StageTimings timings_;
+  msgs::FrameSourceGuard source_guard_;  ///< which PPLVO_RGBD frames are the followed stream
 };
 
 }  // namespace pplvo::nodes

@@ -20,6 +20,9 @@ struct NodeCounts {
   bool final = false;  ///< ... and its last one was its final status
   /// Frames the depth filter fused over a shortened window (its "ogm_shortened" stage count).
   int64_t shortened_fusions = 0;
+  /// Frames on PPLVO_RGBD not of the followed stream (forged, a second source), skipped (its
+  /// "stray_frame" stage count; msgs::FrameSourceGuard).
+  int64_t stray_frames = 0;
 };
 
 /// Decides when the pipeline has drained after the player ended: every published frame has
