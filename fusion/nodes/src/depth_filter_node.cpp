@@ -73,38 +73,23 @@ void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
 
 void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   ++counters_.frames_in;
-  RgbdFrame frame;
-  try {
-    {
-      ScopedStageTimer t(timings_, "decode");
-      // Only the depth: the colour image is the frontend's. MessageError -> counted skip in
-      // guarded().
-      frame = msgs::fromMsg(msg, 65535, msgs::FrameImages::kDepth);
-    }
-    const PinholeCamera& depth_camera =
-        frame.depth_camera ? frame.depth_camera->camera : frame.camera;
-    if (frame.depth_m.empty() || frame.depth_m.rows != depth_camera.height ||
-        frame.depth_m.cols != depth_camera.width) {
-      throw msgs::MessageError("rgbd_frame_t: depth size disagrees with camera_info");
-    }
-  } catch (const msgs::MessageError&) {
-    // A bad frame of the followed stream still arrived: not a lost one (counted skip).
-    if (source_guard_.wouldFollow(msg.source, msg.seq, msg.utime)) {
-      msgs::noteFrameSequence(counters_, msg.seq);
-    }
-    throw;
-  }
-  // A valid frame of a stray publisher (a forged seq or stamp, a second source) is counted and
-  // skipped before it can make the followed stream's frames look old (msgs::FrameSourceGuard).
-  std::string why;
-  if (source_guard_.judge(msg.source, msg.seq, msg.utime, &why) == msgs::FrameVerdict::kStray) {
-    ++counters_.frames_skipped;
-    timings_.add("stray_frame", 0.0);
-    msgs::reportProblem(counters_, kName,
-                        "stray frame " + std::to_string(msg.seq) + " skipped: " + why);
-    return;
-  }
-  msgs::noteFrameSequence(counters_, msg.seq);
+  std::optional<RgbdFrame> admitted =
+      msgs::admitFrame(source_guard_, counters_, timings_, kName, msg, [&] {
+        RgbdFrame f;
+        {
+          ScopedStageTimer t(timings_, "decode");
+          // Only the depth: the colour image is the frontend's.
+          f = msgs::fromMsg(msg, 65535, msgs::FrameImages::kDepth);
+        }
+        const PinholeCamera& depth_camera = f.depth_camera ? f.depth_camera->camera : f.camera;
+        if (f.depth_m.empty() || f.depth_m.rows != depth_camera.height ||
+            f.depth_m.cols != depth_camera.width) {
+          throw msgs::MessageError("rgbd_frame_t: depth size disagrees with camera_info");
+        }
+        return f;
+      });
+  if (!admitted) return;
+  RgbdFrame frame = std::move(*admitted);
   frame.stamp = msg.stamp;
   if (deferred_.empty() && !waitsForAlignmentPose(frame)) {
     processFrame(frame);

@@ -57,36 +57,21 @@ void FrontendNode::warn(const std::string& what) { counters_.last_warning = what
 
 void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   ++counters_.frames_in;
-  RgbdFrame frame;
-  try {
-    {
-      ScopedStageTimer t(timings_, "decode");
-      // Only the colour: the frontend takes depth from the depth filter. MessageError ->
-      // counted skip.
-      frame = msgs::fromMsg(msg, 65535, msgs::FrameImages::kColour);
-    }
-    if (frame.bgr.empty() || frame.bgr.rows != frame.camera.height ||
-        frame.bgr.cols != frame.camera.width) {
-      throw msgs::MessageError("rgbd_frame_t: colour image size disagrees with camera_info");
-    }
-  } catch (const msgs::MessageError&) {
-    // A bad frame of the followed stream still arrived: not a lost one (counted skip).
-    if (source_guard_.wouldFollow(msg.source, msg.seq, msg.utime)) {
-      msgs::noteFrameSequence(counters_, msg.seq);
-    }
-    throw;
-  }
-  // A valid frame of a stray publisher (a forged seq or stamp, a second source) is counted and
-  // skipped before it can make the followed stream's frames look old (msgs::FrameSourceGuard).
-  std::string why;
-  if (source_guard_.judge(msg.source, msg.seq, msg.utime, &why) == msgs::FrameVerdict::kStray) {
-    ++counters_.frames_skipped;
-    timings_.add("stray_frame", 0.0);
-    msgs::reportProblem(counters_, kName,
-                        "stray frame " + std::to_string(msg.seq) + " skipped: " + why);
-    return;
-  }
-  msgs::noteFrameSequence(counters_, msg.seq);
+  std::optional<RgbdFrame> admitted =
+      msgs::admitFrame(source_guard_, counters_, timings_, kName, msg, [&] {
+        RgbdFrame f;
+        {
+          ScopedStageTimer t(timings_, "decode");
+          // Only the colour: the frontend takes depth from the depth filter.
+          f = msgs::fromMsg(msg, 65535, msgs::FrameImages::kColour);
+        }
+        if (f.bgr.empty() || f.bgr.rows != f.camera.height || f.bgr.cols != f.camera.width) {
+          throw msgs::MessageError("rgbd_frame_t: colour image size disagrees with camera_info");
+        }
+        return f;
+      });
+  if (!admitted) return;
+  RgbdFrame frame = std::move(*admitted);
   newest_frame_utime_ = msg.utime;
   if (msg.seq <= last_extracted_seq_) {
     ++counters_.frames_skipped;

@@ -6,10 +6,14 @@
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
+#include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <string>
 
+#include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/frame_source_guard.h"
 
 namespace pplvo::msgs {
 
@@ -83,6 +87,34 @@ bool guarded(NodeCounters& counters, const char* node, Body&& body) noexcept {
     report("error", "unknown exception");
   }
   return false;
+}
+
+/// The step every node that reads frames (PPLVO_RGBD: depth filter, frontend) runs on one:
+/// `decode()` decodes and checks it (a MessageError is a counted skip in guarded(); a bad frame
+/// of the followed stream still arrived, so it is not counted as lost), then a valid frame of a
+/// stray publisher (a forged seq or stamp, a second source; FrameSourceGuard) is counted in
+/// frames_skipped and the `stray_frame` stage and skipped, before it can make the followed
+/// stream's frames look old. Returns the decoded frame, or nullopt for a stray one.
+template <class Decode>
+auto admitFrame(FrameSourceGuard& guard, NodeCounters& counters, StageTimings& timings,
+                const std::string& node, const pplvo_msgs::rgbd_frame_t& msg, Decode&& decode)
+    -> std::optional<decltype(decode())> {
+  std::optional<decltype(decode())> frame;
+  try {
+    frame = decode();
+  } catch (const MessageError&) {
+    if (guard.wouldFollow(msg.source, msg.seq, msg.utime)) noteFrameSequence(counters, msg.seq);
+    throw;
+  }
+  std::string why;
+  if (guard.judge(msg.source, msg.seq, msg.utime, &why) == FrameVerdict::kStray) {
+    ++counters.frames_skipped;
+    timings.add("stray_frame", 0.0);
+    reportProblem(counters, node, "stray frame " + std::to_string(msg.seq) + " skipped: " + why);
+    return std::nullopt;
+  }
+  noteFrameSequence(counters, msg.seq);
+  return frame;
 }
 
 }  // namespace pplvo::msgs
