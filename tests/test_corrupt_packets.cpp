@@ -16,6 +16,7 @@
 #include "pplvo/depth_filter_node/depth_filter_node.h"
 #include "pplvo/fixtures/synthetic_sequence.h"
 #include "pplvo/msgs/channels.h"
+#include "pplvo_msgs/camera_info_t.hpp"
 #include "pplvo/odometry_nodes/estimator_node.h"
 #include "pplvo/odometry_nodes/frontend_node.h"
 #include "pplvo/player/player_node.h"
@@ -91,10 +92,12 @@ class Corrupter {
         break;
       default: {
         if (channel == channels::kFeatures || channel == channels::kFeatures3d) {
-          // n_points follows stamp, stage (1 byte) and camera_info (80 bytes).
+          // n_points follows stamp, stage (1 byte) and camera_info (88 bytes: size from the type).
           const uint32_t stamp_length = (uint32_t{bad[24]} << 24) | (uint32_t{bad[25]} << 16) |
                                         (uint32_t{bad[26]} << 8) | bad[27];
-          putInt32(bad, 28 + stamp_length + 1 + 80,
+          const uint32_t camera_bytes =
+              static_cast<uint32_t>(pplvo_msgs::camera_info_t()._getEncodedSizeNoHash());
+          putInt32(bad, 28 + stamp_length + 1 + camera_bytes,
                    published_[channel] % 2 ? 0x80000000u : 0x7ffffff0u);
         } else {
           // One byte too long.

@@ -6,7 +6,8 @@ namespace pplvo {
 
 bool PinholeCamera::valid() const {
   return width > 0 && height > 0 && std::isfinite(fx) && std::isfinite(fy) && fx != 0.0 &&
-         fy != 0.0 && std::isfinite(cx) && std::isfinite(cy);
+         fy != 0.0 && std::isfinite(cx) && std::isfinite(cy) && readout_s >= 0.0 &&
+         readout_s < 1.0;
 }
 
 bool PinholeCamera::hasDistortion() const {
@@ -69,7 +70,8 @@ PinholeCamera PinholeCamera::scaled(double s) const {
 
 bool operator==(const PinholeCamera& a, const PinholeCamera& b) {
   return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
-         a.cx == b.cx && a.cy == b.cy && a.distortion == b.distortion;
+         a.cx == b.cx && a.cy == b.cy && a.distortion == b.distortion &&
+         a.readout_s == b.readout_s;
 }
 
 }  // namespace pplvo

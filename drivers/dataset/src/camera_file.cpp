@@ -149,6 +149,15 @@ DatasetCamera parseCalibParams(const std::string& text, const std::string& path)
     }
     const cv::FileNode scale = fs["depth_scale"];
     if (!scale.empty()) cam.depth_scale = static_cast<double>(scale);
+    const cv::FileNode readout = fs["rolling_shutter_readout_ms"];
+    if (!readout.empty()) {
+      const double ms = readout.isReal() || readout.isInt() ? static_cast<double>(readout) : -1.0;
+      if (!(ms >= 0 && ms < 1000)) {
+        errors.push_back("rolling_shutter_readout_ms must be a number in [0, 1000)");
+      } else {
+        cam.camera.readout_s = 1e-3 * ms;
+      }
+    }
     const cv::FileNode w = fs["width"], h = fs["height"];
     if (!w.empty()) cam.camera.width = static_cast<int>(w);
     if (!h.empty()) cam.camera.height = static_cast<int>(h);
@@ -309,7 +318,7 @@ DatasetCamera parseCameraYaml(const std::string& text, const std::string& path) 
   const std::set<std::string> known = {"width",       "height",           "fx",
                                        "fy",          "cx",               "cy",
                                        "distortion",  "depth_scale",      "depth_registered",
-                                       "depth_camera"};
+                                       "depth_camera", "rolling_shutter_readout_ms"};
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>("?");
     if (!known.count(key)) errors.push_back("unknown key '" + key + "'");
@@ -342,6 +351,13 @@ DatasetCamera parseCameraYaml(const std::string& text, const std::string& path) 
   getDouble("cx", cam.camera.cx, true);
   getDouble("cy", cam.camera.cy, true);
   getDouble("depth_scale", cam.depth_scale, false);
+  double readout_ms = 0;
+  getDouble("rolling_shutter_readout_ms", readout_ms, false);
+  if (!(readout_ms >= 0 && readout_ms < 1000)) {
+    errors.push_back("'rolling_shutter_readout_ms' must be in [0, 1000)");
+  } else {
+    cam.camera.readout_s = 1e-3 * readout_ms;
+  }
   if (const YAML::Node d = root["distortion"]) {
     if (!d.IsSequence() || d.size() < 4 || d.size() > 5) {
       errors.push_back("'distortion' must be a list of 4 or 5 numbers (k1 k2 p1 p2 [k3])");

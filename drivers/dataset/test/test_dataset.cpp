@@ -585,6 +585,17 @@ TEST(Camera, CalibParamsXmlWithHugeOrInconsistentMatrixSizesIsAnError) {
                                       matrix("RGB_intrinsic_params", "3", "3", k) +
                                       "</opencv_storage>\n");
   EXPECT_DOUBLE_EQ(loadCalibParamsXml((t.path / "calib.xml").string()).camera.fy, 480.0);
+  // The rolling shutter's readout (ms), read when present and bounded.
+  writeText(t.path / "calib.xml", "<?xml version=\"1.0\"?>\n<opencv_storage>\n" +
+                                      matrix("RGB_intrinsic_params", "3", "3", k) +
+                                      "<rolling_shutter_readout_ms>25.</rolling_shutter_readout_ms>\n"
+                                      "</opencv_storage>\n");
+  EXPECT_DOUBLE_EQ(loadCalibParamsXml((t.path / "calib.xml").string()).camera.readout_s, 0.025);
+  writeText(t.path / "calib.xml", "<?xml version=\"1.0\"?>\n<opencv_storage>\n" +
+                                      matrix("RGB_intrinsic_params", "3", "3", k) +
+                                      "<rolling_shutter_readout_ms>-3</rolling_shutter_readout_ms>\n"
+                                      "</opencv_storage>\n");
+  EXPECT_THROW(loadCalibParamsXml((t.path / "calib.xml").string()), DatasetError);
 }
 
 TEST(Camera, YamlCameraFile) {
@@ -600,6 +611,13 @@ TEST(Camera, YamlCameraFile) {
   EXPECT_DOUBLE_EQ(c.camera.fy, -11.0);
   EXPECT_DOUBLE_EQ(c.camera.distortion[4], 0.03);
   EXPECT_DOUBLE_EQ(c.depth_scale, 1000.0);
+  EXPECT_EQ(c.camera.readout_s, 0.0);  // global shutter unless the file says otherwise
+  writeText(t.path / "rolling.yaml",
+            "fx: 10\nfy: 10\ncx: 4\ncy: 3\nrolling_shutter_readout_ms: 25\n");
+  EXPECT_DOUBLE_EQ(loadCameraYaml((t.path / "rolling.yaml").string()).camera.readout_s, 0.025);
+  writeText(t.path / "negative.yaml",
+            "fx: 10\nfy: 10\ncx: 4\ncy: 3\nrolling_shutter_readout_ms: -1\n");
+  EXPECT_THROW(loadCameraYaml((t.path / "negative.yaml").string()), DatasetError);
   // Errors are collected: unknown key and missing fy reported together.
   writeText(t.path / "bad.yaml", "fx: 1\ncx: 1\ncy: 1\nfocal: 3\n");
   try {

@@ -104,6 +104,7 @@ pplvo_msgs::camera_info_t toMsg(const PinholeCamera& c) {
   m.cx = c.cx;
   m.cy = c.cy;
   for (int i = 0; i < 5; ++i) m.distortion[i] = c.distortion[i];
+  m.readout_s = c.readout_s;
   return m;
 }
 
@@ -119,7 +120,11 @@ PinholeCamera fromMsg(const pplvo_msgs::camera_info_t& m) {
     if (!std::isfinite(m.distortion[i])) throw MessageError("camera distortion is not finite");
     c.distortion[i] = m.distortion[i];
   }
-  if (!c.valid()) throw MessageError("camera intrinsics are invalid (size, zero or NaN focal)");
+  c.readout_s = m.readout_s;
+  if (!c.valid()) {
+    throw MessageError(
+        "camera intrinsics are invalid (size, zero or NaN focal, readout outside [0, 1) s)");
+  }
   return c;
 }
 

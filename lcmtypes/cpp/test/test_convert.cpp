@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <opencv2/imgproc.hpp>
 
 #include "pplvo/msgs/convert.h"
@@ -45,14 +47,21 @@ Msg roundTripBytes(const Msg& msg) {
 }
 
 TEST(Convert, CameraRoundTrip) {
-  const PinholeCamera c = vga();
+  PinholeCamera c = vga();
   EXPECT_EQ(fromMsg(roundTripBytes(toMsg(c))), c);
+  c.readout_s = 0.025;  // a rolling shutter travels with the camera
+  EXPECT_EQ(fromMsg(roundTripBytes(toMsg(c))).readout_s, 0.025);
 }
 
 TEST(Convert, InvalidCameraThrows) {
   auto m = toMsg(vga());
   m.fx = 0;
   EXPECT_THROW(fromMsg(m), MessageError);
+  for (const double readout : {-0.01, 1.5, std::nan("")}) {
+    auto r = toMsg(vga());
+    r.readout_s = readout;
+    EXPECT_THROW(fromMsg(r), MessageError) << readout;
+  }
 }
 
 class EncodingRoundTrip : public ::testing::TestWithParam<int8_t> {};

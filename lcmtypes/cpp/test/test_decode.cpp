@@ -209,9 +209,9 @@ TEST(DecodeMessage, NamesAnOlderLogVersion) {
   EXPECT_NE(rig_error.find("depth_camera"), std::string::npos) << rig_error;
 
   // pose_t and depth_map_t before the reference role (one int8_t more today).
-  auto withFingerprint = [](std::vector<uint8_t> bytes, uint64_t fingerprint) {
-    for (int i = 0; i < 8; ++i) bytes[i] = static_cast<uint8_t>(fingerprint >> (56 - 8 * i));
-    return bytes;
+  auto withFingerprint = [](std::vector<uint8_t> packet, uint64_t fingerprint) {
+    for (int i = 0; i < 8; ++i) packet[i] = static_cast<uint8_t>(fingerprint >> (56 - 8 * i));
+    return packet;
   };
   const std::vector<uint8_t> old_pose = withFingerprint(encode(pose()), 0xefc8a0c530381bb2ULL);
   pplvo_msgs::pose_t pose_out;
@@ -224,6 +224,14 @@ TEST(DecodeMessage, NamesAnOlderLogVersion) {
   EXPECT_NE(depth_error.find("older log version: depth_map_t without reference"),
             std::string::npos)
       << depth_error;
+
+  // Every message holding a camera_info_t before its readout_s.
+  const std::vector<uint8_t> old_camera = withFingerprint(encode(frame()), 0xf83ee6370c017a62ULL);
+  const std::string camera_error = decodeMessage(old_camera.data(), old_camera.size(), &out);
+  EXPECT_NE(camera_error.find("older log version: rgbd_frame_t with a camera_info_t without "
+                              "readout_s"),
+            std::string::npos)
+      << camera_error;
 
   // Today's layout still decodes, and carries the depth instant.
   pplvo_msgs::rgbd_frame_t now = frame();

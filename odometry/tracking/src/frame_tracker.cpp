@@ -1,5 +1,6 @@
 #include "pplvo/tracking/frame_tracker.h"
 
+#include <algorithm>
 #include <limits>
 
 #include "pplvo/core/enum_names.h"
@@ -11,12 +12,19 @@ namespace pplvo::tracking {
 namespace {
 
 constexpr EnumName<TrackingReference> kTrackingReferenceNames[] = {
-    {TrackingReference::kFrame, "frame"}, {TrackingReference::kKeyframe, "keyframe"}};
+    {TrackingReference::kFrame, "frame"},
+    {TrackingReference::kKeyframe, "keyframe"},
+    {TrackingReference::kLocalMap, "local_map"}};
 
 void countMatches(const FeatureMatches& m, TrackingStats& s) {
   s.point_matches = static_cast<int>(m.points.size());
   s.line_matches = static_cast<int>(m.lines.size());
   s.plane_matches = static_cast<int>(m.planes.size());
+}
+
+estimator::PoseEstimatorOptions structureOnly(estimator::PoseEstimatorOptions o) {
+  o.use_points = false;
+  return o;
 }
 
 }  // namespace
@@ -30,7 +38,11 @@ const char* toString(TrackingReference reference) {
 }
 
 FrameTracker::FrameTracker(const TrackingOptions& options)
-    : options_(options), tracker_(options.tracker), estimator_(options.tracker.estimator) {}
+    : options_(options),
+      tracker_(options.tracker),
+      estimator_(options.tracker.estimator),
+      structure_estimator_(structureOnly(options.tracker.estimator)),
+      mapper_(options.local_map, options.point_matching, options.tracker.estimator) {}
 
 void FrameTracker::forgetPending() {
   lifted_.clearStages();
@@ -41,13 +53,15 @@ void FrameTracker::resetKeyframes(int64_t next, KeyframeReason reason) {
   keyframes_.clear();
   lifted_.dropObservations();  // they would refine the keyframe dropped here
   pending_keyframe_.reset();
-  if (options_.reference == TrackingReference::kKeyframe) pending_keyframe_ = {next, reason};
+  if (usesKeyframes()) pending_keyframe_ = {next, reason};
 }
 
 estimator::MotionChainOutput FrameTracker::initialise(const FrameFeatures& first) {
   forgetPending();
   lifted_.setLastPosed(first.seq);
   resetKeyframes(first.seq, KeyframeReason::kStart);
+  mapper_.reset();
+  last_posed_stamp_ = {first.seq, first.utime};
   return tracker_.initialise(first.seq);
 }
 
@@ -56,6 +70,8 @@ estimator::MotionChainOutput FrameTracker::restart(const FrameFeatures& current)
   forgetPending();
   lifted_.setLastPosed(current.seq);
   resetKeyframes(current.seq, KeyframeReason::kStart);
+  mapper_.reset();  // its landmarks are not related to the frames after a restart
+  last_posed_stamp_ = {current.seq, current.utime};
   estimator::MotionChainOutput out = tracker_.initialise(current.seq, T_w_c);
   out.status = TrackingStatus::kReinitialised;
   return out;
@@ -138,6 +154,27 @@ estimator::MotionChainOutput FrameTracker::track(const FrameFeatures& reference,
   return restart(current);
 }
 
+std::optional<MapRelativePose> FrameTracker::structureMotion(const FrameFeatures& lifted) {
+  const Keyframe* keyframe = keyframes_.active();
+  const estimator::PoseEstimatorOptions& use = options_.tracker.estimator;
+  if (keyframe == nullptr || !(use.use_lines || use.use_planes) ||
+      lifted.camera != keyframe->landmarks.camera) {
+    return std::nullopt;
+  }
+  const Pose3 T_new_kf_predicted = tracker_.T_w_c().inverse() * keyframe->T_w_kf;
+  FeatureMatches matches = match(keyframe->landmarks, lifted, T_new_kf_predicted);
+  matches.points.clear();
+  if (matches.lines.empty() && matches.planes.empty()) return std::nullopt;
+  const estimator::PoseEstimate est = structure_estimator_.estimate(
+      estimator::buildCorrespondences(keyframe->landmarks, lifted, matches,
+                                      structure_estimator_.options()),
+      lifted.camera, T_new_kf_predicted);
+  if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
+    return std::nullopt;
+  }
+  return MapRelativePose{keyframe->seq(), est.T_curr_prev, est.covariance};
+}
+
 std::optional<int64_t> FrameTracker::fuseDueObservations() {
   // Landmark fusion one frame behind: the frames posed before the previous one refine the
   // keyframe now (their order of arrival does not matter, the result is the same).
@@ -153,7 +190,69 @@ std::optional<int64_t> FrameTracker::fuseDueObservations() {
   return std::nullopt;
 }
 
+std::optional<Eigen::Vector3d> FrameTracker::smoothedAngularVelocity(int64_t seq) const {
+  // The mean over the frames posed before `seq`, at most kAngularVelocityFrames: the estimate
+  // of one frame feeds the compensation of the next, and a single frame's error would be fed
+  // back at full gain (an oscillation that grows); the mean damps it, and a hand-held camera's
+  // angular velocity changes little over a few frames.
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (auto it = angular_velocity_.rbegin(); it != angular_velocity_.rend(); ++it) {
+    if (it->first >= seq) continue;
+    if (n == kAngularVelocityFrames) break;
+    sum += it->second;
+    ++n;
+  }
+  if (n == 0) return std::nullopt;
+  return Eigen::Vector3d(sum / n);
+}
+
+bool FrameTracker::recentlyCompensated(int64_t seq) const {
+  return std::find(compensated_lifted_.begin(), compensated_lifted_.end(), seq) !=
+         compensated_lifted_.end();
+}
+
+bool FrameTracker::addLifted(FrameFeatures lifted) {
+  if (lifted.camera.readout_s > 0) {
+    if (const std::optional<Eigen::Vector3d> w = smoothedAngularVelocity(lifted.seq)) {
+      compensateRollingShutter(lifted, *w);
+      compensated_lifted_.push_back(lifted.seq);
+      while (compensated_lifted_.size() > 64) compensated_lifted_.pop_front();
+    }
+  }
+  return lifted_.add(std::move(lifted));
+}
+
+bool FrameTracker::referenceCompensated() const {
+  const std::optional<int64_t> last = lifted_.lastPosed();
+  if (!last) return false;
+  const bool keyframe_serves = usesKeyframes() && keyframes_.active() &&
+                               !(pending_keyframe_ && pending_keyframe_->seq == *last);
+  return keyframe_serves ? keyframe_compensated_ : recentlyCompensated(*last);
+}
+
 TrackingStep FrameTracker::step(const FrameFeatures& current) {
+  if (!(current.camera.readout_s > 0)) return stepAtStamp(current);
+  const std::optional<Eigen::Vector3d> w = smoothedAngularVelocity(current.seq);
+  if (!w) return stepAtStamp(current);  // no velocity yet (first frames): as read
+  if (!referenceCompensated()) {
+    // The reference was lifted before any velocity was known: a frame is matched against it
+    // as read (both sheared alike), and becomes the keyframe, lifted with the velocity, that
+    // the next frames are compensated against.
+    TrackingStep out = stepAtStamp(current);
+    if (out.posed() && usesKeyframes() && !pending_keyframe_) {
+      pending_keyframe_ = {current.seq, KeyframeReason::kStart};
+      out.stats.new_keyframe = true;
+      out.stats.keyframe_reason = KeyframeReason::kStart;
+    }
+    return out;
+  }
+  FrameFeatures at_stamp = current;
+  compensateRollingShutter(at_stamp, *w);
+  return stepAtStamp(at_stamp);
+}
+
+TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
   TrackingStep out;
   TrackingStats& s = out.stats;
   const std::optional<int64_t> last = lifted_.lastPosed();
@@ -167,7 +266,7 @@ TrackingStep FrameTracker::step(const FrameFeatures& current) {
     out.pose = restart(current);
     return out;
   }
-  const bool keyframes = options_.reference == TrackingReference::kKeyframe;
+  const bool keyframes = usesKeyframes();
   if (const std::optional<int64_t> awaited = fuseDueObservations()) {
     out.awaiting_lifted = awaited;
     return out;
@@ -187,7 +286,15 @@ TrackingStep FrameTracker::step(const FrameFeatures& current) {
     if (current.camera != previous->camera) return restartOnOtherCamera();
     // The previous frame was chosen as keyframe: its 3D features (lifted on its fused depth)
     // are the keyframe's landmarks, its pose is the tracker's current one.
-    keyframes_.insert(*previous, tracker_.T_w_c());
+    if (options_.reference == TrackingReference::kLocalMap) {
+      ScopedStageTimer t(timings_, "local_map");
+      KeyframeInsertion inserted =
+          mapper_.insert(*previous, tracker_.T_w_c(), structureMotion(*previous));
+      keyframes_.insert(std::move(inserted.reference), inserted.T_w_kf);
+    } else {
+      keyframes_.insert(*previous, tracker_.T_w_c());
+    }
+    keyframe_compensated_ = recentlyCompensated(previous->seq);
     pending_keyframe_.reset();
     lifted_.dropObservations();  // they refine the keyframe replaced here
   }
@@ -230,12 +337,22 @@ TrackingStep FrameTracker::step(const FrameFeatures& current) {
 }
 
 void FrameTracker::finishStep(const FrameFeatures& current, TrackingStats& stats) {
-  if (options_.reference == TrackingReference::kKeyframe) {
+  if (usesKeyframes()) {
     stats.new_keyframe = pending_keyframe_ && pending_keyframe_->seq == current.seq;
     if (stats.new_keyframe) stats.keyframe_reason = pending_keyframe_->reason;
   }
   lifted_.setLastPosed(current.seq);
   lifted_.prune();
+  // The frame interval and this frame's angular velocity, for the rolling-shutter model.
+  if (last_posed_stamp_ && current.seq > last_posed_stamp_->first &&
+      current.utime > last_posed_stamp_->second) {
+    frame_interval_s_ = 1e-6 * static_cast<double>(current.utime - last_posed_stamp_->second) /
+                        static_cast<double>(current.seq - last_posed_stamp_->first);
+  }
+  last_posed_stamp_ = {current.seq, current.utime};
+  angular_velocity_.emplace_back(current.seq,
+                                 angularVelocity(tracker_.predictedMotion(), frame_interval_s_));
+  while (angular_velocity_.size() > 64) angular_velocity_.pop_front();
 }
 
 estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures& reference,
@@ -252,7 +369,7 @@ estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures
 }
 
 ReferenceRole FrameTracker::referenceRole(int64_t seq) const {
-  if (options_.reference != TrackingReference::kKeyframe) return ReferenceRole::kReference;
+  if (!usesKeyframes()) return ReferenceRole::kReference;
   return pending_keyframe_ && pending_keyframe_->seq == seq ? ReferenceRole::kReference
                                                             : ReferenceRole::kFallbackOnly;
 }

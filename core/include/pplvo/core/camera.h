@@ -15,6 +15,9 @@ struct PinholeCamera {
   int height = 0;
   double fx = 0, fy = 0, cx = 0, cy = 0;          // pixels
   std::array<double, 5> distortion{0, 0, 0, 0, 0};  // k1 k2 p1 p2 k3
+  /// Rolling shutter: rows read top to bottom over this time (s), the middle row at the
+  /// frame's stamp; 0 for a global shutter.
+  double readout_s = 0;
 
   bool valid() const;
   bool hasDistortion() const;

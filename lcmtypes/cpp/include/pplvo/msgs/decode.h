@@ -29,6 +29,13 @@ inline constexpr OlderMessageVersion kOlderMessageVersions[] = {
      "pose_t without reference (pplvo before 2026-12-03)"},
     {"depth_map_t", static_cast<int64_t>(0x1ecd5069eeeacec5ULL),
      "depth_map_t without reference (pplvo before 2026-12-03)"},
+    // camera_info_t gained readout_s (rolling shutter), 2026-12-04: every message holding it.
+    {"rgbd_frame_t", static_cast<int64_t>(0xf83ee6370c017a62ULL),
+     "rgbd_frame_t with a camera_info_t without readout_s (pplvo before 2026-12-04)"},
+    {"depth_map_t", static_cast<int64_t>(0x9a3e73e1d05ea5c3ULL),
+     "depth_map_t with a camera_info_t without readout_s (pplvo before 2026-12-04)"},
+    {"features_t", static_cast<int64_t>(0xe4a528515d57c872ULL),
+     "features_t with a camera_info_t without readout_s (pplvo before 2026-12-04)"},
 };
 
 /// Why `size` bytes whose fingerprint is not MessageT's are not one: an older pplvo layout, or

@@ -10,6 +10,7 @@
 /// decides what a frame is tracked against, when the previous frame must serve instead
 /// (fallback), when a new keyframe is taken (keyframe_rule.h) and when landmarks are fused.
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 
@@ -24,6 +25,8 @@
 #include "pplvo/tracking/keyframe_rule.h"
 #include "pplvo/tracking/keyframe_store.h"
 #include "pplvo/tracking/lifted_stage_buffer.h"
+#include "pplvo/tracking/local_mapper.h"
+#include "pplvo/tracking/rolling_shutter.h"
 
 namespace pplvo::tracking {
 
@@ -31,6 +34,9 @@ namespace pplvo::tracking {
 enum class TrackingReference {
   kFrame,     ///< the previous frame (the paper)
   kKeyframe,  ///< the active keyframe, the previous frame as fallback
+  /// the landmarks of the keyframes around the active one, adjusted together (local_mapper.h),
+  /// the previous frame as fallback
+  kLocalMap,
 };
 bool parseTrackingReference(const std::string& text, TrackingReference* out);
 const char* toString(TrackingReference reference);
@@ -38,6 +44,7 @@ const char* toString(TrackingReference reference);
 struct TrackingOptions {
   TrackingReference reference = TrackingReference::kKeyframe;
   KeyframeOptions keyframe;
+  LocalMapOptions local_map;  ///< reference: local_map
   estimator::MotionChainOptions tracker;  ///< tracker.estimator.use_* select the families
   features::PointMatchOptions point_matching;
   features::LineMatchOptions line_matching;
@@ -55,10 +62,13 @@ struct TrackingOptions {
 template <class V>
 void visit(V& v, TrackingOptions& o) {
   v.field("reference", o.reference,
-          "what a frame is tracked against: frame (the previous one, as in the paper) or "
-          "keyframe (the active keyframe, the previous frame as fallback; docs/estimator.md)");
-  v.section("keyframe", "When a new keyframe is taken (reference: keyframe)",
+          "what a frame is tracked against: frame (the previous one, as in the paper), "
+          "keyframe (the active keyframe, the previous frame as fallback) or local_map (the "
+          "landmarks of the keyframes around it, adjusted together; docs/estimator.md)");
+  v.section("keyframe", "When a new keyframe is taken (reference: keyframe, local_map)",
             [&] { visit(v, o.keyframe); });
+  v.section("local_map", "The windowed local map and its bundle adjustment (reference: local_map)",
+            [&] { visit(v, o.local_map); });
   v.section("tracker", "Frame-to-frame tracking, pose estimation and window uncertainty",
             [&] { visit(v, o.tracker); });
   v.section("point_matching", "Point matching (Sec. 4.5)", [&] { visit(v, o.point_matching); });
@@ -106,7 +116,9 @@ class FrameTracker {
   /// Hands in the 3D stage of a posed frame, which a later step() may need. False (nothing
   /// kept) when no later frame can use it: not the frame posed last, nor one whose landmark
   /// fusion is due.
-  bool addLifted(FrameFeatures lifted) { return lifted_.add(std::move(lifted)); }
+  /// A rolling-shutter frame (camera.readout_s > 0) is first moved to its stamp with the
+  /// angular velocity it was posed with (rolling_shutter.h).
+  bool addLifted(FrameFeatures lifted);
   /// Whether addLifted() would keep the 3D stage of frame `seq` (checked before decoding).
   bool wantsLifted(int64_t seq) const { return lifted_.wants(seq); }
 
@@ -117,6 +129,8 @@ class FrameTracker {
   /// Landmark fusion runs one frame behind: the 3D stage of frame k refines the keyframe
   /// before frame k+2 is posed, so that frame k+1 never waits for it; the result is the same
   /// whatever the order of arrival (docs/estimator.md, "Poses ahead of the fused depth").
+  /// A rolling-shutter frame is first moved to its stamp with the predicted angular velocity
+  /// (rolling_shutter.h).
   TrackingStep step(const FrameFeatures& current);
 
   /// For callers that have every frame's 3D stage before the next frame: hands in
@@ -134,6 +148,7 @@ class FrameTracker {
   ReferenceRole referenceRole(int64_t seq) const;
 
   const KeyframeStore& keyframes() const { return keyframes_; }
+  const LocalMapper& localMapper() const { return mapper_; }
   const estimator::MotionChain& tracker() const { return tracker_; }
   const TrackingOptions& options() const { return options_; }
   const StageTimings& timings() const { return timings_; }
@@ -145,6 +160,17 @@ class FrameTracker {
     KeyframeReason reason;
   };
 
+  /// The angular velocity a rolling-shutter frame `seq` is compensated with: the mean of the
+  /// last kAngularVelocityFrames posed before it.
+  /// nullopt before any frame was posed.
+  std::optional<Eigen::Vector3d> smoothedAngularVelocity(int64_t seq) const;
+  /// Whether the 3D stage of `seq` (a recent frame) was moved to its stamp.
+  bool recentlyCompensated(int64_t seq) const;
+  /// Whether the reference the next frame is tracked against was moved to its stamp.
+  bool referenceCompensated() const;
+  static constexpr int kAngularVelocityFrames = 4;
+  /// step() on a frame at its stamp (rolling shutter compensated).
+  TrackingStep stepAtStamp(const FrameFeatures& current);
   /// The matches of a reference and a current frame, gated around their positions predicted
   /// by T_curr_ref.
   FeatureMatches match(const FrameFeatures& reference, const FrameFeatures& current,
@@ -155,6 +181,9 @@ class FrameTracker {
   /// Tracks `current` against `reference`, the previous frame's 3D stage.
   estimator::MotionChainOutput trackFromPrevious(const FrameFeatures& reference, const FrameFeatures& current,
                                   TrackingStats& stats);
+  /// The pose of `lifted` (the next keyframe) relative to the active keyframe from lines and
+  /// planes alone, for the local map's bundle adjustment; nullopt when they do not give one.
+  std::optional<MapRelativePose> structureMotion(const FrameFeatures& lifted);
   /// Fuses the observations whose 3D stage is due; the frame it waits for otherwise.
   std::optional<int64_t> fuseDueObservations();
   /// No active keyframe; with keyframes, `next` becomes one once its 3D stage is in.
@@ -167,13 +196,28 @@ class FrameTracker {
   TrackingOptions options_;
   estimator::MotionChain tracker_;
   estimator::PoseEstimator estimator_;
+  estimator::PoseEstimator structure_estimator_;  ///< lines and planes only
+  /// Whether frames are tracked against keyframes (kKeyframe or kLocalMap).
+  bool usesKeyframes() const { return options_.reference != TrackingReference::kFrame; }
+
   KeyframeStore keyframes_;
+  LocalMapper mapper_;
   LiftedStageBuffer lifted_;
   std::optional<PendingKeyframe> pending_keyframe_;
   /// The frame whose estimate against the keyframe was rejected while it waited for the
   /// previous frame's 3D stage (the fallback): not estimated twice.
   std::optional<int64_t> keyframe_rejected_seq_;
   StageTimings timings_;
+  /// Angular velocity (rad/s, camera frame) of the recently posed frames, for the rolling-shutter
+  /// compensation of their 3D stages (oldest first).
+  std::deque<std::pair<int64_t, Eigen::Vector3d>> angular_velocity_;
+  /// Time between consecutive frames (s), from their stamps; 0 until two frames were posed.
+  double frame_interval_s_ = 0;
+  std::optional<std::pair<int64_t, int64_t>> last_posed_stamp_;  ///< (seq, utime)
+  /// The recent frames whose 3D stage was moved to its stamp, and whether the active
+  /// keyframe's was: a frame is compensated only against a compensated reference.
+  std::deque<int64_t> compensated_lifted_;
+  bool keyframe_compensated_ = false;
 };
 
 }  // namespace pplvo::tracking
@@ -185,6 +229,6 @@ struct EnumText<tracking::TrackingReference> {
     return tracking::parseTrackingReference(s, out);
   }
   static std::string name(tracking::TrackingReference r) { return tracking::toString(r); }
-  static const char* choices() { return "frame, keyframe"; }
+  static const char* choices() { return "frame, keyframe, local_map"; }
 };
 }  // namespace pplvo::config

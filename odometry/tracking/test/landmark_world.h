@@ -1,0 +1,122 @@
+#pragma once
+// Fabricated point features with known truth for the tracking tests: a world of landmarks
+// with binary descriptors, observed with pixel noise in 2D and lifted with depth noise in 3D,
+// independently in every frame.
+#include <cmath>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "pplvo/core/features.h"
+#include "pplvo/fixtures/cameras.h"
+
+namespace pplvo::tracking::testing {
+
+using fixtures::kinectVgaCamera;
+
+/// Landmarks on the walls of a 6 x 6 m room around the origin (camera near the centre),
+/// each with a random 256-bit descriptor.
+class LandmarkWorld {
+ public:
+  explicit LandmarkWorld(uint64_t seed, int n = 4000) : rng_(seed) {
+    std::uniform_real_distribution<double> u(-3.0, 3.0), h(-1.2, 1.2);
+    std::uniform_int_distribution<int> byte(0, 255), wall(0, 3);
+    descriptors_.create(n, 32, CV_8U);
+    for (int i = 0; i < n; ++i) {
+      const double a = u(rng_), y = h(rng_);
+      switch (wall(rng_)) {
+        case 0:
+          points_.emplace_back(a, y, 3.0);
+          break;
+        case 1:
+          points_.emplace_back(a, y, -3.0);
+          break;
+        case 2:
+          points_.emplace_back(3.0, y, a);
+          break;
+        default:
+          points_.emplace_back(-3.0, y, a);
+          break;
+      }
+      for (int b = 0; b < 32; ++b)
+        descriptors_.at<uint8_t>(i, b) = static_cast<uint8_t>(byte(rng_));
+    }
+  }
+
+  /// The 2D and 3D stages of a frame seen from T_w_c: the visible landmarks whose index is a
+  /// multiple of `stride` (the same landmarks from every view, as a detector would find),
+  /// pixel noise 0.5 px, depth noise 1.425e-3 z^2 m (Kinect). With `readout_s` > 0 the
+  /// colour rows are read over that time while the camera turns at `angular_velocity` (rad/s,
+  /// camera frame; the middle row at T_w_c): each point where that rolling shutter sees it,
+  /// lifted along that ray (the camera's own readout_s is left 0: the caller sets it).
+  std::pair<FrameFeatures, FrameFeatures> observe(
+      int64_t seq, const Pose3& T_w_c, int stride = 1, double readout_s = 0.0,
+      const Eigen::Vector3d& angular_velocity = Eigen::Vector3d::Zero()) {
+    const PinholeCamera camera = kinectVgaCamera();
+    std::normal_distribution<double> n01(0.0, 1.0);
+    std::vector<int> visible;
+    const Pose3 T_c_w = T_w_c.inverse();
+    for (int i = 0; i < static_cast<int>(points_.size()); i += stride) {
+      const Eigen::Vector3d p = T_c_w * points_[i];
+      if (p.z() < 0.5 || p.z() > 8.0) continue;
+      const Eigen::Vector2d px = camera.project(p);
+      if (px.x() < 5 || px.y() < 5 || px.x() > camera.width - 6 || px.y() > camera.height - 6)
+        continue;
+      visible.push_back(i);
+    }
+    FrameFeatures f2, f3;
+    f2.seq = f3.seq = seq;
+    f2.camera = f3.camera = camera;
+    const std::vector<int>& kept = visible;
+    f2.point_descriptors.create(static_cast<int>(kept.size()), 32, CV_8U);
+    for (size_t k = 0; k < kept.size(); ++k) {
+      Eigen::Vector3d p = T_c_w * points_[kept[k]];
+      if (readout_s > 0 && angular_velocity.norm() > 0) {
+        // The row a point is read on is where it projects at that row's instant.
+        const Eigen::Vector3d p_mid = p;
+        for (int i = 0; i < 20; ++i) {
+          const double v = camera.project(p).y();
+          const double tau = (v - 0.5 * (camera.height - 1)) * readout_s / (camera.height - 1);
+          p = Eigen::AngleAxisd(angular_velocity.norm() * tau, angular_velocity.normalized())
+                  .toRotationMatrix()
+                  .transpose() *
+              p_mid;
+        }
+      }
+      PointFeature f;
+      f.px = camera.project(p) + 0.5 * Eigen::Vector2d(n01(rng_), n01(rng_));
+      f2.points.push_back(f);
+      descriptors_.row(kept[k]).copyTo(f2.point_descriptors.row(static_cast<int>(k)));
+      // The 3D stage: lifted along the observed pixel's ray with depth noise.
+      const double sigma_z = 1.425e-3 * p.z() * p.z();
+      const double z = p.z() + sigma_z * n01(rng_);
+      f.has_3d = true;
+      f.point.p = camera.backproject(f.px.x(), f.px.y(), z);
+      const Eigen::Vector3d ray = f.point.p / z;
+      const double sx = 0.5 * z / camera.fx;
+      f.point.cov = sigma_z * sigma_z * ray * ray.transpose() +
+                    sx * sx *
+                        (Eigen::Matrix3d::Identity() -
+                         Eigen::Vector3d::UnitZ() * Eigen::Vector3d::UnitZ().transpose());
+      f3.points.push_back(f);
+    }
+    f3.point_descriptors = f2.point_descriptors.clone();
+    return {f2, f3};
+  }
+
+ private:
+  std::mt19937_64 rng_;
+  std::vector<Eigen::Vector3d> points_;
+  cv::Mat descriptors_;
+};
+
+inline Pose3 poseOf(const Eigen::Vector3d& t, double yaw_rad, double pitch_rad = 0.0) {
+  Pose3 T = Pose3::Identity();
+  T.linear() = (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+}  // namespace pplvo::tracking::testing
