@@ -82,7 +82,10 @@ class PoseListener {
   }
 
  private:
-  static void print(const pplvo::FramePose& p) {
+  void print(const pplvo::FramePose& p) {
+    // stdout may be a pipe that closes early (`| head -n 3`): printing stops, listening and
+    // the files asked for (--tum, --covariance) go on.
+    if (!stdout_open_) return;
     const Eigen::Vector3d t = p.T_w_c.translation();
     const Eigen::Quaterniond q(p.T_w_c.linear());
     // Standard deviations of the frame-to-frame motion: translation in mm, and the rotation
@@ -95,6 +98,7 @@ class PoseListener {
         t.z(), q.w(), q.x(), q.y(), q.z(), 1e3 * std::sqrt(C(0, 0)), 1e3 * std::sqrt(C(1, 1)),
         1e3 * std::sqrt(C(2, 2)), 2.0 * std::sqrt(C(3, 3)) * 180.0 / M_PI,
         2.0 * std::sqrt(C(4, 4)) * 180.0 / M_PI, 2.0 * std::sqrt(C(5, 5)) * 180.0 / M_PI);
+    if (std::fflush(stdout) != 0) stdout_open_ = false;
   }
 
   lcm::LCM& lcm_;
@@ -102,6 +106,7 @@ class PoseListener {
   pplvo::Trajectory trajectory_;
   std::vector<pplvo::Matrix6d> covariances_;
   int64_t invalid_ = 0;
+  bool stdout_open_ = true;
 };
 
 struct Args {
@@ -188,6 +193,8 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
+  // A reader of stdout that exits (`| head`) must not kill the listener before it writes --tum.
+  std::signal(SIGPIPE, SIG_IGN);
   try {
     lcm::LCM lcm(a.memq_log.empty() ? a.url : std::string("memq://"));
     if (!lcm.good()) throw std::runtime_error("cannot open LCM URL '" + a.url + "'");

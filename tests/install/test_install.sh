@@ -73,6 +73,10 @@ cmp "$tmp/run.txt" "$tmp/file.txt" || fail "pose_listener's trajectory differs f
 awk '!/^#/ && NR > 2 { if ($2 > 0 && $9 > 0 && $16 > 0) good++ } END { exit good > 0 ? 0 : 1 }' \
   "$tmp/file_cov.txt" || fail "no pose with a positive covariance"
 
+step "pose_listener --tum FILE | head -n 3 (the README's line: stdout closes early)"
+"$tmp/example/pose_listener" --log "$tmp/run.lcm" --tum "$tmp/head.txt" | head -n 3 > /dev/null
+cmp "$tmp/run.txt" "$tmp/head.txt" || fail "pose_listener lost its --tum file when stdout closed"
+
 step "pose_listener --replay-memq"
 "$tmp/example/pose_listener" --replay-memq "$tmp/run.lcm" --tum "$tmp/memq.txt" > /dev/null
 cmp "$tmp/run.txt" "$tmp/memq.txt" || fail "memq:// trajectory differs from pplvo-run's"

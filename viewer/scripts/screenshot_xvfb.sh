@@ -3,6 +3,8 @@
 #
 #   viewer/scripts/screenshot_xvfb.sh [BUILD_DIR] [OUT.png]
 #
+# OUT.png defaults to BUILD_DIR/viewer_screenshot.png; the one in docs/images is only replaced
+# when it is named.
 # 1. pplvo-run runs the whole pipeline (player, depth filter, frontend, estimator, in one
 #    process on memq://) on the first 150 frames of the shared TUM sequence and records every
 #    message into an LCM log (--log; no network traffic at all).
@@ -15,7 +17,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 build=${1:-$root/build}
-out=${2:-$root/docs/images/viewer_screenshot.png}
+out=${2:-$build/viewer_screenshot.png}
 data=${PPLVO_SHARED_DATA:-$root/../shared/data}/tum_fr3_sitting_static_short
 for bin in pplvo-run pplvo-viewer; do
   [[ -x $build/bin/$bin ]] || { echo "missing $build/bin/$bin (build it first)" >&2; exit 1; }
