@@ -51,6 +51,7 @@ out="${out:-$build/benchmark_long}"
 suite="$out/suite"
 mkdir -p "$suite" "$out/runs"
 
+# shellcheck disable=SC2054  # the commas are pplvo-synth's list syntax
 effects=(--distortion fr1 --rolling-shutter-ms 25 --exposure-ms 8 --depth-offset-ms -15,-13,16,-16,-12)
 generate() {  # generate NAME ARGS...: a pplvo-synth sequence, unless already there
   local name=$1; shift
@@ -78,7 +79,8 @@ fi
 
 # The same frames with the readout taken out of the calibration: the global-shutter model.
 global_shutter_copy() {  # global_shutter_copy DIR -> prints a folder without the readout
-  local d=$1 g="$out/runs/$(basename "$1")_global_shutter" f
+  local d=$1 g f
+  g="$out/runs/$(basename "$1")_global_shutter"
   mkdir -p "$g"
   for f in rgb depth rgb.txt depth.txt groundtruth.txt associations.txt; do
     [ -e "$d/$f" ] && ln -sfn "$d/$f" "$g/$f"
@@ -114,17 +116,18 @@ for i in "${!names[@]}"; do
   n=${names[$i]}; d=${dirs[$i]}; fps=${fpss[$i]}
   fpsarg=(); [ "$fps" != 0 ] && fpsarg=(--fps "$fps")
   total=$(awk '!/^#/ && NF' "$d/rgb.txt" | wc -l)
-  exact=0; { [[ "$d" == "$suite"/* ]] || [ "$fps" != 0 ]; } && exact=1
+  rendered=0; { [[ "$d" == "$suite"/* ]] || [ "$fps" != 0 ]; } && rendered=1
   metres=$(path_length "$d/groundtruth.txt")
   pplvo_row() {  # pplvo_row LABEL DATASET ARGS...
     local label=$1 data=$2; shift 2
-    local base="$out/runs/$n.$(echo "$label" | tr -c 'a-z0-9' _)"
+    local base
+    base="$out/runs/$n.$(echo "$label" | tr -c 'a-z0-9' _)"
     if ! "$bin/pplvo-run" --dataset "$data" "${fpsarg[@]}" "$@" --output "$base.txt" \
          --covariance "$base.cov" --quiet --no-progress 2> "$base.log"; then
       row "| $n | $label | failed (see $base.log) | | | | | |"; return
     fi
     read -r a t r p < <(eval_line "$d/groundtruth.txt" "$base.txt" "$fps")
-    read -r nm ns < <(nees_cell "$d/groundtruth.txt" "$base.cov" "$fps" "$exact")
+    read -r nm ns < <(nees_cell "$d/groundtruth.txt" "$base.cov" "$fps" "$rendered")
     local drift; drift=$(awk -v a="$a" -v m="$metres" 'BEGIN { if (a == "-" || m <= 0) print "-"; else printf "%.2f %%", 100 * a / m }')
     row "| $n | $label | $a | $t | $r | $p / $total | $nm / $ns | $drift |"
   }
