@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 
 #include "pplvo/dataset/dataset.h"
 #include "pplvo/eval/nees.h"
@@ -69,6 +70,41 @@ TEST_F(RunPipelineTest, EqualsTheLcmFreePipelineWithVerbatimStamps) {
     EXPECT_LT((r.trajectory[i].T_w_c.matrix() - d.pose.T_w_c.matrix()).cwiseAbs().maxCoeff(), 1e-6)
         << "frame " << i;
   }
+}
+
+TEST_F(RunPipelineTest, CameraFileReplacesAMissingCalibration) {
+  // The same frames in a folder without calib_params.xml (as from TUM's official download),
+  // its camera given as a YAML file: the trajectory is the same, bit for bit.
+  const fs::path bare = fs::path(sequenceDir()).string() + "_bare";
+  fs::remove_all(bare);
+  fs::create_directories(bare);
+  for (const auto& entry : fs::directory_iterator(sequenceDir())) {
+    if (entry.path().filename() == "calib_params.xml") continue;
+    fs::create_symlink(entry.path(), bare / entry.path().filename());
+  }
+  const PinholeCamera c = dataset::Dataset::open(sequenceDir()).camera().camera;
+  const fs::path yaml = bare.string() + ".yaml";
+  std::ofstream(yaml) << std::setprecision(17) << "width: " << c.width << "\nheight: " << c.height
+                      << "\nfx: " << c.fx << "\nfy: " << c.fy << "\ncx: " << c.cx
+                      << "\ncy: " << c.cy << "\ndepth_scale: 5000\n";
+  RunOptions with_calib;
+  with_calib.dataset_dir = sequenceDir();
+  with_calib.max_frames = 6;
+  RunOptions with_camera = with_calib;
+  with_camera.dataset_dir = bare.string();
+  const RunResult without_file = runPipeline(with_camera);
+  EXPECT_TRUE(without_file.failed);  // no calibration at all: a clear error
+  EXPECT_NE(without_file.error.find("--camera"), std::string::npos) << without_file.error;
+  with_camera.camera_file = yaml.string();
+  const RunResult a = runPipeline(with_calib), b = runPipeline(with_camera);
+  ASSERT_FALSE(b.failed) << b.error;
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  for (size_t i = 0; i < a.trajectory.size(); ++i) {
+    EXPECT_EQ(a.trajectory[i].T_w_c.matrix(), b.trajectory[i].T_w_c.matrix()) << i;
+  }
+  EXPECT_EQ(parseRunArgs({"--dataset", "d", "--camera", "c.yaml"}).options.camera_file, "c.yaml");
+  fs::remove_all(bare);
+  fs::remove(yaml);
 }
 
 TEST_F(RunPipelineTest, FramesInFlightDoNotChangeTheTrajectory) {

@@ -643,6 +643,35 @@ TEST(Camera, YamlCameraFile) {
   EXPECT_THROW(Dataset::open(t.str(), opt), DatasetError);
 }
 
+// The camera files shipped in config/cameras load as valid cameras; those of the shared
+// sequences' sensors equal their calib_params.xml (TUM fr1, ICL-NUIM).
+TEST(Camera, ShippedCameraFilesLoadAndMatchTheSharedCalibrations) {
+  const char* src = std::getenv("PPLVO_SOURCE_DIR");
+  ASSERT_NE(src, nullptr);
+  const fs::path dir = fs::path(src) / "config" / "cameras";
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() != ".yaml") continue;
+    const DatasetCamera c = loadCameraYaml(entry.path().string());
+    EXPECT_TRUE(c.camera.valid()) << entry.path();
+    EXPECT_EQ(c.camera.width, 640) << entry.path();
+    EXPECT_GT(c.depth_scale, 0.0) << entry.path();
+    ++files;
+  }
+  EXPECT_GE(files, 5);
+  const std::pair<const char*, const char*> same[] = {
+      {"tum_fr1.yaml", "tum_fr1_xyz_short"}, {"icl_nuim.yaml", "icl_living_room_kt0_short"}};
+  for (const auto& [file, folder] : same) {
+    const DatasetCamera shipped = loadCameraYaml((dir / file).string());
+    DatasetCamera shared = loadCalibParamsXml(sharedData() + "/" + folder + "/calib_params.xml");
+    // The XML leaves the size to the images.
+    shared.camera.width = 640;
+    shared.camera.height = 480;
+    EXPECT_EQ(shipped.camera, shared.camera) << file;
+    EXPECT_EQ(shipped.depth_scale, shared.depth_scale) << file;
+  }
+}
+
 // The shared datasets' calib_params.xml carry IR_*, Rotation and Translation with registered
 // depth: unregistered depth only with an explicit depth_registered 0.
 TEST(Camera, UnregisteredDepthOnlyWhenTheFileSaysSo) {

@@ -13,6 +13,7 @@ RunArgs parseRunArgs(const std::vector<std::string>& args) {
   ArgParser p;
   pipeline::addPipelineOptions(p, &pa);
   p.option("--dataset", &o.dataset_dir)
+      .option("--camera", &o.camera_file)
       .option("--output", &o.output)
       .option("--summary", &o.summary)
       .option("--log", &o.log)
@@ -43,6 +44,9 @@ std::string runUsage() {
              "every frame processed in order; writes the TUM trajectory and prints per-stage "
              "timing.\n"
              "  --dataset DIR           TUM-layout folder (rgb.txt/depth.txt or associations.txt)\n"
+             "  --camera FILE           camera file (YAML, or .xml) instead of "
+             "DIR/calib_params.xml;\n"
+             "                          config/cameras/ has TUM fr1/fr2/fr3, ICL-NUIM, Kinect v1\n"
              "  --output TRAJ           TUM trajectory (stamp tx ty tz qx qy qz qw), stamps "
              "verbatim\n"
              "  --max-frames N          stop after N frames (0 = all)\n"

@@ -203,6 +203,7 @@ RunResult runPipeline(const RunOptions& options) {
 
     player::PlayerOptions po;
     po.dataset_dir = options.dataset_dir;
+    po.camera_file = options.camera_file;
     po.rate = 0.0;  // as fast as possible
     // Every handler runs in this thread (the fusion and the extraction on workers): the player
     // dispatches memq's messages one at a time and publishes the next frame as soon as fewer

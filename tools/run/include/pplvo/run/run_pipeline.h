@@ -21,6 +21,9 @@ namespace pplvo::run {
 
 struct RunOptions {
   std::string dataset_dir;  ///< --dataset
+  /// --camera: camera file (YAML, or calib_params.xml) instead of DATASET/calib_params.xml,
+  /// e.g. config/cameras/tum_fr1.yaml for a TUM folder from the official download.
+  std::string camera_file;
   std::string output;       ///< --output: TUM trajectory (empty: not written)
   std::string summary;      ///< --summary: YAML run summary (empty: not written)
   std::string log;          ///< --log: every message as an LCM event log (for replay)
