@@ -6,19 +6,12 @@
 #include <random>
 
 #include "pplvo/estimator/local_bundle_adjustment.h"
+#include "pplvo/fixtures/cameras.h"
 
 namespace pplvo::estimator {
 namespace {
 
-PinholeCamera vga() {
-  PinholeCamera c;
-  c.width = 640;
-  c.height = 480;
-  c.fx = c.fy = 525;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  return c;
-}
+using fixtures::kinectVgaCamera;
 
 Pose3 poseAt(double x, double yaw_deg) {
   Pose3 T = Pose3::Identity();
@@ -45,7 +38,7 @@ struct Scene {
 
 Scene makeScene(bool noisy, bool pixels_after_first) {
   Scene s;
-  s.problem.camera = vga();
+  s.problem.camera = kinectVgaCamera();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::normal_distribution<double> n(0.0, 1.0);
@@ -149,7 +142,7 @@ TEST(LocalBundleAdjustment, InvalidObservationsAreLeftOut) {
 TEST(LocalBundleAdjustment, RelativePoseAloneSetsTheKeyframe) {
   // Two keyframes and no points: the free one lands where the measured relative pose puts it.
   BundleProblem problem;
-  problem.camera = vga();
+  problem.camera = kinectVgaCamera();
   const Pose3 truth = poseAt(0.2, 5.0);
   problem.keyframes = {{Pose3::Identity(), true},
                        {perturbed(truth, Eigen::Vector3d(0.03, 0.01, -0.02), 2.0), false}};

@@ -78,8 +78,8 @@ estimator::MotionChainOutput FrameTracker::restart(const FrameFeatures& current)
 }
 
 FeatureMatches FrameTracker::match(const FrameFeatures& reference, const FrameFeatures& current,
-                                   const Pose3& T_curr_ref) {
-  const estimator::PoseEstimatorOptions& use = options_.tracker.estimator;
+                                   const Pose3& T_curr_ref,
+                                   const estimator::PoseEstimatorOptions& use) {
   FeatureMatches m;
   if (use.use_points && !reference.points.empty() && !current.points.empty()) {
     ScopedStageTimer t(timings_, "match_points");
@@ -162,8 +162,8 @@ std::optional<MapRelativePose> FrameTracker::structureMotion(const FrameFeatures
     return std::nullopt;
   }
   const Pose3 T_new_kf_predicted = tracker_.T_w_c().inverse() * keyframe->T_w_kf;
-  FeatureMatches matches = match(keyframe->landmarks, lifted, T_new_kf_predicted);
-  matches.points.clear();
+  const FeatureMatches matches = match(keyframe->landmarks, lifted, T_new_kf_predicted,
+                                       structure_estimator_.options());
   if (matches.lines.empty() && matches.planes.empty()) return std::nullopt;
   const estimator::PoseEstimate est = structure_estimator_.estimate(
       estimator::buildCorrespondences(keyframe->landmarks, lifted, matches,
@@ -213,6 +213,7 @@ bool FrameTracker::recentlyCompensated(int64_t seq) const {
 }
 
 bool FrameTracker::addLifted(FrameFeatures lifted) {
+  if (!lifted_.wants(lifted.seq)) return false;  // not compensated for nothing
   if (lifted.camera.readout_s > 0) {
     if (const std::optional<Eigen::Vector3d> w = smoothedAngularVelocity(lifted.seq)) {
       compensateRollingShutter(lifted, *w);
@@ -358,7 +359,8 @@ void FrameTracker::finishStep(const FrameFeatures& current, TrackingStats& stats
 estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures& reference,
                                               const FrameFeatures& current, TrackingStats& stats) {
   const Pose3 T_curr_prev_predicted = tracker_.predictedMotion();
-  const FeatureMatches matches = match(reference, current, T_curr_prev_predicted);
+  const FeatureMatches matches =
+      match(reference, current, T_curr_prev_predicted, options_.tracker.estimator);
   countMatches(matches, stats);
   stats.reference_seq = reference.seq;
   ScopedStageTimer t(timings_, "pose");
@@ -381,7 +383,8 @@ std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(const 
   // The tracker's pose is the previous frame's: T_prev_kf chains the prediction.
   const Pose3 T_prev_kf = tracker_.T_w_c().inverse() * keyframe.T_w_kf;
   const Pose3 T_curr_kf_predicted = tracker_.predictedMotion() * T_prev_kf;
-  const FeatureMatches matches = match(keyframe.landmarks, current, T_curr_kf_predicted);
+  const FeatureMatches matches =
+      match(keyframe.landmarks, current, T_curr_kf_predicted, options_.tracker.estimator);
   countMatches(matches, stats);
   stats.reference_seq = keyframe.seq();
   estimator::PoseEstimate est;

@@ -181,9 +181,9 @@ void LocalMapper::adjust(KeyframeInsertion& out) {
     problem.landmarks_w.push_back(p.p_w);
     bool first = true;
     for (const MapObservation& o : p.observations) {
-      // The first observation places the landmark in depth; the others are pixels unless
-      // every depth is to be used.
-      const bool use_depth = first || options_.depth_in_every_observation;
+      // The first observation places the landmark in depth; the others are pixels (their
+      // depth, lifted on depth fused with the same poses, is not an independent measurement).
+      const bool use_depth = first;
       first = false;
       problem.observations.push_back({index_of.at(o.keyframe_seq), static_cast<int>(l), o.p_kf,
                                       o.cov_kf, use_depth, o.sigma_px});

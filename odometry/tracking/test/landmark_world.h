@@ -2,17 +2,38 @@
 // Fabricated point features with known truth for the tracking tests: a world of landmarks
 // with binary descriptors, observed with pixel noise in 2D and lifted with depth noise in 3D,
 // independently in every frame.
+#include <unistd.h>
+
+#include <Eigen/Geometry>
 #include <cmath>
+#include <fstream>
 #include <random>
 #include <utility>
 #include <vector>
 
 #include "pplvo/core/features.h"
 #include "pplvo/fixtures/cameras.h"
+#include "pplvo/tracking/frame_tracker.h"
 
 namespace pplvo::tracking::testing {
 
 using fixtures::kinectVgaCamera;
+
+/// Where a rolling shutter that reads its rows over `readout_s` (middle row at the stamp) sees
+/// the point p_mid (camera frame at the stamp) while the camera turns at `w` (rad/s, camera
+/// frame): in the frame of the camera that read its row. The row is where the point projects
+/// at that row's instant (a fixed point; converges in a few steps).
+inline Eigen::Vector3d rollingShutterView(const PinholeCamera& camera, double readout_s,
+                                          const Eigen::Vector3d& w, const Eigen::Vector3d& p_mid) {
+  if (!(readout_s > 0) || !(w.norm() > 0)) return p_mid;
+  Eigen::Vector3d p = p_mid;
+  for (int i = 0; i < 20; ++i) {
+    const double v = camera.project(p).y();
+    const double tau = (v - 0.5 * (camera.height - 1)) * readout_s / (camera.height - 1);
+    p = Eigen::AngleAxisd(w.norm() * tau, w.normalized()).toRotationMatrix().transpose() * p_mid;
+  }
+  return p;
+}
 
 /// Landmarks on the walls of a 6 x 6 m room around the origin (camera near the centre),
 /// each with a random 256-bit descriptor.
@@ -70,19 +91,8 @@ class LandmarkWorld {
     const std::vector<int>& kept = visible;
     f2.point_descriptors.create(static_cast<int>(kept.size()), 32, CV_8U);
     for (size_t k = 0; k < kept.size(); ++k) {
-      Eigen::Vector3d p = T_c_w * points_[kept[k]];
-      if (readout_s > 0 && angular_velocity.norm() > 0) {
-        // The row a point is read on is where it projects at that row's instant.
-        const Eigen::Vector3d p_mid = p;
-        for (int i = 0; i < 20; ++i) {
-          const double v = camera.project(p).y();
-          const double tau = (v - 0.5 * (camera.height - 1)) * readout_s / (camera.height - 1);
-          p = Eigen::AngleAxisd(angular_velocity.norm() * tau, angular_velocity.normalized())
-                  .toRotationMatrix()
-                  .transpose() *
-              p_mid;
-        }
-      }
+      const Eigen::Vector3d p =
+          rollingShutterView(camera, readout_s, angular_velocity, T_c_w * points_[kept[k]]);
       PointFeature f;
       f.px = camera.project(p) + 0.5 * Eigen::Vector2d(n01(rng_), n01(rng_));
       f2.points.push_back(f);
@@ -117,6 +127,23 @@ inline Pose3 poseOf(const Eigen::Vector3d& t, double yaw_rad, double pitch_rad =
                    .toRotationMatrix();
   T.translation() = t;
   return T;
+}
+
+/// Tracking options with points only (the fabricated world has no lines or planes).
+inline TrackingOptions pointsOnly(TrackingReference reference) {
+  TrackingOptions o;
+  o.reference = reference;
+  o.tracker.estimator.use_lines = false;
+  o.tracker.estimator.use_planes = false;
+  return o;
+}
+
+/// Resident memory of this process (KiB), for the bounded-memory tests.
+inline long residentKiB() {
+  std::ifstream statm("/proc/self/statm");
+  long pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
 }  // namespace pplvo::tracking::testing

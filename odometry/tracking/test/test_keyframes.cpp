@@ -4,10 +4,8 @@
 // Keyframes are taken where the rule says, drift stays bounded where frame-to-frame
 // accumulates, a lost keyframe falls back to the previous frame, and the state stays bounded.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
-#include <fstream>
 #include <random>
 #include <string>
 
@@ -20,14 +18,9 @@ namespace {
 
 using testing::LandmarkWorld;
 using testing::poseOf;
+using testing::pointsOnly;
+using testing::residentKiB;
 
-TrackingOptions pointsOnly(TrackingReference reference) {
-  TrackingOptions o;
-  o.reference = reference;
-  o.tracker.estimator.use_lines = false;
-  o.tracker.estimator.use_planes = false;
-  return o;
-}
 
 struct RunResult {
   std::vector<estimator::MotionChainOutput> outputs;
@@ -193,12 +186,6 @@ TEST(Keyframes, LostKeyframeFallsBackToThePreviousFrame) {
   EXPECT_LT(r.max_error_deg, 2.0);
 }
 
-long residentKiB() {
-  std::ifstream statm("/proc/self/statm");
-  long pages = 0, resident = 0;
-  statm >> pages >> resident;
-  return resident * (sysconf(_SC_PAGESIZE) / 1024);
-}
 
 TEST(Keyframes, StateStaysBoundedOver2000Frames) {
   // A 2,000-frame walk around the room: the keyframe is always recent, memory does not grow.

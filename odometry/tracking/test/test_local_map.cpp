@@ -3,10 +3,8 @@
 // (landmark_world.h): the store's bookkeeping, landmarks re-used when the camera returns to
 // an earlier place, drift below a single keyframe's on a loop, determinism, bounded memory.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
-#include <fstream>
 #include <set>
 
 #include "landmark_world.h"
@@ -18,6 +16,8 @@ namespace {
 
 using testing::LandmarkWorld;
 using testing::poseOf;
+using testing::pointsOnly;
+using testing::residentKiB;
 
 MapObservation observationAt(int64_t seq, const Eigen::Vector3d& p, double sigma = 0.01) {
   return {seq, p, sigma * sigma * Eigen::Matrix3d::Identity(), 0.5};
@@ -56,13 +56,6 @@ TEST(LocalMap, KeepsObservationsAndForgetsWhatNoKeyframeSees) {
   EXPECT_TRUE(map.keyframe(5)->point_ids.empty());
 }
 
-TrackingOptions pointsOnly(TrackingReference reference) {
-  TrackingOptions o;
-  o.reference = reference;
-  o.tracker.estimator.use_lines = false;
-  o.tracker.estimator.use_planes = false;
-  return o;
-}
 
 /// Two turns of a circle of 1.5 m radius looking outwards at the walls (500 frames a turn):
 /// the second turn passes every place of the first.
@@ -139,12 +132,6 @@ TEST(LocalMap, TrackingIsDeterministic) {
   }
 }
 
-long residentKiB() {
-  std::ifstream statm("/proc/self/statm");
-  long pages = 0, resident = 0;
-  statm >> pages >> resident;
-  return resident * (sysconf(_SC_PAGESIZE) / 1024);
-}
 
 TEST(LocalMap, MemoryStaysBounded) {
   // Eight turns (2,000 frames) with at most 30 keyframes in the map.

@@ -17,20 +17,6 @@ using testing::poseOf;
 
 constexpr double kReadout = 0.030;  // s, a Kinect v1 colour camera's order
 
-/// The pixel of X_mid (camera frame at the stamp) as a rolling shutter reads it while the
-/// camera turns at w: the row where the point is seen is where it projects at that row's
-/// instant (fixed point, converges in a few steps).
-Eigen::Vector2d rollingShutterPixel(const PinholeCamera& camera, const Eigen::Vector3d& w,
-                                    const Eigen::Vector3d& X_mid) {
-  Eigen::Vector2d px = camera.project(X_mid);
-  for (int i = 0; i < 20; ++i) {
-    const double tau = rowTime(camera, px.y());
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(w.norm() * tau, w.normalized()).toRotationMatrix();
-    px = camera.project(R.transpose() * X_mid);
-  }
-  return px;
-}
-
 TEST(RollingShutter, RowTimeIsZeroAtTheMiddleRowAndSpansTheReadout) {
   PinholeCamera c = kinectVgaCamera();
   EXPECT_EQ(rowTime(c, 100), 0.0);  // global shutter
@@ -60,7 +46,7 @@ TEST(RollingShutter, FeaturesMoveToTheGlobalShutterView) {
     const Eigen::Vector3d X(-1.0 + 0.05 * i, -0.7 + 0.035 * i, 2.0 + 0.02 * i);
     truth.push_back(X);
     PointFeature p;
-    p.px = rollingShutterPixel(camera, w, X);
+    p.px = camera.project(testing::rollingShutterView(camera, kReadout, w, X));
     p.has_3d = true;
     // Lifted along the ray it was read on, at the right distance.
     p.point.p = camera.ray(p.px.x(), p.px.y()).normalized() * X.norm();
@@ -97,12 +83,7 @@ TEST(RollingShutter, TrackingAFastTurnNeedsTheReadout) {
   }
   auto run = [&](double readout_s) {
     testing::LandmarkWorld world(5);
-    FrameTracker tracker([] {
-      TrackingOptions o;
-      o.tracker.estimator.use_lines = false;
-      o.tracker.estimator.use_planes = false;
-      return o;
-    }());
+    FrameTracker tracker(testing::pointsOnly(TrackingReference::kKeyframe));
     FrameFeatures reference;
     double worst_deg = 0, worst_m = 0;
     for (int k = 0; k < static_cast<int>(truth.size()); ++k) {

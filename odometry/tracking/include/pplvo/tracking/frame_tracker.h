@@ -172,9 +172,9 @@ class FrameTracker {
   /// step() on a frame at its stamp (rolling shutter compensated).
   TrackingStep stepAtStamp(const FrameFeatures& current);
   /// The matches of a reference and a current frame, gated around their positions predicted
-  /// by T_curr_ref.
+  /// by T_curr_ref, of the families `use` selects.
   FeatureMatches match(const FrameFeatures& reference, const FrameFeatures& current,
-                       const Pose3& T_curr_ref);
+                       const Pose3& T_curr_ref, const estimator::PoseEstimatorOptions& use);
   /// The estimate of T_curr_prev through the active keyframe, or nullopt when rejected.
   std::optional<estimator::PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
                                                    TrackingStats& stats);

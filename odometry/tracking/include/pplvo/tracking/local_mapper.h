@@ -38,9 +38,6 @@ struct LocalMapOptions {
   int max_keyframes = 200;
   /// Association of a keyframe's points with the landmarks projected into it (pixels).
   double association_px = 8.0;
-  /// Bundle adjustment uses the depth of every observation (a 3D residual each), not only of
-  /// the landmark's first one (the others as pixels).
-  bool depth_in_every_observation = false;
 };
 
 template <class V>
@@ -63,9 +60,6 @@ void visit(V& v, LocalMapOptions& o) {
           config::between(2, 100000));
   v.field("association_px", o.association_px,
           "gate of a keyframe point around a landmark's projection (px)", config::positive());
-  v.field("depth_in_every_observation", o.depth_in_every_observation,
-          "bundle adjustment uses every observation's depth (3D residuals), not only the "
-          "first one's (the others as pixels)");
 }
 
 /// What inserting a keyframe did.
