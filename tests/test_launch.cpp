@@ -212,6 +212,12 @@ TEST(LaunchUrl, Policy) {
   EXPECT_TRUE(d.errors.empty());
   ASSERT_EQ(d.warnings.size(), 1u);  // ttl > 0 on the host: warned
   EXPECT_NE(d.warnings[0].find("ttl=1"), std::string::npos);
+  EXPECT_NE(d.warnings[0].find("frames, depth maps and features stay"), std::string::npos);
+  o.single_url = true;
+  d = decideLcmUrl(o, nullptr);
+  ASSERT_EQ(d.warnings.size(), 1u);
+  EXPECT_NE(d.warnings[0].find("every channel leaves this host"), std::string::npos);
+  o.single_url = false;
   o.lcm_url.clear();
   d = decideLcmUrl(o, "memq://");
   ASSERT_EQ(d.errors.size(), 1u);  // memq cannot connect processes
@@ -334,6 +340,12 @@ TEST(LaunchUrl, FrameChannelRoutesNeedFreePorts) {
   error.clear();
   EXPECT_EQ(frameChannelRoutes("udpm://239.255.76.67:65531", &error).size(), 5u);
   EXPECT_TRUE(error.empty());
+  // Frames stay on the host whatever the main URL's reach; the other options are kept.
+  EXPECT_EQ(frameChannelRoutes("udpm://239.255.76.67:7667?ttl=1&recv_buf_size=4194304", &error)
+                .front(),
+            "PPLVO_RGBD=udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304");
+  EXPECT_EQ(frameChannelRoutes("udpm://239.255.76.67:7667?recv_buf_size=9", &error).back(),
+            "PPLVO_FEATURES_3D=udpm://239.255.76.67:7671?recv_buf_size=9");
   error.clear();
   EXPECT_TRUE(frameChannelRoutes("memq://", &error).empty());
   EXPECT_FALSE(error.empty());
@@ -407,6 +419,23 @@ TEST(LaunchReport, StrayFramesAreAFault) {
   ASSERT_EQ(r.faults().size(), 1u);
   EXPECT_NE(r.faults()[0].find("pplvo-depth-filter skipped 2 stray frame(s)"), std::string::npos);
   EXPECT_NE(r.text().find("launch.fault: pplvo-depth-filter skipped 2 stray"), std::string::npos);
+}
+
+TEST(LaunchReport, BlockedPublishesAreAFault) {
+  LaunchReport r;
+  LaunchReport::Process p;
+  p.name = kPlayer;
+  p.has_counts = true;
+  p.counts.known = p.counts.final = true;
+  p.exit = ExitInfo{true, 0, false, 0};
+  r.processes.push_back(p);
+  EXPECT_TRUE(r.faults().empty());
+  r.processes[0].counts.blocked_publishes = 40;
+  r.processes[0].counts.blocked_publish_max_ms = 912.4;
+  ASSERT_EQ(r.faults().size(), 1u);
+  EXPECT_NE(r.text().find("launch.fault: pplvo-player: 40 publish(es) blocked, up to 912 ms"),
+            std::string::npos)
+      << r.text();
 }
 
 TEST(LaunchReport, OverloadFusions) {

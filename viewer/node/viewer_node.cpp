@@ -387,8 +387,9 @@ void ViewerNode::writeOutputs(const cv::Mat& canvas) {
 void ViewerNode::publishStatus() {
   if (!options_.publish_status) return;
   msgs::guarded(counters_, options_.node_name.c_str(), [&] {
-    const pplvo_msgs::node_status_t msg =
+    pplvo_msgs::node_status_t msg =
         msgs::toStatusMsg(options_.node_name, counters_, timings_, hostUtime());
+    msgs::appendBlockedPublishes(bus_, &msg);
     bus_.publish(options_.status_channel, &msg);
   });
   last_status_ = Clock::now();

@@ -224,6 +224,7 @@ class CameraPublisher {
       pm::NodeCounters c = counters_;
       c.frames_dropped += backend_dropped;
       auto msg = pm::toStatusMsg(kNodeName, c, timings_, pplvo::hostUtime(), final);
+      pm::appendBlockedPublishes(bus_, &msg);
       bus_.publish(options_.status_channel, &msg);
     });
   }

@@ -332,8 +332,9 @@ void PlayerNode::periodic(bool force) {
   if (force || now - last_status_s_ >= options_.status_period_s) {
     last_status_s_ = now;
     // Forced only as the player ends: its final status.
-    const auto msg =
+    auto msg =
         msgs::toStatusMsg(options_.node_name, counters_, timings_, hostUtime(), /*final=*/force);
+    msgs::appendBlockedPublishes(bus_, &msg);
     bus_.publish(options_.status_channel, &msg);
   }
   if (options_.progress && (force || now - last_progress_s_ >= 0.25)) {

@@ -270,7 +270,8 @@ void DepthFilterNode::publishStatus(int64_t utime, bool final) {
     if (counters_.last_warning.empty() && !fusion_.valid() && !ogm_.stats().last_warning.empty()) {
       counters_.last_warning = ogm_.stats().last_warning;
     }
-    const pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, timings_, utime, final);
+    pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, timings_, utime, final);
+    msgs::appendBlockedPublishes(bus_, &m);
     bus_.publish(options_.status_channel, &m);
   });
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -50,6 +51,55 @@ ArgParser& addRouteOption(ArgParser& parser, std::vector<ChannelRoute>* routes) 
     setRoute(routes, r);
     return "";
   });
+}
+
+bool BlockedPublishLog::record(const std::string& channel, double elapsed_ms) {
+  if (!(elapsed_ms > kBlockedPublishMs)) return false;
+  std::lock_guard<std::mutex> lock(mutex_);
+  BlockedPublishes& b = channels_[channel];
+  if (b.count == 0) {
+    b.channel = channel;
+    std::fprintf(stderr,
+                 "warning: publishing %s blocked for %.0f ms: the link or a receiver is slower "
+                 "than the data (counted in the status as %s)\n",
+                 channel.c_str(), elapsed_ms, blockedPublishStage(channel).c_str());
+  }
+  ++b.count;
+  b.last_ms = elapsed_ms;
+  b.total_ms += elapsed_ms;
+  b.max_ms = std::max(b.max_ms, elapsed_ms);
+  return true;
+}
+
+std::vector<BlockedPublishes> BlockedPublishLog::channels() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<BlockedPublishes> out;
+  for (const auto& [channel, b] : channels_) out.push_back(b);
+  return out;
+}
+
+std::string blockedPublishStage(const std::string& channel) {
+  return "publish_blocked:" + channel;
+}
+
+void appendBlockedPublishes(const Bus& bus, pplvo_msgs::node_status_t* status) {
+  for (const BlockedPublishes& b : bus.blockedPublishes()) {
+    pplvo_msgs::stage_timing_t t;
+    t.name = blockedPublishStage(b.channel);
+    t.count = b.count;
+    t.last_ms = b.last_ms;
+    t.mean_ms = b.total_ms / static_cast<double>(b.count);
+    t.max_ms = b.max_ms;
+    status->stages.push_back(t);
+  }
+  status->n_stages = static_cast<int32_t>(status->stages.size());
+}
+
+void Bus::notePublishTime(const std::string& channel,
+                          std::chrono::steady_clock::time_point start) const {
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  routing_->blocked.record(channel, ms);
 }
 
 bool isChannelPattern(const std::string& channel) {

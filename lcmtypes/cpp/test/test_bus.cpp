@@ -88,6 +88,35 @@ TEST(Bus, OneInstanceCarriesEverything) {
   EXPECT_EQ(r.channels.size(), 2u);
 }
 
+// A send held up by a slow link is counted per channel and reaches the node's status.
+TEST(BlockedPublishLog, CountsOnlyPublishesSlowerThanTheBound) {
+  BlockedPublishLog log;
+  EXPECT_FALSE(log.record("PPLVO_RGBD", 3.0));  // a frame on loopback
+  EXPECT_FALSE(log.record("PPLVO_RGBD", kBlockedPublishMs));
+  EXPECT_TRUE(log.channels().empty());
+  EXPECT_TRUE(log.record("PPLVO_RGBD", 250.0));
+  EXPECT_TRUE(log.record("PPLVO_RGBD", 150.0));
+  EXPECT_TRUE(log.record("PPLVO_DEPTH_CGM", 400.0));
+  const std::vector<BlockedPublishes> c = log.channels();
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c[1].channel, "PPLVO_RGBD");
+  EXPECT_EQ(c[1].count, 2);
+  EXPECT_DOUBLE_EQ(c[1].max_ms, 250.0);
+  EXPECT_DOUBLE_EQ(c[1].last_ms, 150.0);
+  EXPECT_DOUBLE_EQ(c[1].total_ms, 400.0);
+  EXPECT_EQ(c[0].count, 1);
+}
+
+TEST(BlockedPublishLog, AnUnblockedBusAddsNoStage) {
+  lcm::LCM lcm("memq://");
+  const Bus bus(lcm);
+  pplvo_msgs::node_status_t status;
+  status.n_stages = 0;
+  appendBlockedPublishes(bus, &status);
+  EXPECT_EQ(status.n_stages, 0);  // nothing published, nothing blocked
+  EXPECT_EQ(blockedPublishStage("PPLVO_RGBD"), "publish_blocked:PPLVO_RGBD");
+}
+
 TEST(Bus, RoutedChannelTravelsOnItsOwnInstance) {
   lcm::LCM main_lcm("memq://"), frames("memq://");
   Bus bus(main_lcm);

@@ -281,8 +281,8 @@ StageTimings FrontendNode::allTimings() const {
 
 void FrontendNode::publishStatus(int64_t utime, bool final) {
   msgs::guarded(counters_, kName, [&] {
-    const pplvo_msgs::node_status_t m =
-        msgs::toStatusMsg(kName, counters_, allTimings(), utime, final);
+    pplvo_msgs::node_status_t m = msgs::toStatusMsg(kName, counters_, allTimings(), utime, final);
+    msgs::appendBlockedPublishes(bus_, &m);
     bus_.publish(options_.status_channel, &m);
   });
 }

@@ -52,6 +52,10 @@ NodeCounts countsOf(const pplvo_msgs::node_status_t& m) {
   for (const pplvo_msgs::stage_timing_t& t : m.stages) {
     if (t.name == "ogm_shortened") c.shortened_fusions = t.count;
     if (t.name == "stray_frame") c.stray_frames = t.count;
+    if (t.name.rfind("publish_blocked:", 0) == 0) {
+      c.blocked_publishes += t.count;
+      c.blocked_publish_max_ms = std::max(c.blocked_publish_max_ms, t.max_ms);
+    }
   }
   return c;
 }

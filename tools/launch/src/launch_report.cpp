@@ -117,6 +117,14 @@ std::vector<std::string> LaunchReport::faults() const {
       f.push_back(p.name + " skipped " + std::to_string(p.counts.stray_frames) +
                   " stray frame(s) (forged, or a second source on the frame channel)");
     }
+    if (p.has_counts && p.counts.blocked_publishes > 0) {
+      std::snprintf(buf, sizeof buf,
+                    "%s: %lld publish(es) blocked, up to %.0f ms (a link or receiver slower than "
+                    "the data; docs/networking.md)",
+                    p.name.c_str(), static_cast<long long>(p.counts.blocked_publishes),
+                    p.counts.blocked_publish_max_ms);
+      f.push_back(buf);
+    }
     if (p.exit && !p.stop_requested && !p.exit->clean()) {
       f.push_back(p.name + " ended early (" + p.exit->text() + ")" +
                   (p.restarted ? ", restarted" : ""));

@@ -128,11 +128,33 @@ UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url
   if (o.isolated && u.ttl > 0) {
     d.errors.push_back("--isolated needs a loopback URL (udpm with ttl=0), not '" + d.url + "'");
   } else if (!o.isolated && u.ttl > 0) {
-    d.warnings.push_back("LCM URL '" + d.url + "' has ttl=" + std::to_string(u.ttl) +
-                         ": traffic leaves this host (use --isolated for tests and demos)");
+    d.warnings.push_back(
+        "LCM URL '" + d.url + "' has ttl=" + std::to_string(u.ttl) + ": " +
+        (o.single_url ? std::string("every channel leaves this host, frames and depth maps "
+                                    "included (~6.8 MB a 640x480 frame)")
+                      : std::string("poses, statuses and stream events leave this host; "
+                                    "frames, depth maps and features stay on it (ttl=0)")) +
+        " (use --isolated for tests and demos)");
   }
   return d;
 }
+
+namespace {
+/// The URL options with ttl=0: pplvo-launch starts every stage on this host, so the per-frame
+/// data (~6.8 MB a 640x480 frame) never needs to leave it, whatever the main URL's ttl.
+/// Returns "" or "?options".
+std::string hostLocalOptions(const std::string& query) {
+  // Without a ttl option LCM's default, 0, applies already.
+  std::string out;
+  std::istringstream qs(query);
+  for (std::string kv; std::getline(qs, kv, '&');) {
+    if (kv.empty()) continue;
+    if (kv.rfind("ttl=", 0) == 0) kv = "ttl=0";
+    out += (out.empty() ? "?" : "&") + kv;
+  }
+  return out;
+}
+}  // namespace
 
 std::vector<std::string> frameChannelRoutes(const std::string& udpm_url, std::string* error) {
   const LcmUrl u = parseLcmUrl(udpm_url);
@@ -151,7 +173,8 @@ std::vector<std::string> frameChannelRoutes(const std::string& udpm_url, std::st
     return {};
   }
   const size_t q = udpm_url.find('?');
-  const std::string options = q == std::string::npos ? "" : udpm_url.substr(q);
+  const std::string options =
+      hostLocalOptions(q == std::string::npos ? "" : udpm_url.substr(q + 1));
   std::vector<std::string> routes;
   for (const auto& [channel, offset] : channels) {
     routes.push_back(std::string(channel) + "=udpm://" + u.address + ":" +

@@ -12,12 +12,16 @@
 /// runner keep a single memq:// instance.
 #include <poll.h>
 
+#include <chrono>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <pplvo_msgs/node_status_t.hpp>
 
 #include "pplvo/core/args.h"
 #include "pplvo/msgs/decode.h"
@@ -74,6 +78,36 @@ class TypedAdapter : public SubscriptionAdapter {
 };
 
 }  // namespace detail
+
+/// A publish that took longer than this was blocked: UDP's send buffer was full because a link
+/// (or a rate limit) is slower than the data. On loopback a 2.5 MB depth map takes a few ms.
+inline constexpr double kBlockedPublishMs = 100.0;
+
+/// The blocked publishes of one channel.
+struct BlockedPublishes {
+  std::string channel;
+  int64_t count = 0;
+  double last_ms = 0.0;
+  double total_ms = 0.0;
+  double max_ms = 0.0;
+};
+
+/// Records publishes slower than kBlockedPublishMs, per channel; thread-safe (nodes publish
+/// from their workers too). The first one of a channel is said on stderr, all are counted for
+/// the node's status (appendBlockedPublishes).
+class BlockedPublishLog {
+ public:
+  /// Returns true when the publish counted as blocked.
+  bool record(const std::string& channel, double elapsed_ms);
+  std::vector<BlockedPublishes> channels() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<std::string, BlockedPublishes> channels_;
+};
+
+/// The stage name under which a status reports the blocked publishes of `channel`.
+std::string blockedPublishStage(const std::string& channel);
 
 /// "CHANNEL=URL" -> {CHANNEL, URL}; empty error on success.
 struct ChannelRoute {
@@ -138,12 +172,24 @@ class Bus {
   }
   void unsubscribe(const BusSubscription& s) const;
 
+  /// Publishes on the channel's instance; a publish that blocks (kBlockedPublishMs) is
+  /// recorded in blockedPublishes().
   template <class MessageT>
   int publish(const std::string& channel, const MessageT* msg) const {
-    return instanceFor(channel).publish(channel, msg);
+    const auto start = std::chrono::steady_clock::now();
+    const int rc = instanceFor(channel).publish(channel, msg);
+    notePublishTime(channel, start);
+    return rc;
   }
   int publish(const std::string& channel, const void* data, unsigned int size) const {
-    return instanceFor(channel).publish(channel, data, size);
+    const auto start = std::chrono::steady_clock::now();
+    const int rc = instanceFor(channel).publish(channel, data, size);
+    notePublishTime(channel, start);
+    return rc;
+  }
+  /// The publishes of this process that blocked, per channel.
+  std::vector<BlockedPublishes> blockedPublishes() const {
+    return routing_->blocked.channels();
   }
 
   /// Waits up to `timeout_ms` for a message on any instance this process subscribed on and
@@ -165,10 +211,18 @@ class Bus {
     std::vector<pollfd> wait_fds;      // one per receiving instance, for handleTimeout
     // Decoders of the typed subscriptions, alive until unsubscribed (LCM holds raw pointers).
     std::vector<std::shared_ptr<detail::SubscriptionAdapter>> adapters;
+    BlockedPublishLog blocked;
   };
+  void notePublishTime(const std::string& channel,
+                       std::chrono::steady_clock::time_point start) const;
   std::vector<lcm::LCM*> receiveOn(const std::string& channel) const;
   std::shared_ptr<Routing> routing_;
 };
+
+/// Adds the bus's blocked publishes to a node's status, one stage per channel
+/// (blockedPublishStage(): count, last, mean and max ms), so that the launcher and a viewer see
+/// which sends a slow link held up.
+void appendBlockedPublishes(const Bus& bus, pplvo_msgs::node_status_t* status);
 
 /// The environment variable with the routes of the bus, as LCM_DEFAULT_URL is its URL:
 /// "CHANNEL=URL;CHANNEL=URL..." (scripts/isolated.sh sets both).

@@ -23,6 +23,10 @@ struct NodeCounts {
   /// Frames on PPLVO_RGBD not of the followed stream (forged, a second source), skipped (its
   /// "stray_frame" stage count; msgs::FrameSourceGuard).
   int64_t stray_frames = 0;
+  /// Publishes that blocked on a slow link (the "publish_blocked:CHANNEL" stages) and the
+  /// longest, ms.
+  int64_t blocked_publishes = 0;
+  double blocked_publish_max_ms = 0.0;
 };
 
 /// Decides when the pipeline has drained after the player ended: every published frame has

@@ -44,7 +44,9 @@ struct UrlDecision {
 UrlDecision decideLcmUrl(const LaunchOptions& o, const char* env_lcm_default_url,
                          int64_t rmem_max_bytes = -1);
 /// The per-frame data channels on ports of their own in `udpm_url`'s group, with the same
-/// options, as "CHANNEL=URL": PPLVO_RGBD on port + 1, PPLVO_DEPTH_CGM + 2, PPLVO_DEPTH_FUSED
+/// options except ttl=0 (host-local: pplvo-launch runs every stage on this host, so only the
+/// main URL's poses, statuses and stream events, each one datagram, may cross a network), as
+/// "CHANNEL=URL": PPLVO_RGBD on port + 1, PPLVO_DEPTH_CGM + 2, PPLVO_DEPTH_FUSED
 /// + 3, PPLVO_FEATURES and PPLVO_FEATURES_3D + 4. Only the processes that subscribe to a
 /// channel join its port: the estimator, player, logger and launcher then never receive the
 /// ~6.5 MB of images and depth maps of a 640x480 frame, nor the depth filter its own maps or
