@@ -93,4 +93,71 @@ FramePose fromMsg(const pplvo_msgs::pose_t& m) {
   return p;
 }
 
+namespace {
+inline constexpr const char* kOdomFrame = "odom";
+inline constexpr const char* kBaseFrame = "base_link";
+
+void putMatrix(const Matrix6d& M, double* out) {
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) out[6 * r + c] = M(r, c);
+  }
+}
+
+Matrix6d getMatrix(const double* in, const char* what) {
+  Matrix6d M;
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      if (!std::isfinite(in[6 * r + c])) throw MessageError(std::string("non-finite ") + what);
+      M(r, c) = in[6 * r + c];
+    }
+  }
+  return M;
+}
+
+Eigen::Vector3d getVector(const double* in, const char* what) {
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(in[k])) throw MessageError(std::string("non-finite ") + what);
+  }
+  return {in[0], in[1], in[2]};
+}
+}  // namespace
+
+pplvo_msgs::odometry_t toMsg(const BodyOdometry& o) {
+  pplvo_msgs::odometry_t m;
+  m.utime = o.utime;
+  m.seq = o.seq;
+  m.stamp = o.stamp;
+  m.status = static_cast<int8_t>(o.status);
+  m.frame_id = kOdomFrame;
+  m.child_frame_id = kBaseFrame;
+  putPose(o.T_odom_base, m.position, m.orientation);
+  putMatrix(o.pose_covariance, m.pose_covariance);
+  for (int k = 0; k < 3; ++k) {
+    m.linear_velocity[k] = o.linear_velocity[k];
+    m.angular_velocity[k] = o.angular_velocity[k];
+  }
+  putMatrix(o.twist_covariance, m.twist_covariance);
+  m.dt = o.dt_s;
+  return m;
+}
+
+BodyOdometry fromMsg(const pplvo_msgs::odometry_t& m) {
+  BodyOdometry o;
+  o.utime = m.utime;
+  o.seq = m.seq;
+  o.stamp = m.stamp;
+  if (m.status < 0 || m.status > 4) {
+    throw MessageError("unknown odometry status " + std::to_string(m.status));
+  }
+  o.status = static_cast<TrackingStatus>(m.status);
+  o.T_odom_base = getPose(m.position, m.orientation, "odometry pose");
+  o.pose_covariance = getMatrix(m.pose_covariance, "odometry pose covariance");
+  o.linear_velocity = getVector(m.linear_velocity, "linear velocity");
+  o.angular_velocity = getVector(m.angular_velocity, "angular velocity");
+  o.twist_covariance = getMatrix(m.twist_covariance, "twist covariance");
+  if (!std::isfinite(m.dt) || m.dt < 0) throw MessageError("bad odometry dt");
+  o.dt_s = m.dt;
+  return o;
+}
+
 }  // namespace pplvo::msgs

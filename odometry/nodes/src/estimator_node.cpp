@@ -12,7 +12,10 @@
 namespace pplvo::nodes {
 
 EstimatorNode::EstimatorNode(const EstimatorNodeOptions& options, msgs::Bus bus)
-    : options_(options), bus_(std::move(bus)), odometry_(options.odometry) {
+    : options_(options),
+      bus_(std::move(bus)),
+      body_odometry_(options.odometry.body.extrinsic()),
+      odometry_(options.odometry) {
   if (options_.max_waiting < 1) options_.max_waiting = 1;
   subscriptions_.push_back(bus_.subscribe(options_.features_channel, &EstimatorNode::onFeatures,
                                           this, counters_, kName));
@@ -142,6 +145,11 @@ void EstimatorNode::publish(const estimator::MotionChainOutput& out, const Frame
     ScopedStageTimer t(timings_, "encode");
     const pplvo_msgs::pose_t m = msgs::toMsg(pose);
     bus_.publish(options_.pose_channel, &m);
+    if (!options_.odometry_channel.empty()) {
+      const pplvo_msgs::odometry_t o =
+          msgs::toMsg(body_odometry_.add(pose, static_cast<double>(pose.utime) * 1e-6));
+      bus_.publish(options_.odometry_channel, &o);
+    }
   }
   ++counters_.frames_out;
 }

@@ -89,6 +89,7 @@ EstimatorArgs parseEstimatorArgs(const std::vector<std::string>& args) {
         p.option("--features-channel", &o.features_channel)
             .option("--features-3d-channel", &o.features_3d_channel)
             .option("--pose-channel", &o.pose_channel)
+            .option("--odometry-channel", &o.odometry_channel)
             .option("--status-channel", &o.status_channel)
             .option("--max-waiting", &o.max_waiting, 1)
             .option("--max-reference-wait-ms", &o.max_reference_wait_ms, 0, 3600000);
@@ -102,6 +103,8 @@ std::string estimatorUsage() {
          "  --features-channel NAME    in, features_t stage 2D (PPLVO_FEATURES)\n"
          "  --features-3d-channel NAME in, features_t stage 3D (PPLVO_FEATURES_3D)\n"
          "  --pose-channel NAME        out, pose_t (PPLVO_POSE)\n"
+         "  --odometry-channel NAME    out, odometry_t: body frame, mounting from\n"
+         "                             odometry.body (PPLVO_ODOMETRY; '' = none)\n"
          "  --status-channel NAME      out, node_status_t (PPLVO_STATUS)\n"
          "  --max-waiting N            frames waiting for their reference (5)\n"
          "  --max-reference-wait-ms MS restart tracking when no pose could be made for MS of\n"

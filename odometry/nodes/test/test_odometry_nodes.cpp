@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <pplvo_msgs/features_t.hpp>
+#include <pplvo_msgs/odometry_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <thread>
 
@@ -374,6 +375,7 @@ TEST(EstimatorNode, TracksEachFrameOnceItsReferenceArrives) {
   lcm::LCM lcm("memq://");
   EstimatorNode node({}, lcm);
   Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
+  Recorder<pplvo_msgs::odometry_t> odometry(lcm, channels::kOdometry);
   lcm.publish(channels::kFeatures, &fs.f2d[0]);
   drain(lcm);
   ASSERT_EQ(poses.msgs.size(), 1u);
@@ -406,6 +408,23 @@ TEST(EstimatorNode, TracksEachFrameOnceItsReferenceArrives) {
     EXPECT_FALSE(p.window.empty());
   }
   EXPECT_EQ(node.counts().tracking, static_cast<int64_t>(fs.f2d.size()) - 1);
+  // Body-frame odometry beside each pose: the camera's pose in REP-103 axes (identity mount),
+  // a twist with its covariance from the second frame on.
+  ASSERT_EQ(odometry.msgs.size(), poses.msgs.size());
+  Pose3 A = Pose3::Identity();
+  A.linear() = opticalToCameraBody();
+  for (size_t i = 0; i < odometry.msgs.size(); ++i) {
+    const BodyOdometry o = msgs::fromMsg(odometry.msgs[i]);
+    const FramePose p = msgs::fromMsg(poses.msgs[i]);
+    EXPECT_EQ(o.seq, p.seq);
+    EXPECT_EQ(o.stamp, p.stamp);
+    EXPECT_TRUE(o.T_odom_base.isApprox(A * p.T_w_c * A.inverse(), 1e-6)) << i;
+    if (i == 0) continue;
+    EXPECT_GT(o.dt_s, 0.0);
+    EXPECT_GT(o.twist_covariance.trace(), 0.0);
+    EXPECT_LT(o.twist_covariance.trace(), 1.0);
+    EXPECT_GE(o.pose_covariance.trace(), msgs::fromMsg(odometry.msgs[i - 1]).pose_covariance.trace());
+  }
   // Against keyframes (the default) the first frame is the first keyframe; the frames that
   // are not new keyframes are said to be needed only for a fallback.
   EXPECT_EQ(poses.msgs[0].reference, pplvo_msgs::pose_t::REFERENCE_YES);
@@ -500,6 +519,7 @@ TEST(EstimatorNode, KeyframesPoseWithoutThePreviousFrame) {
   lcm::LCM lcm("memq://");
   EstimatorNode node({}, lcm);
   Recorder<pplvo_msgs::pose_t> poses(lcm, channels::kPose);
+  Recorder<pplvo_msgs::odometry_t> odometry(lcm, channels::kOdometry);
   lcm.publish(channels::kFeatures, &fs.f2d[0]);
   lcm.publish(channels::kFeatures3d, &fs.f3d[0]);  // the first keyframe
   lcm.publish(channels::kFeatures, &fs.f2d[1]);

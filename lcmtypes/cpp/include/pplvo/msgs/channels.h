@@ -8,6 +8,7 @@ inline constexpr const char* kDepthFused = "PPLVO_DEPTH_FUSED";    // depth_map_
 inline constexpr const char* kFeatures = "PPLVO_FEATURES";         // features_t (STAGE_2D)
 inline constexpr const char* kFeatures3d = "PPLVO_FEATURES_3D";    // features_t (STAGE_3D)
 inline constexpr const char* kPose = "PPLVO_POSE";                 // pose_t
+inline constexpr const char* kOdometry = "PPLVO_ODOMETRY";         // odometry_t (body frame)
 inline constexpr const char* kStatus = "PPLVO_STATUS";             // node_status_t
 inline constexpr const char* kStream = "PPLVO_STREAM";             // stream_event_t
 }  // namespace pplvo::channels

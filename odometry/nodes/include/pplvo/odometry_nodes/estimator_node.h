@@ -6,6 +6,7 @@
 /// | PPLVO_FEATURES      | features_t    | in        | STAGE_2D of each frame                    |
 /// | PPLVO_FEATURES_3D   | features_t    | in        | STAGE_3D: the reference for the next frame|
 /// | PPLVO_POSE          | pose_t        | out       | T_w_c, motion + covariance, status, window|
+/// | PPLVO_ODOMETRY      | odometry_t    | out       | base_link in odom, twist, covariances     |
 /// | PPLVO_STATUS        | node_status_t | out       | once a second                             |
 ///
 /// Frame k is tracked against the 3D features of the frame tracked last, which come back only
@@ -26,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "pplvo/core/body_odometry.h"
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
@@ -39,6 +41,8 @@ struct EstimatorNodeOptions {
   std::string features_channel = channels::kFeatures;
   std::string features_3d_channel = channels::kFeatures3d;
   std::string pose_channel = channels::kPose;
+  /// Body-frame odometry (odometry_t, the mounting from odometry.body); empty: not published.
+  std::string odometry_channel = channels::kOdometry;
   std::string status_channel = channels::kStatus;
   /// Frames waiting for their reference; beyond this the oldest is dropped. As deep as the
   /// frontend's max_unlifted: at 30 Hz it absorbs a late loop of up to ~5 frame periods
@@ -97,6 +101,7 @@ class EstimatorNode {
 
   EstimatorNodeOptions options_;
   msgs::Bus bus_;
+  BodyOdometryIntegrator body_odometry_;
   std::vector<msgs::BusSubscription> subscriptions_;
   tracking::FrameTracker odometry_;
   /// The frame whose 3D stage the last step waited for, if it waited.

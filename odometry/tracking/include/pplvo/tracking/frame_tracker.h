@@ -22,6 +22,7 @@
 #include "pplvo/estimator/pose_estimator.h"
 #include "pplvo/features/matching.h"
 #include "pplvo/geometry/plane_matching.h"
+#include "pplvo/core/body_odometry.h"
 #include "pplvo/tracking/keyframe_rule.h"
 #include "pplvo/tracking/keyframe_store.h"
 #include "pplvo/tracking/lifted_stage_buffer.h"
@@ -45,6 +46,8 @@ struct TrackingOptions {
   TrackingReference reference = TrackingReference::kKeyframe;
   KeyframeOptions keyframe;
   LocalMapOptions local_map;  ///< reference: local_map
+  /// Where the camera sits on the robot, for the body-frame odometry (odometry_t).
+  BodyMountOptions body;
   estimator::MotionChainOptions tracker;  ///< tracker.estimator.use_* select the families
   features::PointMatchOptions point_matching;
   features::LineMatchOptions line_matching;
@@ -69,6 +72,11 @@ void visit(V& v, TrackingOptions& o) {
             [&] { visit(v, o.keyframe); });
   v.section("local_map", "The windowed local map and its bundle adjustment (reference: local_map)",
             [&] { visit(v, o.local_map); });
+  v.section("body",
+            "The camera's mounting on the robot (camera_link in base_link, REP-103 axes), for "
+            "the body-frame odometry on PPLVO_ODOMETRY; zero: camera at the body origin, "
+            "looking along x",
+            [&] { visit(v, o.body); });
   v.section("tracker", "Frame-to-frame tracking, pose estimation and window uncertainty",
             [&] { visit(v, o.tracker); });
   v.section("point_matching", "Point matching (Sec. 4.5)", [&] { visit(v, o.point_matching); });

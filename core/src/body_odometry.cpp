@@ -1,0 +1,117 @@
+#include "pplvo/core/body_odometry.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+namespace pplvo {
+
+Eigen::Matrix3d opticalToCameraBody() {
+  Eigen::Matrix3d R;
+  // Columns: the optical x, y, z axes in the body frame.
+  R << 0, 0, 1,  //
+      -1, 0, 0,  //
+      0, -1, 0;
+  return R;
+}
+
+Pose3 BodyExtrinsic::baseFromOptical() const {
+  Pose3 T_camera_optical = Pose3::Identity();
+  T_camera_optical.linear() = opticalToCameraBody();
+  return T_base_camera * T_camera_optical;
+}
+
+BodyExtrinsic BodyMountOptions::extrinsic() const {
+  constexpr double kDeg = M_PI / 180.0;
+  BodyExtrinsic e;
+  e.T_base_camera.linear() = (Eigen::AngleAxisd(yaw_deg * kDeg, Eigen::Vector3d::UnitZ()) *
+                              Eigen::AngleAxisd(pitch_deg * kDeg, Eigen::Vector3d::UnitY()) *
+                              Eigen::AngleAxisd(roll_deg * kDeg, Eigen::Vector3d::UnitX()))
+                                 .toRotationMatrix();
+  e.T_base_camera.translation() = Eigen::Vector3d(x_m, y_m, z_m);
+  return e;
+}
+
+Matrix6d motionCovarianceFromQuaternionCovariance(const Pose3& T_prev_curr,
+                                                  const Matrix6d& covariance_t_qxyz) {
+  // q = q(dtheta) * q_est with q(dtheta) ~ [1, dtheta/2]: the vector part moves by
+  // dv = 0.5 (w I - [v]x) dtheta, invertible below a half turn.
+  const Eigen::Quaterniond q(T_prev_curr.linear());
+  const Eigen::Quaterniond qp = q.w() < 0 ? Eigen::Quaterniond(-q.coeffs()) : q;
+  const Eigen::Matrix3d dv_dtheta = 0.5 * (qp.w() * Eigen::Matrix3d::Identity() - skew(qp.vec()));
+  Matrix6d J = Matrix6d::Identity();
+  J.bottomRightCorner<3, 3>() = dv_dtheta.inverse();
+  return J * covariance_t_qxyz * J.transpose();
+}
+
+Eigen::Matrix3d leftJacobianSO3(const Eigen::Vector3d& phi) {
+  const double theta = phi.norm();
+  const Eigen::Matrix3d K = skew(phi);
+  if (theta < 1e-6) return Eigen::Matrix3d::Identity() + 0.5 * K;
+  const double t2 = theta * theta;
+  return Eigen::Matrix3d::Identity() + (1.0 - std::cos(theta)) / t2 * K +
+         (theta - std::sin(theta)) / (t2 * theta) * K * K;
+}
+
+BodyOdometryIntegrator::BodyOdometryIntegrator(BodyExtrinsic extrinsic)
+    : extrinsic_(extrinsic), T_base_optical_(extrinsic_.baseFromOptical()) {}
+
+BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) {
+  BodyOdometry out;
+  out.utime = pose.utime;
+  out.seq = pose.seq;
+  out.stamp = pose.stamp;
+  out.status = pose.status;
+  const double dt = stamp_s - last_stamp_s_;
+  const bool has_motion = started_ && pose.status != TrackingStatus::kFirstFrame && dt > 0.0;
+  if (has_motion) {
+    // The motion of the body: T_base_optical T_prev_curr T_base_optical^-1.
+    const Eigen::Matrix3d& R_a = T_base_optical_.linear();
+    const Eigen::Vector3d& p_a = T_base_optical_.translation();
+    const Pose3 motion = T_base_optical_ * pose.T_prev_curr * T_base_optical_.inverse();
+    const Eigen::Matrix3d& R_m = motion.linear();
+    // Covariance of the body motion's [dt'; dtheta'] (left rotation in the previous body frame):
+    // dtheta' = R_a dtheta, dt' = R_a dt + [R_m p_a]x R_a dtheta.
+    Matrix6d J_body = Matrix6d::Zero();
+    J_body.topLeftCorner<3, 3>() = R_a;
+    J_body.topRightCorner<3, 3>() = skew(R_m * p_a) * R_a;
+    J_body.bottomRightCorner<3, 3>() = R_a;
+    const Matrix6d motion_cov =
+        J_body * motionCovarianceFromQuaternionCovariance(pose.T_prev_curr, pose.rel_covariance) *
+        J_body.transpose();
+
+    // Odom pose: p_k = p + R t', R_k = R R'. Errors (odom frame): dp_k = dp - [R t']x dphi +
+    // R dt', dphi_k = dphi + R dtheta'.
+    const Eigen::Matrix3d R_prev = T_odom_base_.linear();
+    Matrix6d F = Matrix6d::Identity();
+    F.topRightCorner<3, 3>() = -skew(R_prev * motion.translation());
+    Matrix6d G = Matrix6d::Zero();
+    G.topLeftCorner<3, 3>() = R_prev;
+    G.bottomRightCorner<3, 3>() = R_prev;
+    covariance_ = F * covariance_ * F.transpose() + G * motion_cov * G.transpose();
+    T_odom_base_ = T_odom_base_ * motion;
+    T_odom_base_.linear() = Eigen::Quaterniond(T_odom_base_.linear()).normalized().toRotationMatrix();
+
+    // The body twist, constant over the interval, that moves the body by `motion`: the SE(3)
+    // logarithm over dt, phi = log(R'), v = V(phi)^-1 t' (the same in the body frame at both
+    // ends of the interval, as nav_msgs/Odometry's twist in child_frame_id).
+    const Eigen::AngleAxisd aa(R_m);
+    const Eigen::Vector3d phi = aa.angle() * aa.axis();
+    const Eigen::Matrix3d V_inv = leftJacobianSO3(phi).inverse();
+    out.linear_velocity = V_inv * motion.translation() / dt;
+    out.angular_velocity = phi / dt;
+    Matrix6d J_twist = Matrix6d::Zero();
+    J_twist.topLeftCorner<3, 3>() = V_inv / dt;
+    J_twist.bottomRightCorner<3, 3>() = Eigen::Matrix3d::Identity() / dt;
+    out.twist_covariance = J_twist * motion_cov * J_twist.transpose();
+    out.dt_s = dt;
+  } else {
+    out.twist_covariance = Matrix6d::Identity() * kUnknownTwistVariance;
+  }
+  started_ = true;
+  last_stamp_s_ = stamp_s;
+  out.T_odom_base = T_odom_base_;
+  out.pose_covariance = covariance_;
+  return out;
+}
+
+}  // namespace pplvo
