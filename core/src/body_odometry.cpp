@@ -1,5 +1,6 @@
 #include "pplvo/core/body_odometry.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <cmath>
 
@@ -52,8 +53,39 @@ Eigen::Matrix3d leftJacobianSO3(const Eigen::Vector3d& phi) {
          (theta - std::sin(theta)) / (t2 * theta) * K * K;
 }
 
-BodyOdometryIntegrator::BodyOdometryIntegrator(BodyExtrinsic extrinsic)
-    : extrinsic_(extrinsic), T_base_optical_(extrinsic_.baseFromOptical()) {}
+namespace {
+
+/// The nearest positive semi-definite matrix (eigenvalues clamped at 0): a motion's covariance
+/// minus the shared error can dip below zero along an axis the estimate pinned down tightly.
+Matrix6d clampedPsd(const Matrix6d& M) {
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> es(0.5 * (M + M.transpose()));
+  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() *
+         es.eigenvectors().transpose();
+}
+
+/// [dt; dtheta] of a motion of the optical frame, moved into base_link: dtheta' = R_a dtheta,
+/// dt' = R_a dt + [R_m p_a]x R_a dtheta (R_m: the body motion's rotation).
+Matrix6d bodyJacobian(const Pose3& T_base_optical, const Eigen::Matrix3d& R_m) {
+  const Eigen::Matrix3d& R_a = T_base_optical.linear();
+  Matrix6d J = Matrix6d::Zero();
+  J.topLeftCorner<3, 3>() = R_a;
+  J.topRightCorner<3, 3>() = skew(R_m * T_base_optical.translation()) * R_a;
+  J.bottomRightCorner<3, 3>() = R_a;
+  return J;
+}
+
+}  // namespace
+
+BodyOdometryIntegrator::BodyOdometryIntegrator(BodyExtrinsic extrinsic,
+                                               const Matrix6d& frame_error_covariance)
+    : extrinsic_(extrinsic),
+      T_base_optical_(extrinsic_.baseFromOptical()),
+      frame_error_covariance_(frame_error_covariance) {
+  const Matrix6d J = bodyJacobian(T_base_optical_, Eigen::Matrix3d::Identity());
+  frame_error_body_ =
+      J * motionCovarianceFromQuaternionCovariance(Pose3::Identity(), frame_error_covariance_) *
+      J.transpose();
+}
 
 BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) {
   BodyOdometry out;
@@ -64,19 +96,15 @@ BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) 
   const double dt = stamp_s - last_stamp_s_;
   const bool has_motion = started_ && pose.status != TrackingStatus::kFirstFrame && dt > 0.0;
   if (has_motion) {
-    // The motion of the body: T_base_optical T_prev_curr T_base_optical^-1.
-    const Eigen::Matrix3d& R_a = T_base_optical_.linear();
-    const Eigen::Vector3d& p_a = T_base_optical_.translation();
+    // The motion of the body: T_base_optical T_prev_curr T_base_optical^-1, and the covariance
+    // of its [dt'; dtheta'] (left rotation in the previous body frame) without the shared
+    // error of its two frames, which does not accumulate.
     const Pose3 motion = T_base_optical_ * pose.T_prev_curr * T_base_optical_.inverse();
     const Eigen::Matrix3d& R_m = motion.linear();
-    // Covariance of the body motion's [dt'; dtheta'] (left rotation in the previous body frame):
-    // dtheta' = R_a dtheta, dt' = R_a dt + [R_m p_a]x R_a dtheta.
-    Matrix6d J_body = Matrix6d::Zero();
-    J_body.topLeftCorner<3, 3>() = R_a;
-    J_body.topRightCorner<3, 3>() = skew(R_m * p_a) * R_a;
-    J_body.bottomRightCorner<3, 3>() = R_a;
+    const Matrix6d J_body = bodyJacobian(T_base_optical_, R_m);
+    const Matrix6d accumulating = clampedPsd(pose.rel_covariance - frame_error_covariance_);
     const Matrix6d motion_cov =
-        J_body * motionCovarianceFromQuaternionCovariance(pose.T_prev_curr, pose.rel_covariance) *
+        J_body * motionCovarianceFromQuaternionCovariance(pose.T_prev_curr, accumulating) *
         J_body.transpose();
 
     // Odom pose: p_k = p + R t', R_k = R R'. Errors (odom frame): dp_k = dp - [R t']x dphi +
@@ -111,6 +139,14 @@ BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) 
   last_stamp_s_ = stamp_s;
   out.T_odom_base = T_odom_base_;
   out.pose_covariance = covariance_;
+  if (has_motion || !covariance_.isZero()) {
+    // The shared errors of the first and the current frame, once (isotropic blocks: the same
+    // in odom's axes up to the current body rotation).
+    Matrix6d G = Matrix6d::Zero();
+    G.topLeftCorner<3, 3>() = T_odom_base_.linear();
+    G.bottomRightCorner<3, 3>() = T_odom_base_.linear();
+    out.pose_covariance += G * frame_error_body_ * G.transpose();
+  }
   return out;
 }
 

@@ -176,5 +176,27 @@ TEST(BodyOdometry, CovariancesMatchTheSpreadOfSampledMotions) {
   EXPECT_NEAR(nees / kSamples, 6.0, 0.5);
 }
 
+// The per-frame shared error does not accumulate: taken out of every motion (and twist), it
+// is in the pose covariance once, however long the chain.
+TEST(BodyOdometry, SharedFrameErrorIsCountedOnceNotPerMotion) {
+  Matrix6d shared = Matrix6d::Zero();
+  shared.diagonal() << 4e-6, 4e-6, 4e-6, 1e-7, 1e-7, 1e-7;
+  Matrix6d estimate = Matrix6d::Identity() * 1e-8;
+  BodyOdometryIntegrator with_shared({}, shared), without({}, Matrix6d::Zero());
+  const Pose3 step = motion({0.0, 0.0, 0.03}, {0.0, 0.01, 0.0});
+  with_shared.add(framePose(0, Pose3::Identity(), Matrix6d::Zero()), 0.0);
+  without.add(framePose(0, Pose3::Identity(), Matrix6d::Zero()), 0.0);
+  BodyOdometry a, b;
+  for (int k = 1; k <= 100; ++k) {
+    a = with_shared.add(framePose(k, step, estimate + shared), k * kDt);
+    b = without.add(framePose(k, step, estimate), k * kDt);
+  }
+  EXPECT_TRUE(a.twist_covariance.isApprox(b.twist_covariance, 1e-9));
+  // Translation: 100 estimates plus the shared error once (2 frames' worth), not 100 times.
+  const double extra = a.pose_covariance(0, 0) - b.pose_covariance(0, 0);
+  EXPECT_NEAR(extra, shared(1, 1), 0.3 * shared(1, 1));
+  EXPECT_LT(a.pose_covariance.trace(), 2.0 * b.pose_covariance.trace() + 6 * shared(0, 0));
+}
+
 }  // namespace
 }  // namespace pplvo

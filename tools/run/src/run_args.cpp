@@ -17,6 +17,7 @@ RunArgs parseRunArgs(const std::vector<std::string>& args) {
       .option("--output", &o.output)
       .option("--summary", &o.summary)
       .option("--log", &o.log)
+      .option("--log-channels", &o.log_channels)
       .option("--covariance", &o.covariance)
       .option("--max-frames", &o.max_frames, int64_t{0})
       .option("--in-flight", &o.in_flight, 1, 1000)
@@ -65,6 +66,8 @@ std::string runUsage() {
              "                          camera); the throughput then leaves the decoding out\n"
              "  --summary FILE          write the run summary as YAML\n"
              "  --log FILE              record every message as an LCM event log (pplvo-replay)\n"
+             "  --log-channels REGEX    only these channels in --log (LCM regex, whole name;\n"
+             "                          e.g. 'PPLVO_(POSE|ODOMETRY)': the outputs alone)\n"
              "  --covariance FILE       relative pose T_prev_curr and its 6x6 covariance per "
              "frame\n"
              "                          (docs/evaluation.md; pplvo-eval --nees)\n"

@@ -55,8 +55,9 @@ class PoseCollector {
 /// so that any stage can be replayed from it (pplvo-replay).
 class EventRecorder {
  public:
-  EventRecorder(lcm::LCM& lcm, const std::string& path) : lcm_(lcm), writer_(path) {
-    sub_ = lcm_.subscribe(".*", &EventRecorder::onMessage, this);
+  EventRecorder(lcm::LCM& lcm, const std::string& path, const std::string& channels)
+      : lcm_(lcm), writer_(path) {
+    sub_ = lcm_.subscribe(channels, &EventRecorder::onMessage, this);
   }
   ~EventRecorder() { lcm_.unsubscribe(sub_); }
   void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
@@ -199,7 +200,7 @@ RunResult runPipeline(const RunOptions& options) {
 
     PoseCollector collector(lcm, result);
     std::unique_ptr<EventRecorder> recorder;
-    if (!options.log.empty()) recorder = std::make_unique<EventRecorder>(lcm, options.log);
+    if (!options.log.empty()) recorder = std::make_unique<EventRecorder>(lcm, options.log, options.log_channels);
 
     player::PlayerOptions po;
     po.dataset_dir = options.dataset_dir;

@@ -65,8 +65,9 @@ struct BodyOdometry {
   /// Mean velocities over the last frame interval, in base_link (the current body frame).
   Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();   ///< m/s
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< rad/s
-  /// Over [vx vy vz, wx wy wz] in base_link; kUnknownTwistVariance on the diagonal when there
-  /// is no previous frame (first frame, or a gap in time).
+  /// Over [vx vy vz, wx wy wz] in base_link, of the part of the motion's error that
+  /// accumulates (the per-frame shared error is in pose_covariance, once);
+  /// kUnknownTwistVariance on the diagonal when there is no previous frame.
   Matrix6d twist_covariance = Matrix6d::Zero();
   double dt_s = 0.0;  ///< the interval the twist is averaged over (0: unknown)
 };
@@ -88,7 +89,13 @@ Eigen::Matrix3d leftJacobianSO3(const Eigen::Vector3d& phi);
 /// covariances (independent increments).
 class BodyOdometryIntegrator {
  public:
-  explicit BodyOdometryIntegrator(BodyExtrinsic extrinsic = {});
+  /// `frame_error_covariance`: the part of each pose_t.rel_covariance that does not
+  /// accumulate, the per-frame shared error of its two frames (estimator::frameErrorCovariance,
+  /// over [t; q_xyz]): a frame's error enters the motion before it and the one after it with
+  /// opposite signs, so a chain of motions carries it once. It is taken out of each motion
+  /// (and so of the twist) and added once to the pose covariance.
+  explicit BodyOdometryIntegrator(BodyExtrinsic extrinsic = {},
+                                  const Matrix6d& frame_error_covariance = Matrix6d::Zero());
 
   /// The next pose of the estimator (in seq order). `stamp_s`: the frame's time in seconds
   /// (its stamp), for the twist.
@@ -99,6 +106,8 @@ class BodyOdometryIntegrator {
  private:
   BodyExtrinsic extrinsic_;
   Pose3 T_base_optical_;
+  Matrix6d frame_error_covariance_;  ///< over [t; q_xyz] of a motion
+  Matrix6d frame_error_body_;        ///< the same over [dt; dtheta] in base_link
   bool started_ = false;
   double last_stamp_s_ = 0.0;
   Pose3 T_odom_base_ = Pose3::Identity();
