@@ -8,7 +8,8 @@
 #   lib/pkgconfig/               pplvo-msgs.pc (types + LCM) and pplvo.pc (every library)
 #   lib/python3/dist-packages/   the Python message package pplvo_msgs (lcm-gen --python)
 #   share/java/pplvo_msgs.jar    the Java message types (lcm-spy)
-#   share/pplvo/                 the .lcm definitions, the default configuration, examples
+#   share/pplvo/                 the .lcm definitions, the default configuration, camera files
+#                                (cameras/), examples
 # Imported targets are the library names without their pplvo_ prefix: pplvo::msgs,
 # pplvo::msgs_util, pplvo::core, pplvo::pipeline, ... (see examples/cpp).
 include(GNUInstallDirs)
@@ -177,6 +178,8 @@ endif()
 file(GLOB pplvo_lcm_files ${PROJECT_SOURCE_DIR}/lcmtypes/*.lcm)
 install(FILES ${pplvo_lcm_files} DESTINATION ${CMAKE_INSTALL_DATADIR}/pplvo/lcmtypes)
 install(FILES ${PROJECT_SOURCE_DIR}/config/pplvo.yaml DESTINATION ${CMAKE_INSTALL_DATADIR}/pplvo)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/cameras/ DESTINATION ${CMAKE_INSTALL_DATADIR}/pplvo/cameras
+        FILES_MATCHING PATTERN "*.yaml")
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${CMAKE_INSTALL_DATADIR}/pplvo/examples
         USE_SOURCE_PERMISSIONS
         PATTERN "__pycache__" EXCLUDE)

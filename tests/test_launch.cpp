@@ -4,6 +4,8 @@
 // skipped with a message when the kernel refuses unprivileged user namespaces.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <net/if.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -108,11 +110,24 @@ TEST(LaunchArgs, EveryOptionGroupParses) {
        "--config", "C", "--features", "points", "--depth-model", "cgm", "--lcm-url", "memq://",
        "--isolated", "--single-url", "--bin-dir", "B", "--node-logs", "N", "--compress",
        "--timeout", "60", "--startup-timeout", "5", "--drain-idle", "0.5", "--stop-grace", "1",
-       "--restart", "3", "--restart-backoff", "0.25", "--test-pause", "pplvo-frontend:10:1.5"});
+       "--restart", "3", "--restart-backoff", "0.25", "--test-pause", "pplvo-frontend:10:1.5",
+       "--camera", "config/cameras/tum_fr1.yaml"});
   // clang-format on
   ASSERT_TRUE(p.errors.empty()) << p.errors.front();
   const LaunchOptions& o = p.options;
   EXPECT_EQ(o.dataset_dir, "D");
+  EXPECT_EQ(o.camera_file, "config/cameras/tum_fr1.yaml");
+  // ... handed to the player, the only program that reads the folder.
+  UrlDecision url;
+  url.url = kIsolatedUrl;
+  const std::vector<ProcessSpec> specs = buildProcessSpecs(o, url, "/B", "/L");
+  for (const ProcessSpec& s : specs) {
+    const bool player = s.name == kPlayer;
+    EXPECT_EQ(std::find(s.args.begin(), s.args.end(), "config/cameras/tum_fr1.yaml") !=
+                  s.args.end(),
+              player)
+        << s.name;
+  }
   EXPECT_EQ(o.rate, 0.5);
   EXPECT_EQ(o.lockstep_timeout_s, 3.0);
   EXPECT_EQ(o.lockstep_in_flight, 4);

@@ -35,7 +35,8 @@ for f in bin/pplvo-run bin/pplvo-synth bin/pplvo-viewer bin/pplvo-logger bin/ppl
   lib/cmake/pplvo/pplvo-msgs-targets.cmake lib/pkgconfig/pplvo.pc lib/pkgconfig/pplvo-msgs.pc \
   share/java/pplvo_msgs.jar lib/python3/dist-packages/pplvo_msgs/pose_t.py \
   share/pplvo/lcmtypes/pose_t.lcm share/pplvo/examples/cpp/CMakeLists.txt \
-  share/pplvo/examples/python/pplvo_log_to_tum.py; do
+  share/pplvo/examples/python/pplvo_log_to_tum.py share/pplvo/cameras/tum_fr1.yaml \
+  share/pplvo/cameras/kinect_v1.yaml share/pplvo/examples/fusion/CMakeLists.txt; do
   [[ -e $prefix/$f ]] || fail "$f is not installed"
 done
 if grep -rlF -e "$build" -e "$src" "$prefix/lib/cmake" "$prefix/lib/pkgconfig"; then
@@ -60,6 +61,18 @@ if grep -F -e "$build" -e "$src/" "$tmp/example/CMakeCache.txt" \
   "$tmp/example/CMakeFiles/pose_listener.dir/flags.make" \
   "$tmp/example/CMakeFiles/pose_listener.dir/link.txt"; then
   fail "the example was built with paths into pplvo's build or source tree"
+fi
+
+step "examples/fusion against the prefix: messages, conversions and core only"
+cmake -S "$prefix/share/pplvo/examples/fusion" -B "$tmp/fusion" -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$prefix" > "$tmp/fusion_configure.log" ||
+  { cat "$tmp/fusion_configure.log" >&2; fail "configure examples/fusion"; }
+cmake --build "$tmp/fusion" -j2 > "$tmp/fusion_build.log" ||
+  { cat "$tmp/fusion_build.log" >&2; fail "build examples/fusion"; }
+# (opencv_core and opencv_imgproc come with the message conversions, pplvo_msgs_util.)
+if grep -E 'ceres|opencv_(features2d|calib3d|ximgproc|line_descriptor)|pplvo_(pipeline|tracking|features|estimator|geometry)' \
+  "$tmp/fusion/CMakeFiles/fuse_odometry.dir/link.txt"; then
+  fail "examples/fusion links more than it uses"
 fi
 
 step "pose_listener --log (file:// provider)"

@@ -34,6 +34,8 @@ std::string launchUsage() {
          "lets the pipeline drain, stops them (SIGINT, SIGKILL after --stop-grace) and reports\n"
          "frames in/out/dropped/skipped per stage. Exit 0 only if every process ended cleanly.\n"
          "  --dataset DIR           TUM-layout folder (player)\n"
+         "  --camera FILE.yaml      its camera, when it has no calib_params.xml (player;\n"
+         "                          config/cameras/: TUM fr1/fr2/fr3, ICL-NUIM, Kinect v1)\n"
          "  --output TRAJ           TUM trajectory written by the logger from PPLVO_POSE\n"
          "  --lockstep              player publishes frame k+2 only after the pose of frame k\n"
          "                          (trajectory equal to pplvo-run's: the depth filter does\n"
@@ -156,6 +158,8 @@ bool readRunOption(OptionReader& r, LaunchOptions& o, bool* rate_given) {
   const std::string& key = r.key();
   if (key == "--dataset")
     r.next(&o.dataset_dir);
+  else if (key == "--camera")
+    r.next(&o.camera_file);
   else if (key == "--output")
     r.next(&o.output);
   else if (key == "--lockstep")

@@ -48,6 +48,7 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const UrlDeci
                    {"--lockstep", "--lockstep-timeout", fmtDouble(o.lockstep_timeout_s),
                     "--lockstep-in-flight", std::to_string(o.lockstep_in_flight)});
   }
+  if (!o.camera_file.empty()) pl.args.insert(pl.args.end(), {"--camera", o.camera_file});
   if (o.max_frames > 0)
     pl.args.insert(pl.args.end(), {"--max-frames", std::to_string(o.max_frames)});
   if (o.fps > 0) pl.args.insert(pl.args.end(), {"--fps", fmtDouble(o.fps)});

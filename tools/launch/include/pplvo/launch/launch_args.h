@@ -21,6 +21,7 @@ const std::vector<std::string>& allPrograms();
 
 struct LaunchOptions {
   std::string dataset_dir;           ///< --dataset (required)
+  std::string camera_file;           ///< --camera: camera file for a folder without calibration
   std::string output;                ///< --output: TUM trajectory written by the logger (required)
   bool lockstep = false;             ///< --lockstep: player waits for pose k before frame k+2
   int lockstep_in_flight = 2;        ///< --lockstep-in-flight: frames out without their pose
