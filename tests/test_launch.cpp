@@ -453,6 +453,17 @@ TEST(LaunchReport, BlockedPublishesAreAFault) {
       << r.text();
 }
 
+TEST(LaunchReport, ProgressLine) {
+  EXPECT_EQ(progressLine(120, 118, 2, 4.04),
+            "[pplvo-launch] 120 frames published, 118 posed (98 %), 2 dropped, 4.0 s");
+  EXPECT_EQ(progressLine(-1, 0, 0, 0.5), "[pplvo-launch] 0 posed, 0.5 s");
+  EXPECT_FALSE(parseLaunchArgs({"--dataset", "D", "--output", "T"}).options.progress.has_value());
+  EXPECT_EQ(parseLaunchArgs({"--dataset", "D", "--output", "T", "--progress"}).options.progress,
+            true);
+  EXPECT_EQ(parseLaunchArgs({"--dataset", "D", "--output", "T", "--no-progress"}).options.progress,
+            false);
+}
+
 TEST(LaunchReport, OverloadFusions) {
   LaunchReport r;
   EXPECT_EQ(r.text().find("launch.overload_fusions"), std::string::npos);

@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -240,7 +241,8 @@ class SupervisedRun {
         deadline_(t0 + std::chrono::duration<double>(o.timeout_s)),
         faults_(planTestFaults(o)),
         report_(report),
-        failures_(report.failures) {}
+        failures_(report.failures),
+        show_progress_(o.progress.value_or(!o.quiet && ::isatty(STDERR_FILENO) == 1)) {}
 
   /// `specs` in start order, the player last.
   void run(const std::vector<ProcessSpec>& specs) {
@@ -384,11 +386,17 @@ class SupervisedRun {
     say_("nodes subscribed after " + std::to_string(seconds()) + " s; starting the player");
     sup_.spawn(player_spec);
     const size_t player = *sup_.find(kPlayer);
+    auto last_progress = Clock::now();
     while (sup_.child(player).running() && checkChildren(true) && checkLimits("the run")) {
       bus_.handle(20);
       maybeTestKill();
       maybeTestPause();
+      if (show_progress_ && Clock::now() - last_progress > std::chrono::milliseconds(500)) {
+        last_progress = Clock::now();
+        printProgress(false);
+      }
     }
+    if (show_progress_) printProgress(true);
     if (failures_.empty()) {
       const ExitInfo& pe = *sup_.child(player).exit;
       if (!pe.clean()) {
@@ -398,6 +406,21 @@ class SupervisedRun {
         say_("player ended at " + std::to_string(seconds()) + " s; draining");
       }
     }
+  }
+
+  /// The player's frames out (its last status) against the poses heard, on one line.
+  void printProgress(bool last) const {
+    const std::optional<NodeCounts> player = bus_.status(kPlayer);
+    int64_t dropped = 0;
+    for (const char* node : {kDepthFilter, kFrontend, kEstimator}) {
+      if (const auto c = bus_.status(node)) dropped += c->frames_dropped;
+    }
+    // The player reports about once a second, poses come every frame: never fewer published
+    // than posed.
+    const int64_t published = player ? std::max(player->frames_out, bus_.poses()) : -1;
+    std::fprintf(stderr, "\r%s\033[K%s",
+                 progressLine(published, bus_.poses(), dropped, seconds()).c_str(),
+                 last ? "\n" : "");
   }
 
   /// 5. Drain: all published frames posed, or no new pose for --drain-idle.
@@ -496,6 +519,7 @@ class SupervisedRun {
   const TestFaultPlan faults_;
   LaunchReport& report_;
   std::vector<std::string>& failures_;
+  const bool show_progress_;
   std::string failed_process_;  // whose log to show
   Supervisor sup_;
   // --restart: stages that died and when to start them again; restarts done per stage.

@@ -78,7 +78,9 @@ std::string launchUsage() {
          "  --compress              lossless compressed frames (player png/zlib) and depth\n"
          "                          maps (depth filter zlib); automatic when the kernel's\n"
          "                          net.core.rmem_max is below 2 MiB\n"
-         "  --quiet                 only the report\n";
+         "  --quiet                 only the report\n"
+         "  --progress, --no-progress  a progress line on stderr while the sequence plays:\n"
+         "                          frames published, posed, dropped (default: on a terminal)\n";
 }
 
 namespace {
@@ -188,7 +190,11 @@ bool readRunOption(OptionReader& r, LaunchOptions& o, bool* rate_given) {
     o.preload = key == "--preload";
   } else if (key == "--quiet")
     r.flag(&o.quiet);
-  else
+  else if (key == "--progress" || key == "--no-progress") {
+    bool given = false;
+    r.flag(&given);
+    o.progress = key == "--progress";
+  } else
     return false;
   return true;
 }

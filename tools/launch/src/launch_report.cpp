@@ -104,6 +104,21 @@ std::string LaunchReport::text() const {
   return out.str();
 }
 
+std::string progressLine(int64_t published, int64_t posed, int64_t dropped, double elapsed_s) {
+  char buf[160];
+  if (published <= 0) {
+    std::snprintf(buf, sizeof buf, "[pplvo-launch] %lld posed, %.1f s",
+                  static_cast<long long>(posed), elapsed_s);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "[pplvo-launch] %lld frames published, %lld posed (%.0f %%), %lld dropped, %.1f s",
+                  static_cast<long long>(published), static_cast<long long>(posed),
+                  100.0 * static_cast<double>(posed) / static_cast<double>(published),
+                  static_cast<long long>(dropped), elapsed_s);
+  }
+  return buf;
+}
+
 std::vector<std::string> LaunchReport::faults() const {
   std::vector<std::string> f;
   char buf[256];

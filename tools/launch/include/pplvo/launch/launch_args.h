@@ -52,6 +52,9 @@ struct LaunchOptions {
   /// (default: on when free-running, where decoding would compete with the pipeline).
   std::optional<bool> preload;
   bool quiet = false;  ///< --quiet: report only
+  /// --progress / --no-progress: a progress line on stderr while the sequence plays (default:
+  /// when stderr is a terminal and not --quiet).
+  std::optional<bool> progress;
   /// --restart N: a depth filter, frontend or estimator that dies is started again, at most N
   /// times per stage (0: a dead stage fails the launch), after --restart-backoff seconds,
   /// doubled on each restart of the same stage.

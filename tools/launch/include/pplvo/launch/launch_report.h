@@ -46,6 +46,10 @@ class DrainMonitor {
 };
 
 /// Everything the report shows.
+/// The progress line while the sequence plays (without "\r"): "[pplvo-launch] 120 frames
+/// published, 118 posed (98 %), 2 dropped, 4.0 s". `published` < 0: not known yet.
+std::string progressLine(int64_t published, int64_t posed, int64_t dropped, double elapsed_s);
+
 struct LaunchReport {
   struct Process {
     std::string name;
