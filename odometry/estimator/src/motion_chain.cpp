@@ -1,5 +1,6 @@
 #include "pplvo/estimator/motion_chain.h"
 
+#include <optional>
 #include <algorithm>
 #include <cmath>
 
@@ -76,19 +77,48 @@ MotionChainOutput MotionChain::track(const FrameFeatures& prev, const FrameFeatu
                curr.camera);
 }
 
+std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
+    const PoseEstimate& est) const {
+  if (!options_.fuse_weak_estimates || status_ == TrackingStatus::kLost) return std::nullopt;
+  if (est.status != EstimateStatus::kUncertain && est.status != EstimateStatus::kDegenerate) {
+    return std::nullopt;
+  }
+  if (!isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) return std::nullopt;
+  // Information form over xi = [t; q_xyz] of T_curr_prev: the estimate where it has
+  // information, the prediction (with the velocity model's process noise) elsewhere.
+  Matrix6d prior = Matrix6d::Zero();
+  prior.topLeftCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_t_m *
+                                                     options_.velocity_model_sigma_t_m);
+  prior.bottomRightCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_q *
+                                                         options_.velocity_model_sigma_q);
+  const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
+  if (est_ldlt.info() != Eigen::Success) return std::nullopt;
+  const Matrix6d info_est = est_ldlt.solve(Matrix6d::Identity());
+  const Matrix6d info_prior = prior.inverse();
+  Matrix6d cov = (info_est + info_prior).inverse();
+  cov = 0.5 * (cov + cov.transpose());
+  const Vector6d xi = cov * (info_est * poseToXi(est.T_curr_prev) +
+                             info_prior * poseToXi(predictedMotion()));
+  if (!xi.allFinite() || !cov.allFinite()) return std::nullopt;
+  return std::make_pair(xiToPose(xi), cov);
+}
+
 MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
   if (!initialised_) return initialise(seq);
   const bool good =
       est.accepted() && isValidPose(est.T_curr_prev, 1e-6) && est.covariance.allFinite();
+  const std::optional<std::pair<Pose3, Matrix6d>> fused =
+      good ? std::nullopt : fuseWithPrediction(est);
   Pose3 T_curr_prev = Pose3::Identity();
   Matrix6d Q = Matrix6d::Zero();
-  if (good) {
+  if (good || fused) {
     status_ = (status_ == TrackingStatus::kLost) ? TrackingStatus::kReinitialised
                                                  : TrackingStatus::kTracking;
     consecutive_rejections_ = 0;
-    T_curr_prev = est.T_curr_prev;
-    Q = est.covariance;
+    T_curr_prev = good ? est.T_curr_prev : fused->first;
+    Q = good ? est.covariance : fused->second;
     velocity_ = motionToVector(T_curr_prev);
+    if (fused) ++fused_estimates_;
   } else {
     ++consecutive_rejections_;
     if (consecutive_rejections_ <= options_.max_velocity_model_frames) {

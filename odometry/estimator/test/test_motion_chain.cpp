@@ -246,3 +246,41 @@ TEST(MotionChain, OptionsRoundTripThroughYaml) {
 
 }  // namespace
 }  // namespace pplvo::estimator
+
+namespace pplvo::estimator {
+namespace {
+
+// fuse_weak_estimates: an estimate that pins down five directions and leaves the translation
+// along x free (a plain corridor) takes those five from the features and x from the
+// constant-velocity prediction, with the prediction's uncertainty along x only.
+TEST(MotionChain, WeakEstimateTakesTheUnconstrainedDirectionFromThePrediction) {
+  MotionChainOptions o;
+  o.fuse_weak_estimates = true;
+  MotionChain tracker(o);
+  tracker.update(0, goodEstimate(Pose3::Identity()));
+  const Pose3 M = makePose({0.02, 0.0, 0.0}, Eigen::Quaterniond::Identity());  // the velocity
+  tracker.update(1, goodEstimate(M));
+  PoseEstimate weak;
+  weak.status = EstimateStatus::kUncertain;
+  // Wrong along x (the features cannot tell), right across it.
+  weak.T_curr_prev = makePose({-0.3, 0.004, -0.002}, Eigen::Quaterniond::Identity());
+  weak.covariance = Matrix6d::Identity() * 1e-8;
+  weak.covariance(0, 0) = kLargeVariance;
+  const MotionChainOutput out = tracker.update(2, weak);
+  EXPECT_EQ(out.status, TrackingStatus::kTracking);
+  EXPECT_EQ(tracker.fusedEstimates(), 1);
+  EXPECT_NEAR(out.T_curr_prev.translation().x(), 0.02, 1e-6);    // the prediction
+  EXPECT_NEAR(out.T_curr_prev.translation().y(), 0.004, 1e-6);   // the estimate
+  EXPECT_NEAR(out.T_curr_prev.translation().z(), -0.002, 1e-6);  // the estimate
+  EXPECT_NEAR(std::sqrt(out.covariance(0, 0)), o.velocity_model_sigma_t_m, 1e-6);
+  EXPECT_LT(out.covariance(1, 1), 2e-8);
+
+  // Without the option the same estimate is rejected as a whole.
+  MotionChain strict{MotionChainOptions{}};
+  strict.update(0, goodEstimate(Pose3::Identity()));
+  strict.update(1, goodEstimate(M));
+  EXPECT_EQ(strict.update(2, weak).status, TrackingStatus::kVelocityModel);
+}
+
+}  // namespace
+}  // namespace pplvo::estimator

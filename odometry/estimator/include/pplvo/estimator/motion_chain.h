@@ -3,6 +3,8 @@
 /// model when an estimate is rejected (paper Sec. "Pose Uncertainty"), and propagates the
 /// transform uncertainty from each frame of the depth-filter window to the current one
 /// (EKF step, eq. 24).
+#include <optional>
+#include <utility>
 #include <cstdint>
 #include <deque>
 #include <vector>
@@ -32,6 +34,13 @@ struct MotionChainOptions {
   /// threshold drops frames linked to the current one through a guessed motion.
   double velocity_model_sigma_t_m = 0.02;
   double velocity_model_sigma_q = 0.01;
+  /// A weak estimate (EstimateStatus kUncertain or kDegenerate: some directions unconstrained,
+  /// e.g. translation along a plain corridor) is not thrown away: it is combined with the
+  /// velocity model's prediction in information form (the prediction with the process noise
+  /// above), so the constrained directions come from the features and only the unconstrained
+  /// ones from the velocity model, with the covariance to match. false: such an estimate is
+  /// rejected as a whole (the velocity model, then LOST).
+  bool fuse_weak_estimates = true;
   /// Per-frame shared error: each frame's pose carries an error common to all of its
   /// measurements (std per axis), which no number of matches averages away and which does
   /// not accumulate from frame to frame. A relative pose between two frames gains 2 Q, Q =
@@ -56,6 +65,9 @@ void visit(V& v, MotionChainOptions& o) {
   v.field("max_velocity_model_frames", o.max_velocity_model_frames,
           "consecutive rejected frames bridged by the velocity model, then LOST",
           config::atLeast(0));
+  v.field("fuse_weak_estimates", o.fuse_weak_estimates,
+          "combine an uncertain or degenerate estimate with the velocity model's prediction "
+          "(information form) instead of rejecting it");
   v.field("predict_from_velocity", o.predict_from_velocity,
           "start each estimate from the constant-velocity prediction (false: identity)");
   v.field("window_length", o.window_length,
@@ -133,6 +145,8 @@ class MotionChain {
   /// The state machine alone, given an estimate (used by track(); public for tests and for
   /// callers that run the estimator themselves).
   MotionChainOutput update(int64_t seq, const PoseEstimate& estimate);
+  /// Weak estimates combined with the prediction so far (fuse_weak_estimates).
+  int64_t fusedEstimates() const { return fused_estimates_; }
 
   bool initialised() const { return initialised_; }
   TrackingStatus status() const { return status_; }
@@ -149,6 +163,9 @@ class MotionChain {
   Pose3 T_w_c_ = Pose3::Identity();
   Vector6d velocity_ = Vector6d::Zero();  ///< last good motion, [t; angle-axis] (tangent)
   int consecutive_rejections_ = 0;
+  int64_t fused_estimates_ = 0;
+  /// A weak estimate combined with the prediction (fuse_weak_estimates), or nullopt.
+  std::optional<std::pair<Pose3, Matrix6d>> fuseWithPrediction(const PoseEstimate& est) const;
   Pose3 last_T_curr_prev_ = Pose3::Identity();
   Matrix6d last_cov_ = Matrix6d::Zero();
   std::deque<WindowEntry> window_;
