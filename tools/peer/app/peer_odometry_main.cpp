@@ -16,7 +16,7 @@
 namespace {
 
 void usage(std::ostream& out) {
-  out << "usage: pplvo-peer-odometry --dataset DIR --output TRAJ.txt\n"
+  out << "usage: pplvo-peer-odometry --dataset DIR [--camera FILE.yaml] --output TRAJ.txt\n"
          "                           [--method rgbd|icp|rgbd_icp] [--max-frames N]\n"
          "                           [--failure hold|constant_velocity] [--signed-camera]\n"
          "                           [--max-points-part F] [--max-depth M]\n"
@@ -24,6 +24,7 @@ void usage(std::ostream& out) {
          "                            [--keyframe-rotation DEG]]\n"
          "  Runs OpenCV contrib's cv::rgbd odometry (default rgbd) on a TUM-layout folder and\n"
          "  writes camera-to-world poses (world = first camera) with the dataset's stamps.\n"
+         "  --camera: a camera file for a folder without calib_params.xml (config/cameras/).\n"
          "  --signed-camera passes a mirrored camera matrix (fy < 0) to OpenCV unchanged\n"
          "  instead of flipping the images (for comparison only).\n"
          "  --max-points-part: fraction of valid pixels OpenCV samples (default 0.07);\n"
@@ -52,7 +53,7 @@ bool parseInt(const std::string& s, long* v) {
 }
 
 struct PeerArgs {
-  std::string dataset_dir, output;
+  std::string dataset_dir, camera_file, output;
   long max_frames = -1;
   pplvo::peer::PeerOdometryOptions options;
 };
@@ -130,6 +131,8 @@ std::optional<int> parseArgs(int argc, char** argv, PeerArgs* args) {
       return 0;
     } else if (a == "--dataset") {
       if (!value(&args->dataset_dir)) return 2;
+    } else if (a == "--camera") {
+      if (!value(&args->camera_file)) return 2;
     } else if (a == "--output") {
       if (!value(&args->output)) return 2;
     } else if (a == "--method" || a == "--max-frames" || a == "--failure" ||
@@ -253,7 +256,9 @@ int main(int argc, char** argv) {
   const peer::PeerOdometryOptions& options = args.options;
 
   try {
-    const dataset::Dataset data = dataset::Dataset::open(args.dataset_dir);
+    dataset::DatasetOptions dataset_options;
+    dataset_options.camera_file = args.camera_file;  // a folder without calib_params.xml
+    const dataset::Dataset data = dataset::Dataset::open(args.dataset_dir, dataset_options);
     printSetup(args.dataset_dir, data, options);
     size_t n = data.size();
     if (args.max_frames > 0 && static_cast<size_t>(args.max_frames) < n) {

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <string>
 
@@ -173,6 +174,43 @@ TEST_F(PeerProgram, UnreadableFrameIsSkippedAndCounted) {
   EXPECT_NE(r.out.find("1 unreadable frames skipped"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("0 failures"), std::string::npos) << r.out;
   EXPECT_EQ(readTumTrajectory(traj.string()).poses.size(), 11u);
+}
+
+// A folder without calib_params.xml (TUM's official download) runs with --camera, the same
+// poses as with the calibration file.
+TEST_F(PeerProgram, CameraFileReplacesAMissingCalibration) {
+  const fs::path bare = *tmp_ / "bare";
+  fs::create_directories(bare);
+  for (const auto& entry : fs::directory_iterator(*tmp_ / "seq")) {
+    if (entry.path().filename() == "calib_params.xml") continue;
+    fs::create_symlink(entry.path(), bare / entry.path().filename());
+  }
+  const PinholeCamera c = dataset::Dataset::open((*tmp_ / "seq").string()).camera().camera;
+  const fs::path yaml = *tmp_ / "camera.yaml";
+  std::ofstream(yaml) << std::setprecision(17) << "width: " << c.width << "\nheight: " << c.height
+                      << "\nfx: " << c.fx << "\nfy: " << c.fy << "\ncx: " << c.cx
+                      << "\ncy: " << c.cy << "\ndepth_scale: 5000\n";
+  const std::string common = " --max-frames 4 --output '";
+  EXPECT_EQ(runProgram("--dataset '" + bare.string() + "'" + common +
+                           (*tmp_ / "none.txt").string() + "'",
+                       *tmp_)
+                .exit_code,
+            1);  // no calibration at all: an error
+  const ProgramRun with_file = runProgram("--dataset '" + (*tmp_ / "seq").string() + "'" + common +
+                                              (*tmp_ / "calib.txt").string() + "'",
+                                          *tmp_);
+  const ProgramRun with_camera =
+      runProgram("--dataset '" + bare.string() + "' --camera '" + yaml.string() + "'" + common +
+                     (*tmp_ / "camera.txt").string() + "'",
+                 *tmp_);
+  ASSERT_EQ(with_file.exit_code, 0) << with_file.err;
+  ASSERT_EQ(with_camera.exit_code, 0) << with_camera.err;
+  const auto a = readTumTrajectory((*tmp_ / "calib.txt").string());
+  const auto b = readTumTrajectory((*tmp_ / "camera.txt").string());
+  ASSERT_EQ(a.poses.size(), b.poses.size());
+  for (size_t i = 0; i < a.poses.size(); ++i) {
+    EXPECT_EQ(a.poses[i].T_w_c.matrix(), b.poses[i].T_w_c.matrix()) << i;
+  }
 }
 
 TEST_F(PeerProgram, BadDatasetExitsWithOne) {
