@@ -26,6 +26,33 @@ Pose3 getPose(const double* position, const double* q_wxyz, const char* what) {
   return makePose(Eigen::Vector3d(position[0], position[1], position[2]), q);
 }
 
+void putMatrix(const Matrix6d& M, double* out) {
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) out[6 * r + c] = M(r, c);
+  }
+}
+
+Matrix6d getMatrix(const double* in, const char* what) {
+  Matrix6d M;
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      if (!std::isfinite(in[6 * r + c])) throw MessageError(std::string("non-finite ") + what);
+      M(r, c) = in[6 * r + c];
+    }
+  }
+  return M;
+}
+
+Eigen::Vector3d getVector(const double* in, const char* what) {
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(in[k])) throw MessageError(std::string("non-finite ") + what);
+  }
+  return {in[0], in[1], in[2]};
+}
+
+inline constexpr const char* kOdomFrame = "odom";
+inline constexpr const char* kBaseFrame = "base_link";
+
 }  // namespace
 
 pplvo_msgs::pose_t toMsg(const FramePose& p) {
@@ -36,9 +63,7 @@ pplvo_msgs::pose_t toMsg(const FramePose& p) {
   m.status = static_cast<int8_t>(p.status);
   putPose(p.T_w_c, m.position, m.orientation);
   putPose(p.T_prev_curr, m.rel_position, m.rel_orientation);
-  for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) m.rel_covariance[6 * r + c] = p.rel_covariance(r, c);
-  }
+  putMatrix(p.rel_covariance, m.rel_covariance);
   m.max_translation_variance = p.max_translation_variance_m2;
   m.n_point_matches = p.n_point_matches;
   m.n_line_matches = p.n_line_matches;
@@ -63,13 +88,7 @@ FramePose fromMsg(const pplvo_msgs::pose_t& m) {
   p.status = static_cast<TrackingStatus>(m.status);
   p.T_w_c = getPose(m.position, m.orientation, "pose T_w_c");
   p.T_prev_curr = getPose(m.rel_position, m.rel_orientation, "relative pose");
-  for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) {
-      const double v = m.rel_covariance[6 * r + c];
-      if (!std::isfinite(v)) throw MessageError("non-finite pose covariance");
-      p.rel_covariance(r, c) = v;
-    }
-  }
+  p.rel_covariance = getMatrix(m.rel_covariance, "pose covariance");
   p.max_translation_variance_m2 = m.max_translation_variance;
   p.n_point_matches = m.n_point_matches;
   p.n_line_matches = m.n_line_matches;
@@ -93,34 +112,6 @@ FramePose fromMsg(const pplvo_msgs::pose_t& m) {
   return p;
 }
 
-namespace {
-inline constexpr const char* kOdomFrame = "odom";
-inline constexpr const char* kBaseFrame = "base_link";
-
-void putMatrix(const Matrix6d& M, double* out) {
-  for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) out[6 * r + c] = M(r, c);
-  }
-}
-
-Matrix6d getMatrix(const double* in, const char* what) {
-  Matrix6d M;
-  for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) {
-      if (!std::isfinite(in[6 * r + c])) throw MessageError(std::string("non-finite ") + what);
-      M(r, c) = in[6 * r + c];
-    }
-  }
-  return M;
-}
-
-Eigen::Vector3d getVector(const double* in, const char* what) {
-  for (int k = 0; k < 3; ++k) {
-    if (!std::isfinite(in[k])) throw MessageError(std::string("non-finite ") + what);
-  }
-  return {in[0], in[1], in[2]};
-}
-}  // namespace
 
 pplvo_msgs::odometry_t toMsg(const BodyOdometry& o) {
   pplvo_msgs::odometry_t m;
