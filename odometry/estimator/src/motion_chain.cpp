@@ -1,8 +1,10 @@
 #include "pplvo/estimator/motion_chain.h"
 
-#include <optional>
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "pplvo/estimator/pose_parameterisation.h"
 
@@ -95,6 +97,12 @@ std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
   if (est_ldlt.info() != Eigen::Success) return std::nullopt;
   const Matrix6d info_est = est_ldlt.solve(Matrix6d::Identity());
   const Matrix6d info_prior = prior.inverse();
+  // The constrained subset: the directions in which the estimate knows more than the
+  // prediction (eigenvalues above 1 of its information whitened by the prediction's). Fewer
+  // than half of them: the features say too little, the frame is the velocity model's.
+  const Matrix6d prior_sqrt = prior.cwiseSqrt();  // diagonal
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(prior_sqrt * info_est * prior_sqrt);
+  if ((whitened.eigenvalues().array() > 1.0).count() < 3) return std::nullopt;
   Matrix6d cov = (info_est + info_prior).inverse();
   cov = 0.5 * (cov + cov.transpose());
   const Vector6d xi = cov * (info_est * poseToXi(est.T_curr_prev) +

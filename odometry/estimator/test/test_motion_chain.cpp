@@ -275,8 +275,18 @@ TEST(MotionChain, WeakEstimateTakesTheUnconstrainedDirectionFromThePrediction) {
   EXPECT_NEAR(std::sqrt(out.covariance(0, 0)), o.velocity_model_sigma_t_m, 1e-6);
   EXPECT_LT(out.covariance(1, 1), 2e-8);
 
-  // Without the option the same estimate is rejected as a whole.
-  MotionChain strict{MotionChainOptions{}};
+  // An estimate that knows less than the prediction in most directions is rejected as a
+  // whole (the velocity model), as is any weak estimate without the option.
+  MotionChain chain2(o);
+  chain2.update(0, goodEstimate(Pose3::Identity()));
+  chain2.update(1, goodEstimate(M));
+  PoseEstimate vague = weak;
+  vague.covariance = Matrix6d::Identity();  // 1 m, 1 rad: nothing
+  vague.covariance(1, 1) = 1e-8;
+  EXPECT_EQ(chain2.update(2, vague).status, TrackingStatus::kVelocityModel);
+  MotionChainOptions off;
+  off.fuse_weak_estimates = false;
+  MotionChain strict(off);
   strict.update(0, goodEstimate(Pose3::Identity()));
   strict.update(1, goodEstimate(M));
   EXPECT_EQ(strict.update(2, weak).status, TrackingStatus::kVelocityModel);

@@ -38,8 +38,9 @@ struct MotionChainOptions {
   /// e.g. translation along a plain corridor) is not thrown away: it is combined with the
   /// velocity model's prediction in information form (the prediction with the process noise
   /// above), so the constrained directions come from the features and only the unconstrained
-  /// ones from the velocity model, with the covariance to match. false: such an estimate is
-  /// rejected as a whole (the velocity model, then LOST).
+  /// ones from the velocity model, with the covariance to match; only when the estimate knows
+  /// more than the prediction in at least half of the six directions. false: such an estimate
+  /// is rejected as a whole (the velocity model, then LOST).
   bool fuse_weak_estimates = true;
   /// Per-frame shared error: each frame's pose carries an error common to all of its
   /// measurements (std per axis), which no number of matches averages away and which does
