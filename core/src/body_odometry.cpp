@@ -76,6 +76,36 @@ Matrix6d bodyJacobian(const Pose3& T_base_optical, const Eigen::Matrix3d& R_m) {
 
 }  // namespace
 
+Vector6d twistOfMotion(const Pose3& motion, double dt_s) {
+  const Eigen::AngleAxisd aa(motion.linear());
+  const Eigen::Vector3d phi = aa.angle() * aa.axis();
+  Vector6d twist;
+  twist << leftJacobianSO3(phi).inverse() * motion.translation() / dt_s, phi / dt_s;
+  return twist;
+}
+
+Pose3 motionOfTwist(const Vector6d& twist, double dt_s) {
+  const Eigen::Vector3d phi = twist.tail<3>() * dt_s;
+  Pose3 motion = Pose3::Identity();
+  if (phi.norm() > 0) motion.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).matrix();
+  motion.translation() = leftJacobianSO3(phi) * twist.head<3>() * dt_s;
+  return motion;
+}
+
+void OdometryChain::compose(const Pose3& motion, const Matrix6d& motion_covariance) {
+  // p_k = p + R t', R_k = R R'. Errors in odom: dp_k = dp - [R t']x dphi + R dt',
+  // dphi_k = dphi + R dtheta'.
+  const Eigen::Matrix3d R = T_odom_base_.linear();
+  Matrix6d F = Matrix6d::Identity();
+  F.topRightCorner<3, 3>() = -skew(R * motion.translation());
+  Matrix6d G = Matrix6d::Zero();
+  G.topLeftCorner<3, 3>() = R;
+  G.bottomRightCorner<3, 3>() = R;
+  covariance_ = F * covariance_ * F.transpose() + G * motion_covariance * G.transpose();
+  T_odom_base_ = T_odom_base_ * motion;
+  T_odom_base_.linear() = Eigen::Quaterniond(T_odom_base_.linear()).normalized().toRotationMatrix();
+}
+
 BodyOdometryIntegrator::BodyOdometryIntegrator(BodyExtrinsic extrinsic,
                                                const Matrix6d& frame_error_covariance)
     : extrinsic_(extrinsic),
@@ -100,35 +130,22 @@ BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) 
     // of its [dt'; dtheta'] (left rotation in the previous body frame) without the shared
     // error of its two frames, which does not accumulate.
     const Pose3 motion = T_base_optical_ * pose.T_prev_curr * T_base_optical_.inverse();
-    const Eigen::Matrix3d& R_m = motion.linear();
-    const Matrix6d J_body = bodyJacobian(T_base_optical_, R_m);
+    const Matrix6d J_body = bodyJacobian(T_base_optical_, motion.linear());
     const Matrix6d accumulating = clampedPsd(pose.rel_covariance - frame_error_covariance_);
     const Matrix6d motion_cov =
         J_body * motionCovarianceFromQuaternionCovariance(pose.T_prev_curr, accumulating) *
         J_body.transpose();
 
-    // Odom pose: p_k = p + R t', R_k = R R'. Errors (odom frame): dp_k = dp - [R t']x dphi +
-    // R dt', dphi_k = dphi + R dtheta'.
-    const Eigen::Matrix3d R_prev = T_odom_base_.linear();
-    Matrix6d F = Matrix6d::Identity();
-    F.topRightCorner<3, 3>() = -skew(R_prev * motion.translation());
-    Matrix6d G = Matrix6d::Zero();
-    G.topLeftCorner<3, 3>() = R_prev;
-    G.bottomRightCorner<3, 3>() = R_prev;
-    covariance_ = F * covariance_ * F.transpose() + G * motion_cov * G.transpose();
-    T_odom_base_ = T_odom_base_ * motion;
-    T_odom_base_.linear() = Eigen::Quaterniond(T_odom_base_.linear()).normalized().toRotationMatrix();
+    chain_.compose(motion, motion_cov);
 
-    // The body twist, constant over the interval, that moves the body by `motion`: the SE(3)
-    // logarithm over dt, phi = log(R'), v = V(phi)^-1 t' (the same in the body frame at both
-    // ends of the interval, as nav_msgs/Odometry's twist in child_frame_id).
-    const Eigen::AngleAxisd aa(R_m);
-    const Eigen::Vector3d phi = aa.angle() * aa.axis();
-    const Eigen::Matrix3d V_inv = leftJacobianSO3(phi).inverse();
-    out.linear_velocity = V_inv * motion.translation() / dt;
-    out.angular_velocity = phi / dt;
+    // The body twist, constant over the interval, that moves the body by `motion` (the same
+    // in the body frame at both ends of the interval, as nav_msgs/Odometry's twist in
+    // child_frame_id); its covariance to first order, dv = V^-1 dt' / dt, dw = dtheta' / dt.
+    const Vector6d twist = twistOfMotion(motion, dt);
+    out.linear_velocity = twist.head<3>();
+    out.angular_velocity = twist.tail<3>();
     Matrix6d J_twist = Matrix6d::Zero();
-    J_twist.topLeftCorner<3, 3>() = V_inv / dt;
+    J_twist.topLeftCorner<3, 3>() = leftJacobianSO3(twist.tail<3>() * dt).inverse() / dt;
     J_twist.bottomRightCorner<3, 3>() = Eigen::Matrix3d::Identity() / dt;
     out.twist_covariance = J_twist * motion_cov * J_twist.transpose();
     out.dt_s = dt;
@@ -137,14 +154,14 @@ BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) 
   }
   started_ = true;
   last_stamp_s_ = stamp_s;
-  out.T_odom_base = T_odom_base_;
-  out.pose_covariance = covariance_;
-  if (has_motion || !covariance_.isZero()) {
+  out.T_odom_base = chain_.pose();
+  out.pose_covariance = chain_.covariance();
+  if (has_motion || !chain_.covariance().isZero()) {
     // The shared errors of the first and the current frame, once (isotropic blocks: the same
     // in odom's axes up to the current body rotation).
     Matrix6d G = Matrix6d::Zero();
-    G.topLeftCorner<3, 3>() = T_odom_base_.linear();
-    G.bottomRightCorner<3, 3>() = T_odom_base_.linear();
+    G.topLeftCorner<3, 3>() = chain_.pose().linear();
+    G.bottomRightCorner<3, 3>() = chain_.pose().linear();
     out.pose_covariance += G * frame_error_body_ * G.transpose();
   }
   return out;

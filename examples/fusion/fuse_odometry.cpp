@@ -86,7 +86,7 @@ class Fusion {
   explicit Fusion(const Args& args) : args_(args), out_(args.output) {
     if (!out_) throw std::runtime_error("cannot write " + args.output);
     out_ << "# base_link in odom, fused (" << args.use << ")\n";
-    if (!args.groundtruth_base.empty()) gt_ = examples::readTum(args.groundtruth_base);
+    if (!args.groundtruth_base.empty()) gt_ = examples::readTumByStamp(args.groundtruth_base);
   }
 
   /// A sample of one source; returns the fused odometry of every frame it completed.

@@ -76,21 +76,11 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-/// The constant body twist that moves `a` to `b` in dt (SE(3) logarithm).
-Vector6d twistBetween(const Pose3& a, const Pose3& b, double dt) {
-  const Pose3 m = a.inverse() * b;
-  const Eigen::AngleAxisd aa(m.linear());
-  const Eigen::Vector3d phi = aa.angle() * aa.axis();
-  Vector6d xi;
-  xi << leftJacobianSO3(phi).inverse() * m.translation() / dt, phi / dt;
-  return xi;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) try {
   const Args args = parse(argc, argv);
-  const auto gt = examples::readTum(args.groundtruth);
+  const auto gt = examples::readTumByStamp(args.groundtruth);
   const Pose3 T_base_optical = args.mount.extrinsic().baseFromOptical();
   lcm::LogFile in(args.run_log, "r");
   lcm::LogFile out(args.output, "w");
@@ -133,7 +123,7 @@ int main(int argc, char** argv) try {
     w.twist_covariance = Matrix6d::Identity() * kUnknownTwistVariance;
     if (last_base && t > last_t) {
       const double dt = t - last_t;
-      const Vector6d truth = twistBetween(*last_base, T_w_base, dt);
+      const Vector6d truth = twistOfMotion(last_base->inverse() * T_w_base, dt);
       slip = std::clamp(slip + kSlipStep * n01(rng), -kSlipMax, kSlipMax);
       const double v = truth(0) * kScale * (1.0 + slip) + kSpeedNoise * n01(rng);
       const double wz = truth(5) + kYawBias + kYawNoise * n01(rng);

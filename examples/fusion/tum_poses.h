@@ -1,30 +1,21 @@
 #pragma once
-/// TUM trajectory text ("stamp tx ty tz qx qy qz qw") in and out, for the fusion example.
-#include <Eigen/Geometry>
-#include <fstream>
+/// Ground truth by stamp for the fusion example, on pplvo's TUM reader and writer
+/// (pplvo/core/trajectory.h).
 #include <map>
-#include <sstream>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 
-#include "pplvo/core/geometry.h"
+#include "pplvo/core/trajectory.h"
 
 namespace pplvo::examples {
 
-/// Poses by stamp (seconds); throws on a file that cannot be read.
-inline std::map<double, Pose3> readTum(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read " + path);
+/// Poses of a TUM file by stamp (seconds); throws when it cannot be read or has bad lines.
+inline std::map<double, Pose3> readTumByStamp(const std::string& path) {
+  const TrajectoryReadResult r = readTumTrajectory(path);
+  if (r.skipped_lines > 0) throw std::runtime_error(path + ": " + r.first_error);
   std::map<double, Pose3> poses;
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream s(line);
-    double t, x, y, z, qx, qy, qz, qw;
-    if (!(s >> t >> x >> y >> z >> qx >> qy >> qz >> qw)) {
-      throw std::runtime_error(path + ": bad line '" + line + "'");
-    }
-    poses[t] = makePose({x, y, z}, Eigen::Quaterniond(qw, qx, qy, qz).normalized());
-  }
+  for (const StampedPose& p : r.poses) poses[p.stamp] = p.T_w_c;
   return poses;
 }
 
@@ -37,11 +28,7 @@ inline const Pose3* poseAt(const std::map<double, Pose3>& poses, double t,
 }
 
 inline void writeTumLine(std::ostream& out, const std::string& stamp, const Pose3& T) {
-  const Eigen::Quaterniond q(T.linear());
-  char buf[256];
-  std::snprintf(buf, sizeof buf, " %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", T.translation().x(),
-                T.translation().y(), T.translation().z(), q.x(), q.y(), q.z(), q.w());
-  out << stamp << buf;
+  out << formatTumLine({stamp, 0.0, T}) << '\n';
 }
 
 }  // namespace pplvo::examples

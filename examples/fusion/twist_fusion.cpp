@@ -91,26 +91,11 @@ BodyTwist WheelErrorEstimator::correctWheels(const BodyTwist& wheels, double dt_
 }
 
 void TwistFusionFilter::propagate(const BodyTwist& twist, double dt_s) {
-  // The motion over dt: Exp of the twist (rotation phi = w dt, translation V(phi) v dt).
-  const Eigen::Vector3d phi = twist.xi.tail<3>() * dt_s;
-  const Eigen::Matrix3d V = leftJacobianSO3(phi);
-  Pose3 motion = Pose3::Identity();
-  if (phi.norm() > 0) motion.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).matrix();
-  motion.translation() = V * twist.xi.head<3>() * dt_s;
-  // Its covariance over [dt'; dtheta'] (previous body frame), to first order.
+  // The motion's covariance over [dt'; dtheta'] to first order: V(w dt) dt dv, dt dw.
   Matrix6d J = Matrix6d::Zero();
-  J.topLeftCorner<3, 3>() = V * dt_s;
+  J.topLeftCorner<3, 3>() = leftJacobianSO3(twist.xi.tail<3>() * dt_s) * dt_s;
   J.bottomRightCorner<3, 3>() = Eigen::Matrix3d::Identity() * dt_s;
-  const Matrix6d motion_cov = J * twist.covariance * J.transpose();
-  // The pose: p += R t', R = R R'; errors in odom as BodyOdometryIntegrator's.
-  const Eigen::Matrix3d R = T_odom_base_.linear();
-  Matrix6d F = Matrix6d::Identity();
-  F.topRightCorner<3, 3>() = -skew(R * motion.translation());
-  Matrix6d G = Matrix6d::Zero();
-  G.topLeftCorner<3, 3>() = R;
-  G.bottomRightCorner<3, 3>() = R;
-  covariance_ = F * covariance_ * F.transpose() + G * motion_cov * G.transpose();
-  T_odom_base_ = T_odom_base_ * motion;
+  chain_.compose(motionOfTwist(twist.xi, dt_s), J * twist.covariance * J.transpose());
 }
 
 }  // namespace pplvo::examples

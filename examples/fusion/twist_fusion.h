@@ -58,12 +58,11 @@ class TwistFusionFilter {
  public:
   /// Moves the body by `twist` over `dt_s` seconds; the pose covariance grows by the motion's.
   void propagate(const BodyTwist& twist, double dt_s);
-  const Pose3& pose() const { return T_odom_base_; }
-  const Matrix6d& covariance() const { return covariance_; }  ///< [x y z rx ry rz], odom
+  const Pose3& pose() const { return chain_.pose(); }
+  const Matrix6d& covariance() const { return chain_.covariance(); }  ///< [x y z rx ry rz], odom
 
  private:
-  Pose3 T_odom_base_ = Pose3::Identity();
-  Matrix6d covariance_ = Matrix6d::Zero();
+  OdometryChain chain_;  // the same composition as pplvo's own odometry
 };
 
 }  // namespace pplvo::examples

@@ -32,6 +32,18 @@ Pose3 vectorToMotion(const Vector6d& v) {
 
 }  // namespace
 
+namespace {
+/// The process noise of a velocity-model step, over [t; q_xyz].
+Matrix6d velocityModelCovariance(const MotionChainOptions& o) {
+  Matrix6d Q = Matrix6d::Zero();
+  Q.topLeftCorner<3, 3>().diagonal().setConstant(o.velocity_model_sigma_t_m *
+                                                 o.velocity_model_sigma_t_m);
+  Q.bottomRightCorner<3, 3>().diagonal().setConstant(o.velocity_model_sigma_q *
+                                                     o.velocity_model_sigma_q);
+  return Q;
+}
+}  // namespace
+
 Matrix6d frameErrorCovariance(const MotionChainOptions& o) {
   const double var_t = o.frame_error_sigma_t_m * o.frame_error_sigma_t_m;
   const double half_angle = 0.5 * o.frame_error_sigma_rot_deg * M_PI / 180.0;  // q_xyz
@@ -88,11 +100,7 @@ std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
   if (!isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) return std::nullopt;
   // Information form over xi = [t; q_xyz] of T_curr_prev: the estimate where it has
   // information, the prediction (with the velocity model's process noise) elsewhere.
-  Matrix6d prior = Matrix6d::Zero();
-  prior.topLeftCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_t_m *
-                                                     options_.velocity_model_sigma_t_m);
-  prior.bottomRightCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_q *
-                                                         options_.velocity_model_sigma_q);
+  const Matrix6d prior = velocityModelCovariance(options_);
   const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
   if (est_ldlt.info() != Eigen::Success) return std::nullopt;
   const Matrix6d info_est = est_ldlt.solve(Matrix6d::Identity());
@@ -133,10 +141,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
       status_ = TrackingStatus::kVelocityModel;
       T_curr_prev =
           vectorToMotion(std::pow(options_.velocity_decay, consecutive_rejections_) * velocity_);
-      Q.topLeftCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_t_m *
-                                                     options_.velocity_model_sigma_t_m);
-      Q.bottomRightCorner<3, 3>().diagonal().setConstant(options_.velocity_model_sigma_q *
-                                                         options_.velocity_model_sigma_q);
+      Q = velocityModelCovariance(options_);
     } else {
       status_ = TrackingStatus::kLost;
       velocity_.setZero();

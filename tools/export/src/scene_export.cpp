@@ -4,13 +4,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 #include <pplvo_msgs/features_t.hpp>
 #include <pplvo_msgs/pose_t.hpp>
 #include <stdexcept>
 
+#include "pplvo/logging/event_log.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert_features.h"
 #include "pplvo/msgs/convert_pose.h"
@@ -74,32 +75,33 @@ SceneExport exportFromLog(const std::string& log_path, const LogExportOptions& o
   if (!std::filesystem::is_regular_file(log_path)) {
     throw std::runtime_error("no event log at " + log_path);
   }
-  lcm::LogFile log(log_path, "r");
-  if (!log.good()) throw std::runtime_error("cannot read the event log " + log_path);
+  // The project's reader: a log cut mid-event (a killed logger) gives its complete events.
+  logging::EventLogReader log(log_path);
   std::map<int64_t, FramePose> poses;
   std::map<int64_t, FrameFeatures> lifted;
   int bad = 0;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
+  // Decodes and converts one message; false for a bad one (counted, skipped).
+  const auto convert = [&bad](const logging::LogEvent& e, auto* msg, auto* out) {
     try {
-      if (e->channel == channels::kPose) {
-        pplvo_msgs::pose_t m;
-        if (!msgs::decodeMessage(e->data, static_cast<unsigned>(e->datalen), &m).empty()) {
-          ++bad;
-          continue;
-        }
-        poses[m.seq] = msgs::fromMsg(m);
-      } else if (e->channel == channels::kFeatures3d) {
-        pplvo_msgs::features_t m;
-        if (!msgs::decodeMessage(e->data, static_cast<unsigned>(e->datalen), &m).empty()) {
-          ++bad;
-          continue;
-        }
-        lifted[m.seq] = msgs::fromMsg(m);
+      if (!msgs::decodeMessage(e.data.data(), static_cast<unsigned>(e.data.size()), msg).empty()) {
+        ++bad;
+        return;
       }
+      (*out)[msg->seq] = msgs::fromMsg(*msg);
     } catch (const std::exception&) {
-      ++bad;  // a message that decodes but does not convert (NaN, sizes that disagree)
+      ++bad;  // decodes but does not convert (NaN, sizes that disagree)
+    }
+  };
+  while (const std::optional<logging::LogEvent> e = log.next()) {
+    if (e->channel == channels::kPose) {
+      pplvo_msgs::pose_t m;
+      convert(*e, &m, &poses);
+    } else if (e->channel == channels::kFeatures3d) {
+      pplvo_msgs::features_t m;
+      convert(*e, &m, &lifted);
     }
   }
+  if (log.truncated()) ++bad;  // the incomplete last event
   if (skipped != nullptr) *skipped = bad;
   SceneCollector collector(options.max_point_sigma_m);
   for (const auto& [seq, pose] : poses) {

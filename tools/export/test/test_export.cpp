@@ -92,6 +92,16 @@ TEST(Export, RunLogToPlyEveryPrimitiveInTheRoom) {
   EXPECT_EQ(plyElements(dir / "ply" / "lines.ply")["edge"], scene.lines.size());
   EXPECT_EQ(plyElements(dir / "ply" / "planes.ply")["face"], scene.plane_outlines.size());
 
+  // A log cut mid-event (a killed logger): its complete events, the cut counted.
+  const fs::path cut = dir / "cut.lcmlog";
+  fs::copy_file(r.log, cut);
+  fs::resize_file(cut, fs::file_size(cut) - 1000);
+  int cut_skipped = 0;
+  const SceneExport partial = exportFromLog(cut.string(), {}, &cut_skipped);
+  EXPECT_EQ(cut_skipped, 1);
+  EXPECT_GE(partial.keyframes, 1);
+  EXPECT_LE(partial.points.size(), scene.points.size());
+
   // Refused with a clear error: no log, and a log of poses only.
   EXPECT_THROW(exportFromLog((dir / "missing.lcmlog").string(), {}), std::runtime_error);
   run::RunOptions poses_only = r;

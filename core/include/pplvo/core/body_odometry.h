@@ -83,6 +83,28 @@ Matrix6d motionCovarianceFromQuaternionCovariance(const Pose3& T_prev_curr,
 /// SO(3)'s left Jacobian V(phi): exp of a twist (v, w) over dt moves by V(w dt) v dt.
 Eigen::Matrix3d leftJacobianSO3(const Eigen::Vector3d& phi);
 
+/// The constant body twist [v; w] that moves a body by `motion` (in its own frame at the start)
+/// in dt_s: the SE(3) logarithm over dt, w = log(R) / dt, v = V(log R)^-1 t / dt.
+Vector6d twistOfMotion(const Pose3& motion, double dt_s);
+/// Its inverse: the motion of the constant twist [v; w] over dt_s (the SE(3) exponential).
+Pose3 motionOfTwist(const Vector6d& twist, double dt_s);
+
+/// A chain of body motions and the covariance of its pose, to first order: the pose of
+/// base_link in odom and its covariance over [x y z rx ry rz] (position error in odom, a small
+/// rotation about odom's axes). Shared by pplvo's odometry and a filter that integrates twists.
+class OdometryChain {
+ public:
+  /// Appends `motion` (in the current body frame) with the covariance of its [dt; dtheta]
+  /// (left rotation in the current body frame).
+  void compose(const Pose3& motion, const Matrix6d& motion_covariance);
+  const Pose3& pose() const { return T_odom_base_; }
+  const Matrix6d& covariance() const { return covariance_; }
+
+ private:
+  Pose3 T_odom_base_ = Pose3::Identity();
+  Matrix6d covariance_ = Matrix6d::Zero();
+};
+
 /// Integrates the estimator's frame-to-frame motions into body odometry. The odom pose is the
 /// composition of the motions, so it stays continuous when the estimator starts a new world
 /// frame (a restarted tracker); its covariance is the first-order composition of their
@@ -110,8 +132,7 @@ class BodyOdometryIntegrator {
   Matrix6d frame_error_body_;        ///< the same over [dt; dtheta] in base_link
   bool started_ = false;
   double last_stamp_s_ = 0.0;
-  Pose3 T_odom_base_ = Pose3::Identity();
-  Matrix6d covariance_ = Matrix6d::Zero();
+  OdometryChain chain_;
 };
 
 }  // namespace pplvo

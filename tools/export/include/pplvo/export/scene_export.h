@@ -50,7 +50,8 @@ struct LogExportOptions {
 };
 
 /// Reads a run's event log; throws std::runtime_error on a log that cannot be read or holds no
-/// pose with lifted features. Bad messages are skipped and counted in `skipped`.
+/// pose with lifted features. Bad messages are skipped and counted in `skipped`, as is the
+/// incomplete last event of a log cut mid-event (everything before it is used).
 SceneExport exportFromLog(const std::string& log_path, const LogExportOptions& options,
                           int* skipped = nullptr);
 
