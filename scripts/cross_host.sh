@@ -141,7 +141,16 @@ fi
 launch_rc=0
 wait "$LAUNCH" || launch_rc=$?
 read -r tx_bytes1 tx_packets1 <<< "$(read_link)"
-sleep 1  # the last poses and final statuses reach the base host
+# The last poses and final statuses reach the base host: wait until its log stops growing
+# (checked every 0.5 s, at least 1 s, at most 20 s: only a hang reaches the bound), so that a
+# loaded machine does not cut the base logger short.
+base_poses=-1
+for half_seconds in $(seq 40); do
+  sleep 0.5
+  now=$(python3 scripts/netsim/pose_delivery.py --count "$OUT/base.lcmlog")
+  [[ $now -eq $base_poses && $half_seconds -ge 2 ]] && break
+  base_poses=$now
+done
 kill -TERM "$BASE_LOGGER" "$SENSOR_RECORDER"
 wait "$BASE_LOGGER" || true
 wait "$SENSOR_RECORDER" || true
