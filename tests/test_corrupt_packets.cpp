@@ -207,8 +207,9 @@ TEST(CorruptPackets, AreCountedSkipsAndThePosesStayByteIdentical) {
   ASSERT_FALSE(clean.player.failed) << clean.player.error;
   ASSERT_EQ(clean.poses.size(), static_cast<size_t>(kFrames));
   for (const auto& [name, c] : clean.counters) {
-    EXPECT_EQ(c.frames_skipped, 0) << name;
+    EXPECT_EQ(c.frames_skipped + c.messages_skipped, 0) << name;
     EXPECT_EQ(c.errors, 0) << name;
+    EXPECT_TRUE(msgs::countsAddUp(c)) << name;
   }
 
   const PipelineRun bad = runPipeline(true);
@@ -229,9 +230,12 @@ TEST(CorruptPackets, AreCountedSkipsAndThePosesStayByteIdentical) {
       {nodes::EstimatorNode::kName, corrupted({channels::kFeatures, channels::kFeatures3d})}};
   for (const auto& [name, n] : expected) {
     const msgs::NodeCounters& c = bad.counters.at(name);
-    EXPECT_EQ(c.frames_skipped, n) << name << ": " << c.last_warning;
+    // Undecodable packets have no seq: they are skipped messages, not frames of the ledger.
+    EXPECT_EQ(c.frames_skipped + c.messages_skipped, n) << name << ": " << c.last_warning;
     EXPECT_EQ(c.errors, 0) << name << ": " << c.last_warning;
     EXPECT_EQ(c.frames_out, clean.counters.at(name).frames_out) << name;
+    EXPECT_EQ(c.frames_in, clean.counters.at(name).frames_in) << name;
+    EXPECT_TRUE(msgs::countsAddUp(c)) << name;
   }
 }
 
@@ -247,6 +251,8 @@ TEST(StrayPublisher, FramesOfASecondSourceOrAForgedSeqAreSkippedAndThePosesStayB
     EXPECT_EQ(c.frames_skipped, kFrames + 1) << node << ": " << c.last_warning;
     EXPECT_EQ(c.frames_dropped, 0) << node << ": " << c.last_warning;  // no "lost" frames
     EXPECT_EQ(c.frames_in, 2 * kFrames + 1) << node;
+    EXPECT_EQ(c.frames_lost, 0) << node;
+    EXPECT_TRUE(msgs::countsAddUp(c)) << node;
     EXPECT_NE(c.last_warning.find("stray frame"), std::string::npos) << c.last_warning;
   }
 }

@@ -536,6 +536,28 @@ TEST(LaunchReport, TextAndTrajectoryCount) {
   fs::remove_all(dir);
 }
 
+TEST(LaunchReport, CountsThatDoNotAddUpAreAFault) {
+  LaunchReport r;
+  LaunchReport::Process p;
+  p.name = kFrontend;
+  p.has_counts = true;
+  p.counts.known = true;
+  p.counts.frames_in = 10;
+  p.counts.frames_out = 6;
+  p.counts.frames_dropped = 1;
+  p.counts.frames_skipped = 1;
+  p.counts.frames_pending = 2;
+  p.counts.frames_lost = 5;  // outside the sum: they never reached it
+  r.processes.push_back(p);
+  EXPECT_TRUE(r.faults().empty());
+  const std::string text = r.text();
+  EXPECT_NE(text.find("pending"), std::string::npos) << text;
+  r.processes[0].counts.frames_dropped = 3;
+  ASSERT_EQ(r.faults().size(), 1u);
+  EXPECT_NE(r.faults()[0].find("pplvo-frontend's counts do not add up (in 10"), std::string::npos)
+      << r.faults()[0];
+}
+
 TEST(LaunchReport, PlayerCountsAndLockstepTimeouts) {
   LaunchReport r;
   LaunchReport::Process player;
@@ -887,6 +909,7 @@ TEST_F(LaunchProgram, LockstepEqualsPplvoRun) {
   std::printf("pplvo-launch --isolated --lockstep: %.1f s wall\n%s", l.seconds, l.out.c_str());
   ASSERT_EQ(l.code, 0) << l.out << l.err;
   EXPECT_NE(l.out.find("launch.result: ok"), std::string::npos);
+  EXPECT_EQ(l.out.find("do not add up"), std::string::npos) << l.out;
   EXPECT_EQ(reportValue(l.out, "launch.frames_published"), 30);
   EXPECT_EQ(reportValue(l.out, "launch.dropped_total"), 0);
   EXPECT_EQ(reportValue(l.out, "launch.frames_not_received"), 0);
@@ -1061,6 +1084,7 @@ TEST_F(LaunchProgram, PausedStageCostsOnlyTheFramesItHeld) {
               std::string::npos)
         << l.out;
     EXPECT_NE(l.out.find("launch.failure: frames lost to a fault"), std::string::npos) << l.out;
+    EXPECT_EQ(l.out.find("do not add up"), std::string::npos) << l.out;  // every frame's end
     EXPECT_EQ(l.code, 1) << node;
   }
 }

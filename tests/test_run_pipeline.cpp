@@ -14,6 +14,7 @@
 #include "pplvo/eval/pose_records.h"
 #include "pplvo/eval/relative_pose_file.h"
 #include "pplvo/fixtures/synthetic_sequence.h"
+#include "pplvo/msgs/frame_ledger.h"
 #include "pplvo/node/process.h"
 #include "pplvo/pipeline/odometry_pipeline.h"
 #include "pplvo/run/run_args.h"
@@ -57,6 +58,11 @@ TEST_F(RunPipelineTest, EqualsTheLcmFreePipelineWithVerbatimStamps) {
     EXPECT_EQ(n.counters.frames_dropped, 0) << n.name;
     EXPECT_EQ(n.counters.frames_skipped, 0) << n.name;
     EXPECT_EQ(n.counters.errors, 0) << n.name;
+    // Every node's every frame came out: the ledger holds nothing at the end.
+    EXPECT_EQ(n.counters.frames_in, kFrames) << n.name;
+    EXPECT_EQ(n.counters.frames_out, kFrames) << n.name;
+    EXPECT_EQ(n.counters.frames_pending, 0) << n.name;
+    EXPECT_EQ(n.counters.frames_lost + n.counters.messages_skipped, 0) << n.name;
   }
 
   const dataset::Dataset ds = dataset::Dataset::open(sequenceDir());
@@ -186,6 +192,17 @@ TEST_F(RunPipelineTest, CorruptFrameIsACountedSkipWithSkipBad) {
   EXPECT_FALSE(skip.failed) << skip.error;
   EXPECT_EQ(skip.frames_skipped, 1);
   EXPECT_EQ(skip.poses, kFrames - 1);
+  for (const NodeReport& n : skip.nodes) {
+    EXPECT_TRUE(msgs::countsAddUp(n.counters)) << n.name;
+    EXPECT_EQ(n.counters.frames_pending, 0) << n.name;
+    // The player read the bad file (in, skipped); the nodes never saw that frame.
+    if (n.name == "pplvo-player") {
+      EXPECT_EQ(n.counters.frames_in, kFrames);
+      EXPECT_EQ(n.counters.frames_skipped, 1);
+    } else {
+      EXPECT_EQ(n.counters.frames_in, kFrames - 1) << n.name;
+    }
+  }
   EXPECT_GE(skip.tracking, kFrames - 3);
   fs::remove_all(copy);
 }

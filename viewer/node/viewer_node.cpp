@@ -387,6 +387,7 @@ void ViewerNode::writeOutputs(const cv::Mat& canvas) {
 void ViewerNode::publishStatus() {
   if (!options_.publish_status) return;
   msgs::guarded(counters_, options_.node_name.c_str(), [&] {
+    counters_.frames_pending = frame_pending_ ? 1 : 0;  // the newest frame, not drawn yet
     pplvo_msgs::node_status_t msg =
         msgs::toStatusMsg(options_.node_name, counters_, timings_, hostUtime());
     msgs::appendBlockedPublishes(bus_, &msg);

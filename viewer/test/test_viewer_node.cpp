@@ -140,7 +140,7 @@ TEST(ViewerNode, CountsDepthOnlyThroughFusionAgainstTheSameFramesCgm) {
   publishDepthMap(lcm, channels::kDepthCgm, cgm, seq + 4, f.utime + 133332,
                   pplvo_msgs::depth_map_t::STAGE_CGM);
   node.spinOnce(0.0);
-  EXPECT_EQ(node.counters().frames_skipped, 1);
+  EXPECT_EQ(node.counters().messages_skipped, 1);
   EXPECT_EQ(node.counters().errors, 0);
   EXPECT_NE(node.counters().last_warning.find("sizes differ"), std::string::npos)
       << node.counters().last_warning;
@@ -281,7 +281,7 @@ TEST(ViewerNode, BadMessagesAreCountedNotFatal) {
   p.position[0] = NAN;
   lcm.publish(channels::kPose, &p);
   node.spinOnce(0.0);
-  EXPECT_EQ(node.counters().frames_skipped, 2);
+  EXPECT_EQ(node.counters().messages_skipped, 2);
   EXPECT_EQ(node.canvasesDrawn(), 1);  // still draws (panels say "no data")
   // A features message with a corrupt label image is counted once, not at every later draw.
   pplvo_msgs::features_t f =
@@ -294,13 +294,13 @@ TEST(ViewerNode, BadMessagesAreCountedNotFatal) {
   publishFrame(lcm, 1);
   std::this_thread::sleep_for(std::chrono::milliseconds(2));
   node.spinOnce(0.0);
-  EXPECT_EQ(node.counters().frames_skipped, 3);
+  EXPECT_EQ(node.counters().messages_skipped, 3);
   EXPECT_EQ(node.canvasesDrawn(), 3);
   publishAll(lcm, 2);
   std::this_thread::sleep_for(std::chrono::milliseconds(2));
   node.spinOnce(0.0);
   EXPECT_EQ(node.canvasesDrawn(), 4);
-  EXPECT_EQ(node.counters().frames_skipped, 3);
+  EXPECT_EQ(node.counters().messages_skipped, 3);
   std::system(("rm -rf " + dir).c_str());
 }
 

@@ -160,12 +160,13 @@ class CameraPublisher {
   void resetClock(const DeviceClockOptions& clock) { clock_.emplace(clock); }
 
   void onFrame(const CapturedFrame& f) {
-    ++counters_.frames_in;
-    pm::guarded(counters_, kNodeName, [&] {
+    const int64_t seq = seq_;  // the seq it goes out with
+    ledger_.arrived(seq);
+    pm::guardedFrame(ledger_, counters_, kNodeName, seq, [&] {
       pplvo::Stopwatch watch;
       const int64_t utime = clock_->map(f.device_ticks, f.host_arrival_utime);
       if (!limiter_.allow(utime)) {
-        ++counters_.frames_dropped;
+        ledger_.dropped(seq);
         return;
       }
       // Depth has the colour's size when registered, the depth camera's otherwise.
@@ -201,7 +202,7 @@ class CameraPublisher {
       pm::setDepthCamera(depth_camera_, &msg);
       bus_.publish(options_.channel, &msg);
       ++seq_;
-      ++counters_.frames_out;
+      ledger_.published(msg.seq);
       counters_.last_seq = msg.seq;
       timings_.add("publish", watch.elapsedMs());
     });
@@ -222,7 +223,7 @@ class CameraPublisher {
   void publishStatus(int64_t backend_dropped, bool final = false) {
     pm::guarded(counters_, kNodeName, [&] {
       pm::NodeCounters c = counters_;
-      c.frames_dropped += backend_dropped;
+      c.frames_lost += backend_dropped;  // dropped by the driver: they never reached us
       auto msg = pm::toStatusMsg(kNodeName, c, timings_, pplvo::hostUtime(), final);
       pm::appendBlockedPublishes(bus_, &msg);
       bus_.publish(options_.status_channel, &msg);
@@ -244,6 +245,7 @@ class CameraPublisher {
   std::optional<DeviceClockMapper> clock_;
   RateLimiter limiter_;
   pm::NodeCounters counters_;
+  pm::FrameLedger ledger_{counters_};  ///< each captured frame: published, dropped or skipped
   pplvo::StageTimings timings_;
   int64_t seq_ = 0;
 };

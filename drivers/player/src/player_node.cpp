@@ -469,13 +469,16 @@ void PlayerNode::runLoop(PlayerResult& result) {
     }
     feed.fetchNext();
     std::optional<dataset::DatasetReader::Item> item = std::move(fetched.item);
-    ++counters_.frames_in;
+    ledger_.arrived(published_);  // the seq it goes out with
     const dataset::DatasetEntry& entry = dataset_.entry(item->index);
     const int64_t utime = entry.utime + loop_offset_us;
 
     if (options_.rate > 0) {
       waitUntil(pacing.target(nowS(), utime, published_, options_));
-      if (msgs::shutdownRequested()) break;
+      if (msgs::shutdownRequested()) {
+        ledger_.dropped(published_);
+        break;
+      }
     }
 
     pplvo_msgs::rgbd_frame_t msg;
@@ -485,7 +488,10 @@ void PlayerNode::runLoop(PlayerResult& result) {
       const int64_t timeouts = result.lockstep_timeouts;
       lockstepWait(published_ - std::max(1, options_.lockstep_in_flight), result);
       if (result.lockstep_timeouts != timeouts) pacing.anchored = false;  // do not rush after
-      if (msgs::shutdownRequested()) break;
+      if (msgs::shutdownRequested()) {
+        ledger_.dropped(published_);
+        break;
+      }
     }
     publishFrame(msg);
     ++published_this_pass;
@@ -501,7 +507,7 @@ void PlayerNode::countSkipped(const dataset::ReadStats& stats, int64_t* skipped_
   const int64_t newly_skipped = stats.frames_skipped - *skipped_before;
   *skipped_before = stats.frames_skipped;
   if (newly_skipped <= 0) return;
-  counters_.frames_skipped += newly_skipped;
+  ledger_.skippedOnArrival(newly_skipped);  // unreadable files: no frame, no seq
   counters_.last_warning = "skipped bad frame: " + stats.last_error;
   if (counters_.frames_skipped <= 5 || counters_.frames_skipped % 100 == 0) {
     std::fprintf(stderr, "[%s] %s\n", options_.node_name.c_str(), counters_.last_warning.c_str());
@@ -512,7 +518,7 @@ bool PlayerNode::encodeFrame(const dataset::DatasetReader::Item& item,
                              const dataset::DatasetEntry& entry, int64_t utime,
                              const pplvo_msgs::camera_info_t& camera_msg,
                              pplvo_msgs::rgbd_frame_t* msg) {
-  return msgs::guarded(counters_, options_.node_name.c_str(), [&] {
+  return msgs::guardedFrame(ledger_, counters_, options_.node_name.c_str(), published_, [&] {
     ScopedStageTimer t(timings_, "encode");
     msg->utime = utime;
     msg->depth_utime = entry.depth_utime + (utime - entry.utime);  // same loop offset
@@ -531,11 +537,12 @@ void PlayerNode::publishFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   {
     ScopedStageTimer t(timings_, "publish");
     if (bus_.publish(options_.channel, &msg) != 0) {
+      ledger_.dropped(msg.seq);
       throw std::runtime_error("LCM publish failed on " + options_.channel);
     }
   }
   counters_.last_seq = msg.seq;
-  ++counters_.frames_out;
+  ledger_.published(msg.seq);
   ++published_;
 }
 

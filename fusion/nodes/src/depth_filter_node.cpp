@@ -30,7 +30,8 @@ DepthFilterNode::~DepthFilterNode() {
 
 void DepthFilterNode::onFrame(const lcm::ReceiveBuffer*, const std::string&,
                               const pplvo_msgs::rgbd_frame_t* msg) {
-  msgs::guarded(counters_, kName, [&] { handleFrame(*msg); });
+  ledger_.arrived(msg->seq);
+  msgs::guardedFrame(ledger_, counters_, kName, msg->seq, [&] { handleFrame(*msg); });
 }
 
 void DepthFilterNode::onPose(const lcm::ReceiveBuffer*, const std::string&,
@@ -72,9 +73,8 @@ void DepthFilterNode::publishDepth(const std::string& channel, const Pending& p,
 }
 
 void DepthFilterNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
-  ++counters_.frames_in;
   std::optional<RgbdFrame> admitted =
-      msgs::admitFrame(source_guard_, counters_, timings_, kName, msg, [&] {
+      msgs::admitFrame(source_guard_, ledger_, counters_, timings_, kName, msg, [&] {
         RgbdFrame f;
         {
           ScopedStageTimer t(timings_, "decode");
@@ -141,8 +141,8 @@ void DepthFilterNode::processFrame(const RgbdFrame& frame) {
   publishDepth(options_.cgm_channel, p, p.depth, p.stage);
   pending_.push_back(std::move(p));
   while (static_cast<int>(pending_.size()) > options_.max_pending) {
+    ledger_.dropped(pending_.front().seq);
     pending_.pop_front();
-    ++counters_.frames_dropped;
     counters_.last_warning = "frame dropped: no pose within the pending queue";
   }
 }
@@ -150,8 +150,8 @@ void DepthFilterNode::processFrame(const RgbdFrame& frame) {
 std::optional<DepthFilterNode::Pending> DepthFilterNode::takePending(int64_t seq) {
   // Frames older than this pose will never get theirs: stale, drop and count.
   while (!pending_.empty() && pending_.front().seq < seq) {
+    ledger_.dropped(pending_.front().seq);
     pending_.pop_front();
-    ++counters_.frames_dropped;
     counters_.last_warning = "frame dropped: its pose never came";
   }
   if (pending_.empty() || pending_.front().seq != seq) return std::nullopt;
@@ -180,7 +180,7 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
     while (fusion_.valid()) finishFusion();
     if (std::optional<Pending> p = takePending(msg.seq)) {
       publishDepth(options_.fused_channel, *p, p->depth, p->stage);
-      ++counters_.frames_out;
+      ledger_.published(p->seq);
     }
     throw;
   }
@@ -189,14 +189,14 @@ void DepthFilterNode::handlePose(const pplvo_msgs::pose_t& msg) {
   std::optional<Pending> taken = takePending(pose.seq);
   if (!taken) {
     ++unknown_poses_;
-    ++counters_.frames_skipped;
+    ++counters_.messages_skipped;
     counters_.last_warning = "pose for unknown frame " + std::to_string(pose.seq);
     return;
   }
   Pending& p = *taken;
   if (options_.filter.model != DepthModel::kOgm) {
     publishDepth(options_.fused_channel, p, p.depth, p.stage, static_cast<int8_t>(pose.reference));
-    ++counters_.frames_out;
+    ledger_.published(p.seq);
     return;
   }
   Fusion& f = to_fuse_.emplace_back();
@@ -240,7 +240,7 @@ void DepthFilterNode::finishFusion() {
     // starts, and guarded() counts the error.
     publishDepth(options_.fused_channel, fusing_.frame, fusing_.frame.depth, fusing_.frame.stage,
                  static_cast<int8_t>(fusing_.pose.reference));
-    ++counters_.frames_out;
+    ledger_.published(fusing_.frame.seq);
     startFusion();
     throw;
   }
@@ -253,15 +253,15 @@ void DepthFilterNode::finishFusion() {
     timings_.add("ogm_shortened", ogm_ms);
   }
   if (!result.ok) {
-    // Downstream still gets a depth map: the frame's own stage-2 output.
-    ++counters_.frames_skipped;
+    // Downstream still gets a depth map: the frame's own stage-2 output (counted as a stage).
+    timings_.add("ogm_failed", 0.0);
     counters_.last_warning = result.warning + " (published C-GM as fused)";
     publishDepth(options_.fused_channel, p, p.depth, p.stage, reference);
   } else {
     publishDepth(options_.fused_channel, p, result.depth, pplvo_msgs::depth_map_t::STAGE_OGM,
                  reference);
   }
-  ++counters_.frames_out;
+  ledger_.published(p.seq);
   startFusion();
 }
 

@@ -419,7 +419,9 @@ TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   f.depth.size = 10;
   lcm.publish(channels::kRgbd, &f);
   drain(lcm);
-  EXPECT_EQ(node.counters().frames_skipped, 2);
+  EXPECT_EQ(node.counters().messages_skipped, 1);  // the pose: no frame of this node
+  EXPECT_EQ(node.counters().frames_skipped, 1);    // the frame
+  EXPECT_TRUE(msgs::countsAddUp(node.counters()));
   // All-zero depth frame: C-GM and fusion run, empty map out.
   RgbdFrame z;
   z.seq = 1;
@@ -445,7 +447,9 @@ TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   ASSERT_EQ(c.fused.size(), 2u);
   EXPECT_EQ(c.fused[1].stage, pplvo_msgs::depth_map_t::STAGE_CGM);
   EXPECT_EQ(node.ogmStats().invalid_poses, 0);
-  EXPECT_EQ(node.counters().frames_skipped, 3);
+  EXPECT_EQ(node.counters().messages_skipped, 2);
+  EXPECT_EQ(node.counters().frames_skipped, 1);
+  EXPECT_EQ(node.counters().frames_out, 2);  // frame 2 went out despite its bad pose
   EXPECT_EQ(node.counters().errors, 0);
   // Frames whose pose never comes: bounded queue drops the oldest.
   for (int i = 3; i < 9; ++i) {
@@ -455,11 +459,14 @@ TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   }
   EXPECT_EQ(node.pending(), 3);
   EXPECT_EQ(node.counters().frames_dropped, 3);
+  EXPECT_EQ(node.counters().frames_pending, 3);
+  EXPECT_TRUE(msgs::countsAddUp(node.counters()));
   // Pose of frame 8 drops the stale 6 and 7.
   p = poseMsg(scene, 8);
   lcm.publish(channels::kPose, &p);
   drain(lcm);
   EXPECT_EQ(node.counters().frames_dropped, 5);
+  EXPECT_EQ(node.counters().frames_pending, 0);
   EXPECT_EQ(c.fused.back().seq, 8);
   // A frame of another size resets the window with a counted warning.
   SceneOptions so = smallScene();
@@ -477,6 +484,10 @@ TEST(DepthFilterNode, BadInputIsCountedNeverFatal) {
   EXPECT_EQ(node.ogmStats().size_changes, 1);
   EXPECT_EQ(c.fused.back().window_length, 1);
   EXPECT_EQ(node.counters().errors, 0);
+  // Every frame accounted for: 10 in = 4 out (1, 2, 8, 9) + 5 dropped + 1 skipped.
+  EXPECT_EQ(node.counters().frames_in, 10);
+  EXPECT_EQ(node.counters().frames_out, 4);
+  EXPECT_TRUE(msgs::countsAddUp(node.counters()));
 }
 
 TEST(DepthFilterNode, NonFinitePosesAreCountedSkips) {
@@ -502,7 +513,8 @@ TEST(DepthFilterNode, NonFinitePosesAreCountedSkips) {
     spoil[k](p);
     lcm.publish(channels::kPose, &p);
     drain(lcm);
-    EXPECT_EQ(node.counters().frames_skipped, static_cast<int64_t>(k + 1)) << "case " << k;
+    EXPECT_EQ(node.counters().messages_skipped, static_cast<int64_t>(k + 1)) << "case " << k;
+    EXPECT_EQ(node.counters().frames_out, static_cast<int64_t>(k + 1)) << "case " << k;
     EXPECT_NE(node.counters().last_warning.find("skipped bad message"), std::string::npos)
         << node.counters().last_warning;
     ASSERT_EQ(c.fused.size(), k + 1);
@@ -516,7 +528,8 @@ TEST(DepthFilterNode, NonFinitePosesAreCountedSkips) {
   orphan.position[0] = nan;
   lcm.publish(channels::kPose, &orphan);
   drain(lcm);
-  EXPECT_EQ(node.counters().frames_skipped, static_cast<int64_t>(spoil.size() + 1));
+  EXPECT_EQ(node.counters().messages_skipped, static_cast<int64_t>(spoil.size() + 1));
+  EXPECT_EQ(node.counters().frames_skipped, 0);
   EXPECT_EQ(c.fused.size(), spoil.size());
   // A good pose afterwards is fused normally.
   pplvo_msgs::rgbd_frame_t f = frameMsg(scene, 101);

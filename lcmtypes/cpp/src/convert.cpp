@@ -557,6 +557,9 @@ pplvo_msgs::node_status_t toStatusMsg(const std::string& node, const NodeCounter
   m.frames_out = c.frames_out;
   m.frames_dropped = c.frames_dropped;
   m.frames_skipped = c.frames_skipped;
+  m.frames_pending = c.frames_pending;
+  m.frames_lost = c.frames_lost;
+  m.messages_skipped = c.messages_skipped;
   m.errors = c.errors;
   for (const auto& s : timings.stages()) {
     pplvo_msgs::stage_timing_t t;

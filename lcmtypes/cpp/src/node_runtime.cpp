@@ -39,7 +39,7 @@ std::unique_ptr<lcm::LCM> openLcm(const std::string& url) {
 
 void reportProblem(NodeCounters& counters, const std::string& node, const std::string& warning) {
   counters.last_warning = warning;
-  const int64_t n = counters.errors + counters.frames_skipped;
+  const int64_t n = counters.errors + counters.frames_skipped + counters.messages_skipped;
   if (n <= 5 || n % 100 == 0) {
     std::fprintf(stderr, "[%s] %s (%lld so far)\n", node.c_str(), warning.c_str(),
                  static_cast<long long>(n));
@@ -50,7 +50,7 @@ namespace detail {
 
 void countUndecodable(NodeCounters& counters, const std::string& node, const std::string& channel,
                       const std::string& error) {
-  ++counters.frames_skipped;
+  ++counters.messages_skipped;  // no frame to attribute it to: its seq is unreadable
   reportProblem(counters, node, "skipped undecodable packet on " + channel + ": " + error);
 }
 

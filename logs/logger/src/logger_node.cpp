@@ -243,6 +243,9 @@ void LoggerNode::onStatus(const lcm::ReceiveBuffer* rbuf, const std::string& cha
     n.frames_out = m.frames_out;
     n.frames_dropped = m.frames_dropped;
     n.frames_skipped = m.frames_skipped;
+    n.frames_pending = m.frames_pending;
+    n.frames_lost = m.frames_lost;
+    n.messages_skipped = m.messages_skipped;
     n.errors = m.errors;
     n.last_warning = m.last_warning;
     n.stages.clear();
@@ -323,7 +326,7 @@ LoggerResult LoggerNode::run() {
   }
   summary_.stop_reason = reason;
   summary_.elapsed_s = nowS() - start_s_;
-  summary_.handler_errors = counters_.errors + counters_.frames_skipped;
+  summary_.handler_errors = counters_.errors + counters_.messages_skipped;
   summary_.error = fatal_;
   if (!options_.summary.empty()) {
     try {

@@ -134,6 +134,9 @@ std::string RunSummary::toYaml() const {
     y << YAML::Key << "frames_out" << YAML::Value << n.frames_out;
     y << YAML::Key << "frames_dropped" << YAML::Value << n.frames_dropped;
     y << YAML::Key << "frames_skipped" << YAML::Value << n.frames_skipped;
+    y << YAML::Key << "frames_pending" << YAML::Value << n.frames_pending;
+    y << YAML::Key << "frames_lost" << YAML::Value << n.frames_lost;
+    y << YAML::Key << "messages_skipped" << YAML::Value << n.messages_skipped;
     y << YAML::Key << "errors" << YAML::Value << n.errors;
     y << YAML::Key << "last_warning" << YAML::Value << n.last_warning;
     y << YAML::Key << "stages" << YAML::Value << YAML::BeginMap;

@@ -30,7 +30,8 @@ EstimatorNode::~EstimatorNode() {
 
 void EstimatorNode::onFeatures(const lcm::ReceiveBuffer*, const std::string&,
                                const pplvo_msgs::features_t* msg) {
-  msgs::guarded(counters_, kName, [&] { handleFeatures(*msg); });
+  ledger_.arrived(msg->seq);
+  msgs::guardedFrame(ledger_, counters_, kName, msg->seq, [&] { handleFeatures(*msg); });
 }
 void EstimatorNode::onFeatures3d(const lcm::ReceiveBuffer*, const std::string&,
                                  const pplvo_msgs::features_t* msg) {
@@ -38,7 +39,6 @@ void EstimatorNode::onFeatures3d(const lcm::ReceiveBuffer*, const std::string&,
 }
 
 void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
-  ++counters_.frames_in;
   counters_.last_seq = msg.seq;
   newest_utime_ = msg.utime;
   if (msg.stage != pplvo_msgs::features_t::STAGE_2D) {
@@ -46,7 +46,7 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
   }
   const std::optional<int64_t> last = odometry_.lastPosed();
   if (last && msg.seq <= *last) {
-    ++counters_.frames_skipped;
+    ledger_.skipped(msg.seq);
     counters_.last_warning = "features of frame " + std::to_string(msg.seq) + " came too late";
     return;
   }
@@ -62,8 +62,8 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
   }
   waiting_.push_back(std::move(frame));
   while (static_cast<int>(waiting_.size()) > options_.max_waiting) {
+    ledger_.dropped(waiting_.front().seq);
     waiting_.pop_front();
-    ++counters_.frames_dropped;
     ++drops_without_reference_;
     counters_.last_warning = "frame dropped: the reference of the last pose is late";
   }
@@ -77,7 +77,8 @@ void EstimatorNode::handleFeatures(const pplvo_msgs::features_t& msg) {
       (drops_without_reference_ > options_.max_drops_without_reference || waited_too_long)) {
     // The reference is not coming: restart at the newest frame, holding the last pose.
     FrameFeatures newest = std::move(waiting_.back());
-    counters_.frames_dropped += static_cast<int64_t>(waiting_.size()) - 1;
+    waiting_.pop_back();
+    for (const FrameFeatures& f : waiting_) ledger_.dropped(f.seq);
     waiting_.clear();
     ++counts_.restarts_missing_reference;
     const int64_t awaited = awaiting_lifted_.value_or(odometry_.lastPosed().value_or(-1));
@@ -101,7 +102,7 @@ void EstimatorNode::handleFeatures3d(const pplvo_msgs::features_t& msg) {
       return;
     }
     // Only the last posed frame (a reference) and frames whose landmark fusion is due serve.
-    ++counters_.frames_skipped;
+    ++counters_.messages_skipped;
     counters_.last_warning = "3D features of frame " + std::to_string(msg.seq) +
                              " are not needed (last posed " + std::to_string(last.value_or(-1)) +
                              ")";
@@ -152,7 +153,7 @@ void EstimatorNode::publish(const estimator::MotionChainOutput& out, const Frame
       bus_.publish(options_.odometry_channel, &o);
     }
   }
-  ++counters_.frames_out;
+  ledger_.published(frame.seq);
 }
 
 StageTimings EstimatorNode::allTimings() const {

@@ -12,11 +12,13 @@ namespace pplvo::nodes {
 
 namespace {
 
-/// Drops the front of `q` while it holds more than `max` entries; returns how many.
-template <typename Q>
-int64_t trim(Q& q, int max) {
+/// Drops the front of `q` while it holds more than `max` entries, calling `drop(entry)` on
+/// each; returns how many.
+template <typename Q, typename Drop>
+int64_t trim(Q& q, int max, Drop&& drop) {
   int64_t dropped = 0;
   while (static_cast<int>(q.size()) > max) {
+    drop(q.front());
     q.pop_front();
     ++dropped;
   }
@@ -42,7 +44,8 @@ FrontendNode::~FrontendNode() {
 
 void FrontendNode::onFrame(const lcm::ReceiveBuffer*, const std::string&,
                            const pplvo_msgs::rgbd_frame_t* msg) {
-  msgs::guarded(counters_, kName, [&] { handleFrame(*msg); });
+  ledger_.arrived(msg->seq);
+  msgs::guardedFrame(ledger_, counters_, kName, msg->seq, [&] { handleFrame(*msg); });
 }
 void FrontendNode::onCgm(const lcm::ReceiveBuffer*, const std::string&,
                          const pplvo_msgs::depth_map_t* msg) {
@@ -56,9 +59,8 @@ void FrontendNode::onFused(const lcm::ReceiveBuffer*, const std::string&,
 void FrontendNode::warn(const std::string& what) { counters_.last_warning = what; }
 
 void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
-  ++counters_.frames_in;
   std::optional<RgbdFrame> admitted =
-      msgs::admitFrame(source_guard_, counters_, timings_, kName, msg, [&] {
+      msgs::admitFrame(source_guard_, ledger_, counters_, timings_, kName, msg, [&] {
         RgbdFrame f;
         {
           ScopedStageTimer t(timings_, "decode");
@@ -74,13 +76,12 @@ void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
   RgbdFrame frame = std::move(*admitted);
   newest_frame_utime_ = msg.utime;
   if (msg.seq <= last_extracted_seq_) {
-    ++counters_.frames_skipped;
+    ledger_.skipped(msg.seq);
     warn("frame " + std::to_string(msg.seq) + " is older than one already handled");
     return;
   }
   frames_.push_back(std::move(frame));
-  if (const int64_t n = trim(frames_, options_.max_pending)) {
-    counters_.frames_dropped += n;
+  if (trim(frames_, options_.max_pending, [&](const RgbdFrame& f) { ledger_.dropped(f.seq); })) {
     warn("frames dropped: no C-GM depth came for them");
   }
   extractReady();
@@ -88,7 +89,7 @@ void FrontendNode::handleFrame(const pplvo_msgs::rgbd_frame_t& msg) {
 
 void FrontendNode::handleCgm(const pplvo_msgs::depth_map_t& msg) {
   if (msg.seq <= last_extracted_seq_) {
-    ++counters_.frames_skipped;
+    ++counters_.messages_skipped;
     warn("C-GM depth of frame " + std::to_string(msg.seq) + " came too late");
     return;
   }
@@ -98,8 +99,8 @@ void FrontendNode::handleCgm(const pplvo_msgs::depth_map_t& msg) {
     p.depth = msgs::fromMsg(msg);
   }
   cgm_.push_back(std::move(p));
-  if (const int64_t n = trim(cgm_, options_.max_pending)) {
-    counters_.frames_dropped += n;
+  if (const int64_t n = trim(cgm_, options_.max_pending, [](const PendingDepth&) {})) {
+    counters_.messages_skipped += n;
     warn("C-GM maps dropped: their frames never came");
   }
   extractReady();
@@ -111,13 +112,13 @@ void FrontendNode::extractReady() {
     const int64_t fs = frames_.front().seq, ds = cgm_.front().seq;
     if (fs < ds) {
       frames_.pop_front();
-      ++counters_.frames_dropped;
+      ledger_.dropped(fs);
       warn("frame " + std::to_string(fs) + " dropped: its C-GM depth never came");
       continue;
     }
     if (ds < fs) {
       cgm_.pop_front();
-      ++counters_.frames_dropped;
+      ++counters_.messages_skipped;
       warn("C-GM depth " + std::to_string(ds) + " dropped: its frame never came");
       continue;
     }
@@ -138,7 +139,7 @@ void FrontendNode::extractReady() {
     if (options_.max_unlifted > 0 && unlifted >= static_cast<size_t>(options_.max_unlifted)) {
       // The pose -> fused depth -> lifting loop is behind: extracting this frame would only
       // delay it further, and the estimator would drop the frame anyway.
-      ++counters_.frames_dropped;
+      ledger_.dropped(frame.seq);
       ++dropped_loop_behind_;
       warn("frame " + std::to_string(frame.seq) + " dropped before extraction: " +
            std::to_string(unlifted) + " frames wait for their fused depth");
@@ -170,15 +171,22 @@ void FrontendNode::publishExtracted(Extracted extracted) {
                              std::move(extracted.message.plane_labels)});
   if (static_cast<int>(encoded_labels_.size()) > options_.max_pending) encoded_labels_.pop_front();
   awaiting_3d_.push_back(std::move(extracted.features));
-  if (const int64_t n = trim(awaiting_3d_, options_.max_pending)) {
-    counters_.frames_dropped += n;
+  if (trim(awaiting_3d_, options_.max_pending,
+           [&](const FrameFeatures& f) { ledger_.dropped(f.seq); })) {
     warn("features dropped: their fused depth never came");
   }
 }
 
 void FrontendNode::finishInFlight() {
   if (!in_flight_.result.valid()) return;
-  publishExtracted(in_flight_.result.get());  // a job's exception surfaces here (counted skip)
+  Extracted extracted;
+  try {
+    extracted = in_flight_.result.get();
+  } catch (...) {
+    ledger_.dropped(in_flight_.seq);  // a job's exception surfaces here (an error in guarded())
+    throw;
+  }
+  publishExtracted(std::move(extracted));
 }
 
 int64_t FrontendNode::dropUnliftedIfLoopStalled(int64_t utime) {
@@ -195,8 +203,8 @@ int64_t FrontendNode::dropUnliftedIfLoopStalled(int64_t utime) {
   warn(std::to_string(dropped) + " extracted frames dropped: no fused depth for " +
        std::to_string((utime - last_lift_utime_) / 1000) + " ms (from frame " +
        std::to_string(awaiting_3d_.front().seq) + ")");
+  for (const FrameFeatures& f : awaiting_3d_) ledger_.dropped(f.seq);
   awaiting_3d_.clear();
-  counters_.frames_dropped += dropped;
   dropped_unlifted_timeout_ += dropped;
   last_lift_utime_ = utime;
   return dropped;
@@ -231,12 +239,12 @@ void FrontendNode::handleFused(const pplvo_msgs::depth_map_t& msg) {
 void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
   // Stage-2D features of frames older than this map will never get theirs.
   while (!awaiting_3d_.empty() && awaiting_3d_.front().seq < msg.seq) {
+    ledger_.dropped(awaiting_3d_.front().seq);
     awaiting_3d_.pop_front();
-    ++counters_.frames_dropped;
     warn("features dropped: their fused depth never came");
   }
   if (awaiting_3d_.empty() || awaiting_3d_.front().seq != msg.seq) {
-    ++counters_.frames_skipped;
+    ++counters_.messages_skipped;
     warn("fused depth for unknown frame " + std::to_string(msg.seq));
     return;
   }
@@ -271,7 +279,7 @@ void FrontendNode::liftFused(const pplvo_msgs::depth_map_t& msg) {
         msgs::toMsg(features, pplvo_msgs::features_t::STAGE_3D, labels);
     bus_.publish(options_.features_3d_channel, &m);
   }
-  ++counters_.frames_out;
+  ledger_.published(features.seq);
 }
 
 StageTimings FrontendNode::allTimings() const {

@@ -269,7 +269,8 @@ TEST(FrontendNode, BadMessagesAreCountedAndQueuesStayBounded) {
   bad_depth.depth.size = 10;
   lcm.publish(channels::kDepthCgm, &bad_depth);
   drain(lcm);
-  EXPECT_EQ(node.counters().frames_skipped, 2);
+  EXPECT_EQ(node.counters().frames_skipped, 1);    // the frame
+  EXPECT_EQ(node.counters().messages_skipped, 1);  // the depth map: not one of its frames
   // Colour without its depth: the queue never holds more than max_pending.
   for (int i = 0; i < 6; ++i) {
     auto m = frameMsg(i);
@@ -278,6 +279,10 @@ TEST(FrontendNode, BadMessagesAreCountedAndQueuesStayBounded) {
   drain(lcm);
   EXPECT_TRUE(f2d.msgs.empty());
   EXPECT_EQ(node.counters().frames_dropped, 3);
+  EXPECT_EQ(node.counters().frames_pending, 3);
+  // 7 in = 0 out + 3 dropped + 1 skipped + 3 pending.
+  EXPECT_EQ(node.counters().frames_in, 7);
+  EXPECT_TRUE(msgs::countsAddUp(node.counters()));
 }
 
 TEST(FrontendNode, CountsFramesLostBeforeReachingIt) {
@@ -290,14 +295,19 @@ TEST(FrontendNode, CountsFramesLostBeforeReachingIt) {
     lcm.publish(channels::kDepthCgm, &d);
     drain(lcm);
   }
-  EXPECT_EQ(node.counters().frames_dropped, 2);
+  // Lost on the way, so not in: in = out + dropped + skipped + pending holds without them.
+  EXPECT_EQ(node.counters().frames_lost, 2);
+  EXPECT_EQ(node.counters().frames_in, 3);
+  EXPECT_EQ(node.counters().frames_dropped, 0);
+  EXPECT_TRUE(msgs::countsAddUp(node.counters()));
   EXPECT_NE(node.counters().last_warning.find("lost"), std::string::npos)
       << node.counters().last_warning;
   // A restarted source (seq back to 0) is not a loss.
   auto m0 = frameMsg(0);
   lcm.publish(channels::kRgbd, &m0);
   drain(lcm);
-  EXPECT_EQ(node.counters().frames_dropped, 2);
+  EXPECT_EQ(node.counters().frames_lost, 2);
+  EXPECT_TRUE(msgs::countsAddUp(node.counters()));
 }
 
 /// Stage-2D and stage-3D features of the synthetic frames, computed once by a frontend.
@@ -388,7 +398,8 @@ TEST(EstimatorNode, TracksEachFrameOnceItsReferenceArrives) {
   lcm.publish(channels::kFeatures3d, &fs.f3d[2]);
   drain(lcm);
   EXPECT_EQ(poses.msgs.size(), 1u);
-  EXPECT_EQ(node.counters().frames_skipped, 1);
+  EXPECT_EQ(node.counters().messages_skipped, 1);
+  EXPECT_EQ(node.counters().frames_skipped, 0);
   lcm.publish(channels::kFeatures3d, &fs.f3d[0]);
   drain(lcm);
   ASSERT_EQ(poses.msgs.size(), 2u);
@@ -408,6 +419,9 @@ TEST(EstimatorNode, TracksEachFrameOnceItsReferenceArrives) {
     EXPECT_FALSE(p.window.empty());
   }
   EXPECT_EQ(node.counts().tracking, static_cast<int64_t>(fs.f2d.size()) - 1);
+  EXPECT_EQ(node.counters().frames_out, static_cast<int64_t>(fs.f2d.size()));
+  EXPECT_EQ(node.counters().frames_pending, 0);
+  EXPECT_TRUE(msgs::countsAddUp(node.counters()));
   // Body-frame odometry beside each pose: the camera's pose in REP-103 axes (identity mount),
   // a twist with its covariance from the second frame on.
   ASSERT_EQ(odometry.msgs.size(), poses.msgs.size());

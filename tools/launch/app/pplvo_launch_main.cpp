@@ -47,6 +47,9 @@ NodeCounts countsOf(const pplvo_msgs::node_status_t& m) {
   c.frames_out = m.frames_out;
   c.frames_dropped = m.frames_dropped;
   c.frames_skipped = m.frames_skipped;
+  c.frames_pending = m.frames_pending;
+  c.frames_lost = m.frames_lost;
+  c.messages_skipped = m.messages_skipped;
   c.errors = m.errors;
   c.known = true;
   c.final = m.at_exit;

@@ -35,8 +35,9 @@ std::string LaunchReport::text() const {
   std::snprintf(buf, sizeof buf, "pplvo-launch report (%s, %s, %.2f s wall)\n",
                 lockstep ? "lockstep" : "free-running", url.c_str(), wall_s);
   out << buf;
-  std::snprintf(buf, sizeof buf, "  %-20s %-34s %7s %7s %8s %8s %7s\n", "process", "ended", "in",
-                "out", "dropped", "skipped", "errors");
+  std::snprintf(buf, sizeof buf, "  %-20s %-34s %7s %7s %8s %8s %8s %7s %9s %7s\n", "process",
+                "ended", "in", "out", "dropped", "skipped", "pending", "lost", "msg-skip",
+                "errors");
   out << buf;
   for (const Process& p : processes) {
     std::string ended = p.exit ? p.exit->text() : "still running";
@@ -46,15 +47,17 @@ std::string LaunchReport::text() const {
       ended += " (stopped)";
     if (p.has_counts && p.counts.known && !p.counts.final) ended += ", counts not final";
     if (p.has_counts && p.counts.known) {
-      std::snprintf(buf, sizeof buf, "  %-20s %-34s %7lld %7lld %8lld %8lld %7lld\n",
-                    p.name.c_str(), ended.c_str(), static_cast<long long>(p.counts.frames_in),
-                    static_cast<long long>(p.counts.frames_out),
-                    static_cast<long long>(p.counts.frames_dropped),
-                    static_cast<long long>(p.counts.frames_skipped),
-                    static_cast<long long>(p.counts.errors));
+      const NodeCounts& c = p.counts;
+      std::snprintf(buf, sizeof buf,
+                    "  %-20s %-34s %7lld %7lld %8lld %8lld %8lld %7lld %9lld %7lld\n",
+                    p.name.c_str(), ended.c_str(), static_cast<long long>(c.frames_in),
+                    static_cast<long long>(c.frames_out), static_cast<long long>(c.frames_dropped),
+                    static_cast<long long>(c.frames_skipped),
+                    static_cast<long long>(c.frames_pending), static_cast<long long>(c.frames_lost),
+                    static_cast<long long>(c.messages_skipped), static_cast<long long>(c.errors));
     } else {
-      std::snprintf(buf, sizeof buf, "  %-20s %-34s %7s %7s %8s %8s %7s\n", p.name.c_str(),
-                    ended.c_str(), "-", "-", "-", "-", "-");
+      std::snprintf(buf, sizeof buf, "  %-20s %-34s %7s %7s %8s %8s %8s %7s %9s %7s\n",
+                    p.name.c_str(), ended.c_str(), "-", "-", "-", "-", "-", "-", "-", "-");
     }
     out << buf;
   }
@@ -127,6 +130,10 @@ std::vector<std::string> LaunchReport::faults() const {
       std::snprintf(buf, sizeof buf, "%s paused %d time(s), %.1f s in all", p.name.c_str(),
                     p.pauses, p.paused_s);
       f.push_back(buf);
+    }
+    if (p.has_counts && p.counts.known && !p.counts.addsUp()) {
+      f.push_back(p.name + "'s counts do not add up (in " + std::to_string(p.counts.frames_in) +
+                  " != out + dropped + skipped + pending): a status from another program?");
     }
     if (p.has_counts && p.counts.stray_frames > 0) {
       f.push_back(p.name + " skipped " + std::to_string(p.counts.stray_frames) +

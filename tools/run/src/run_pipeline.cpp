@@ -106,12 +106,15 @@ std::string RunResult::text() const {
     out << buf << "  chosen for: " << keyframe_reasons << "\n";
   }
   for (const NodeReport& n : nodes) {
-    std::snprintf(buf, sizeof buf, "%s: in %lld out %lld dropped %lld skipped %lld errors %lld\n",
-                  n.name.c_str(), static_cast<long long>(n.counters.frames_in),
-                  static_cast<long long>(n.counters.frames_out),
-                  static_cast<long long>(n.counters.frames_dropped),
-                  static_cast<long long>(n.counters.frames_skipped),
-                  static_cast<long long>(n.counters.errors));
+    const msgs::NodeCounters& c = n.counters;
+    std::snprintf(buf, sizeof buf,
+                  "%s: in %lld = out %lld + dropped %lld + skipped %lld + pending %lld; lost %lld, "
+                  "messages skipped %lld, errors %lld\n",
+                  n.name.c_str(), static_cast<long long>(c.frames_in),
+                  static_cast<long long>(c.frames_out), static_cast<long long>(c.frames_dropped),
+                  static_cast<long long>(c.frames_skipped), static_cast<long long>(c.frames_pending),
+                  static_cast<long long>(c.frames_lost), static_cast<long long>(c.messages_skipped),
+                  static_cast<long long>(c.errors));
     out << buf;
     if (!n.counters.last_warning.empty())
       out << "  last warning: " << n.counters.last_warning << "\n";
@@ -156,6 +159,9 @@ std::string RunResult::yaml() const {
         << "    frames_out: " << n.counters.frames_out << "\n"
         << "    frames_dropped: " << n.counters.frames_dropped << "\n"
         << "    frames_skipped: " << n.counters.frames_skipped << "\n"
+        << "    frames_pending: " << n.counters.frames_pending << "\n"
+        << "    frames_lost: " << n.counters.frames_lost << "\n"
+        << "    messages_skipped: " << n.counters.messages_skipped << "\n"
         << "    errors: " << n.counters.errors << "\n"
         << "    stages_mean_ms:\n";
     for (const StageStats& s : n.timings.stages()) {

@@ -16,6 +16,7 @@
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/frame_ledger.h"
 
 namespace pplvo::player {
 
@@ -141,6 +142,7 @@ class PlayerNode {
   dataset::Dataset dataset_;
   msgs::BusSubscription pose_sub_;
   msgs::NodeCounters counters_;
+  msgs::FrameLedger ledger_{counters_};  ///< each frame read: published, skipped or dropped
   StageTimings timings_;
   int64_t last_pose_seq_ = -1;
   double start_s_ = 0.0;

@@ -30,6 +30,7 @@
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/frame_ledger.h"
 #include "pplvo/msgs/frame_source_guard.h"
 
 namespace pplvo::nodes {
@@ -170,6 +171,7 @@ class DepthFilterNode {
   std::deque<Deferred> deferred_;
   int64_t alignment_waits_timed_out_ = 0;
   msgs::NodeCounters counters_;
+  msgs::FrameLedger ledger_{counters_};  ///< where each frame ended (its counts in counters_)
   StageTimings timings_;
   msgs::FrameSourceGuard source_guard_;  ///< which PPLVO_RGBD frames are the followed stream
   int64_t unknown_poses_ = 0;

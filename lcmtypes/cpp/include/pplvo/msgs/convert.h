@@ -81,13 +81,17 @@ DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& msg);
 /// handler that uses the map before it returns).
 DepthWithVariance viewOfMsg(const pplvo_msgs::depth_map_t& msg);
 
-/// Counters every node keeps; published as node_status_t.
+/// Counters every node keeps; published as node_status_t. The frame counts add up
+/// (frames_in = out + dropped + skipped + pending): nodes keep them with a FrameLedger.
 struct NodeCounters {
   int64_t last_seq = -1;
   int64_t frames_in = 0;
   int64_t frames_out = 0;
   int64_t frames_dropped = 0;
   int64_t frames_skipped = 0;
+  int64_t frames_pending = 0;
+  int64_t frames_lost = 0;       ///< never reached the node (source numbering gaps)
+  int64_t messages_skipped = 0;  ///< other inputs' messages that served no frame
   int64_t errors = 0;
   std::string last_warning;
 };

@@ -13,6 +13,7 @@
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/frame_ledger.h"
 #include "pplvo/msgs/frame_source_guard.h"
 
 namespace pplvo::msgs {
@@ -46,13 +47,13 @@ int64_t spinOn(const std::function<int(int timeout_ms)>& handle_timeout,
 /// Notes the arrival of frame `seq` from a source that numbers its published frames
 /// consecutively (player, camera). A jump means frames were lost on the way (the socket buffer
 /// overflowed: this node is slower than its input, or the network dropped them): they are
-/// counted as dropped, with a warning. A smaller seq (a restarted source) is not a loss.
-/// Returns the number of frames lost before this one.
+/// counted in frames_lost (they never reached the node), with a warning. A smaller seq (a
+/// restarted source) is not a loss. Returns the number of frames lost before this one.
 inline int64_t noteFrameSequence(NodeCounters& counters, int64_t seq) {
   int64_t lost = 0;
   if (counters.last_seq >= 0 && seq > counters.last_seq + 1) {
     lost = seq - counters.last_seq - 1;
-    counters.frames_dropped += lost;
+    counters.frames_lost += lost;
     counters.last_warning = std::to_string(lost) + " frame(s) lost before frame " +
                             std::to_string(seq) +
                             " reached this node (input faster than the node, or network loss)";
@@ -65,9 +66,10 @@ inline int64_t noteFrameSequence(NodeCounters& counters, int64_t seq) {
 /// node's skips and errors so far (the first few, then every 100th). Count before calling.
 void reportProblem(NodeCounters& counters, const std::string& node, const std::string& warning);
 
-/// Runs `body`; any exception is counted in `counters` (as a skipped frame when it is a
-/// MessageError, as an error otherwise), remembered as the last warning and printed
-/// (rate-limited to the first few and then every 100th). Never throws.
+/// Runs `body`; any exception is counted in `counters` (in messages_skipped when it is a
+/// MessageError: a bad message that served no frame; as an error otherwise), remembered as the
+/// last warning and printed (rate-limited to the first few and then every 100th). Never throws.
+/// For the handler of a node's frames use guardedFrame(), which closes the frame instead.
 template <typename Body>
 bool guarded(NodeCounters& counters, const char* node, Body&& body) noexcept {
   auto report = [&](const char* kind, const char* what) {
@@ -77,7 +79,7 @@ bool guarded(NodeCounters& counters, const char* node, Body&& body) noexcept {
     body();
     return true;
   } catch (const MessageError& e) {
-    ++counters.frames_skipped;
+    ++counters.messages_skipped;
     report("skipped bad message", e.what());
   } catch (const std::exception& e) {
     ++counters.errors;
@@ -89,15 +91,44 @@ bool guarded(NodeCounters& counters, const char* node, Body&& body) noexcept {
   return false;
 }
 
-/// The step every node that reads frames (PPLVO_RGBD: depth filter, frontend) runs on one:
-/// `decode()` decodes and checks it (a MessageError is a counted skip in guarded(); a bad frame
-/// of the followed stream still arrived, so it is not counted as lost), then a valid frame of a
-/// stray publisher (a forged seq or stamp, a second source; FrameSourceGuard) is counted in
-/// frames_skipped and the `stray_frame` stage and skipped, before it can make the followed
-/// stream's frames look old. Returns the decoded frame, or nullopt for a stray one.
+/// guarded() for the step that handles frame `seq` of the node's frame stream, after
+/// `ledger.arrived(seq)`: a MessageError skips that frame (bad input), any other exception
+/// counts an error and drops it, when the step left it open. Never throws.
+template <typename Body>
+bool guardedFrame(FrameLedger& ledger, NodeCounters& counters, const char* node, int64_t seq,
+                  Body&& body) noexcept {
+  auto report = [&](const char* kind, const char* what) {
+    reportProblem(counters, node, std::string(kind) + ": " + what);
+  };
+  try {
+    body();
+    return true;
+  } catch (const MessageError& e) {
+    if (!ledger.skipped(seq)) ++counters.messages_skipped;
+    report("skipped bad frame", e.what());
+  } catch (const std::exception& e) {
+    ++counters.errors;
+    ledger.dropped(seq);
+    report("error", e.what());
+  } catch (...) {
+    ++counters.errors;
+    ledger.dropped(seq);
+    report("error", "unknown exception");
+  }
+  return false;
+}
+
+/// The step every node that reads frames (PPLVO_RGBD: depth filter, frontend) runs on one,
+/// after `ledger.arrived(msg.seq)`: `decode()` decodes and checks it (a MessageError is a
+/// counted skip in guardedFrame(); a bad frame of the followed stream still arrived, so it is
+/// not counted as lost), then a valid frame of a stray publisher (a forged seq or stamp, a
+/// second source; FrameSourceGuard) is skipped in the ledger and counted in the `stray_frame`
+/// stage, before it can make the followed stream's frames look old. Returns the decoded frame,
+/// or nullopt for a stray one.
 template <class Decode>
-auto admitFrame(FrameSourceGuard& guard, NodeCounters& counters, StageTimings& timings,
-                const std::string& node, const pplvo_msgs::rgbd_frame_t& msg, Decode&& decode)
+auto admitFrame(FrameSourceGuard& guard, FrameLedger& ledger, NodeCounters& counters,
+                StageTimings& timings, const std::string& node,
+                const pplvo_msgs::rgbd_frame_t& msg, Decode&& decode)
     -> std::optional<decltype(decode())> {
   std::optional<decltype(decode())> frame;
   try {
@@ -108,7 +139,7 @@ auto admitFrame(FrameSourceGuard& guard, NodeCounters& counters, StageTimings& t
   }
   std::string why;
   if (guard.judge(msg.source, msg.seq, msg.utime, &why) == FrameVerdict::kStray) {
-    ++counters.frames_skipped;
+    ledger.skipped(msg.seq);
     timings.add("stray_frame", 0.0);
     reportProblem(counters, node, "stray frame " + std::to_string(msg.seq) + " skipped: " + why);
     return std::nullopt;

@@ -64,6 +64,7 @@ struct NodeSnapshot {
   int64_t utime = 0;
   int64_t last_seq = -1;
   int64_t frames_in = 0, frames_out = 0, frames_dropped = 0, frames_skipped = 0, errors = 0;
+  int64_t frames_pending = 0, frames_lost = 0, messages_skipped = 0;
   std::vector<StageSnapshot> stages;
   std::string last_warning;
   int64_t reports = 0;  ///< status messages received from this node

@@ -31,6 +31,7 @@
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/frame_ledger.h"
 #include "pplvo/tracking/frame_tracker.h"
 
 namespace pplvo::nodes {
@@ -111,6 +112,7 @@ class EstimatorNode {
   int64_t newest_utime_ = -1;     ///< stamp of the newest stage-2D features received
   int64_t last_pose_utime_ = -1;  ///< newest_utime_ when the last pose was published
   msgs::NodeCounters counters_;
+  msgs::FrameLedger ledger_{counters_};  ///< where each frame ended (its counts in counters_)
   EstimatorCounts counts_;
   StageTimings timings_;
 };

@@ -29,6 +29,7 @@
 #include "pplvo/msgs/bus.h"
 #include "pplvo/msgs/channels.h"
 #include "pplvo/msgs/convert.h"
+#include "pplvo/msgs/frame_ledger.h"
 #include "pplvo/msgs/frame_source_guard.h"
 #include "pplvo/pipeline/frontend.h"
 
@@ -165,6 +166,7 @@ class FrontendNode {
   };
   InFlight in_flight_;
   msgs::NodeCounters counters_;
+  msgs::FrameLedger ledger_{counters_};  ///< where each frame ended (its counts in counters_)
   StageTimings timings_;
   msgs::FrameSourceGuard source_guard_;  ///< which PPLVO_RGBD frames are the followed stream
 };

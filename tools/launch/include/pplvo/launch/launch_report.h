@@ -16,6 +16,9 @@ namespace pplvo::launch {
 /// word when it says so (node_status_t.final: published as it exits).
 struct NodeCounts {
   int64_t frames_in = 0, frames_out = 0, frames_dropped = 0, frames_skipped = 0, errors = 0;
+  int64_t frames_pending = 0;    ///< still queued when the status was sent
+  int64_t frames_lost = 0;       ///< never reached the process (numbering gaps)
+  int64_t messages_skipped = 0;  ///< its other inputs' messages that served no frame
   bool known = false;  ///< a status came from the process
   bool final = false;  ///< ... and its last one was its final status
   /// Frames the depth filter fused over a shortened window (its "ogm_shortened" stage count).
@@ -27,6 +30,12 @@ struct NodeCounts {
   /// longest, ms.
   int64_t blocked_publishes = 0;
   double blocked_publish_max_ms = 0.0;
+
+  /// in = out + dropped + skipped + pending, as every pplvo process keeps them
+  /// (msgs::FrameLedger); false means a status from something else, or a bug.
+  bool addsUp() const {
+    return frames_in == frames_out + frames_dropped + frames_skipped + frames_pending;
+  }
 };
 
 /// Decides when the pipeline has drained after the player ended: every published frame has
