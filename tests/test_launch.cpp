@@ -317,6 +317,22 @@ TEST(LaunchSpecs, CommandLines) {
   }
   EXPECT_EQ(specs[1].log_path, "/L/pplvo-frontend.log");
   EXPECT_EQ(specs[1].env.at("LCM_DEFAULT_URL"), kIsolatedUrl);
+  EXPECT_EQ(joined(specs[3]).find("--channels"), std::string::npos);  // every PPLVO_ channel
+  // A compact recording: the player sends what the log keeps, the logger keeps frames and
+  // what the run said of them.
+  o.compact_log = true;
+  const auto compact = buildProcessSpecs(o, url, "/B", "/L");
+  EXPECT_NE(joined(compact[4]).find("--rgb-encoding jpeg --depth-encoding zlib"),
+            std::string::npos)
+      << joined(compact[4]);
+  EXPECT_NE(joined(compact[3]).find("--channels PPLVO_(RGBD|POSE|ODOMETRY|STATUS|STREAM)"),
+            std::string::npos)
+      << joined(compact[3]);
+  EXPECT_TRUE(parseLaunchArgs({"--dataset", "D", "--output", "t", "--log-mode", "compact"})
+                  .options.compact_log);
+  EXPECT_EQ(parseLaunchArgs({"--dataset", "D", "--output", "t", "--log-mode", "tiny"}).errors,
+            std::vector<std::string>{"--log-mode: full or compact, not 'tiny'"});
+  o.compact_log = false;
 
   // By default each frame channel gets its own port, handed to every process.
   o.single_url = false;

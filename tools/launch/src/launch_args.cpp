@@ -51,6 +51,9 @@ std::string launchUsage() {
          "  --max-frames N          player stops after N frames (0 = all)\n"
          "  --fps HZ                frame rate of integer-stamped datasets (ICL-NUIM: 30)\n"
          "  --log LOG               logger also writes an LCM event log of PPLVO_.* channels\n"
+         "  --log-mode full|compact compact: the player sends JPEG colour and zlib depth and\n"
+         "                          --log keeps frames, poses, odometry, status, stream\n"
+         "                          (~200 KB/frame; pplvo-replay --stage pipeline replays it)\n"
          "  --summary FILE          logger's YAML run summary\n"
          "  --lcm-url URL           udpm URL (default $LCM_DEFAULT_URL; with --isolated\n"
          "                          udpm://239.255.76.67:7667?ttl=0)\n"
@@ -182,6 +185,15 @@ bool readRunOption(OptionReader& r, LaunchOptions& o, bool* rate_given) {
     r.number(&o.fps, 0.0);
   else if (key == "--log")
     r.next(&o.log);
+  else if (key == "--log-mode") {
+    std::string mode;
+    if (r.next(&mode)) {
+      if (mode == "compact" || mode == "full")
+        o.compact_log = mode == "compact";
+      else
+        r.error("--log-mode: full or compact, not '" + mode + "'");
+    }
+  }
   else if (key == "--summary")
     r.next(&o.summary);
   else if (key == "--preload" || key == "--no-preload") {

@@ -1,5 +1,6 @@
 #include "pplvo/launch/process_specs.h"
 
+#include "pplvo/msgs/channels.h"
 #include "text_numbers.h"
 
 namespace pplvo::launch {
@@ -38,6 +39,9 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const UrlDeci
   ProcessSpec lg = make(kLogger);
   lg.args.insert(lg.args.end(), {"--trajectory", o.output, "--no-progress"});
   if (!o.log.empty()) lg.args.insert(lg.args.end(), {"--output", o.log, "--force"});
+  if (!o.log.empty() && o.compact_log) {
+    lg.args.insert(lg.args.end(), {"--channels", channels::kCompactLogChannels});
+  }
   if (!o.summary.empty()) lg.args.insert(lg.args.end(), {"--summary", o.summary});
   specs.push_back(lg);
   ProcessSpec pl = make(kPlayer);
@@ -53,7 +57,9 @@ std::vector<ProcessSpec> buildProcessSpecs(const LaunchOptions& o, const UrlDeci
     pl.args.insert(pl.args.end(), {"--max-frames", std::to_string(o.max_frames)});
   if (o.fps > 0) pl.args.insert(pl.args.end(), {"--fps", fmtDouble(o.fps)});
   if (o.preload.value_or(!o.lockstep)) pl.args.push_back("--preload");
-  if (o.compress) {
+  if (o.compact_log) {  // the frames the pipeline runs on are those the log keeps
+    pl.args.insert(pl.args.end(), {"--rgb-encoding", "jpeg", "--depth-encoding", "zlib"});
+  } else if (o.compress) {
     pl.args.insert(pl.args.end(), {"--rgb-encoding", "png", "--depth-encoding", "zlib"});
   }
   specs.push_back(pl);

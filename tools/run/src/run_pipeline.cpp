@@ -225,6 +225,11 @@ RunResult runPipeline(const RunOptions& options) {
     po.progress = options.progress;
     po.preload = options.preload;
     po.status_period_s = 1e9;  // no status messages inside one process
+    if (options.compact_log) {
+      po.rgb_encoding = pplvo_msgs::image_t::ENCODING_JPEG;
+      po.jpeg_quality = options.jpeg_quality;
+      po.depth_encoding = pplvo_msgs::image_t::ENCODING_ZLIB_U16;
+    }
     // Nothing queued: publish what the workers finished, waiting for the first of them.
     po.in_process_idle = [&] {
       while (depth_filter.fusing() || frontend.extracting()) {

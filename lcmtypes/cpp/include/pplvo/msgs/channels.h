@@ -11,4 +11,8 @@ inline constexpr const char* kPose = "PPLVO_POSE";                 // pose_t
 inline constexpr const char* kOdometry = "PPLVO_ODOMETRY";         // odometry_t (body frame)
 inline constexpr const char* kStatus = "PPLVO_STATUS";             // node_status_t
 inline constexpr const char* kStream = "PPLVO_STREAM";             // stream_event_t
+/// What a compact recording keeps (LCM regex): the frames and what the run said about them;
+/// depth maps and features are derived from the frames again by `pplvo-replay --stage
+/// pipeline` (docs/logger.md, "Compact recordings").
+inline constexpr const char* kCompactLogChannels = "PPLVO_(RGBD|POSE|ODOMETRY|STATUS|STREAM)";
 }  // namespace pplvo::channels

@@ -47,6 +47,9 @@ struct LaunchOptions {
   /// --test-pause NODE:POSES:SECONDS: SIGSTOP NODE after POSES poses, SIGCONT SECONDS later
   std::string test_pause;
   bool compress = false;    ///< --compress: lossless compressed images and depth maps
+  /// --log-mode compact: the player sends JPEG colour and zlib depth, and --log keeps only
+  /// msgs channels::kCompactLogChannels (docs/logger.md, "Compact recordings").
+  bool compact_log = false;
   bool single_url = false;  ///< --single-url: frame channels on the main URL too
   /// --preload / --no-preload: the player decodes the frames before publishing the first
   /// (default: on when free-running, where decoding would compete with the pipeline).

@@ -13,7 +13,9 @@
 
 namespace pplvo::replay {
 
-enum class Stage { kDepthFilter, kFrontend, kEstimator };
+/// One node, or the whole pipeline (depth filter, frontend and estimator fed the recorded
+/// frames alone: what a compact recording, without depth maps and features, replays).
+enum class Stage { kDepthFilter, kFrontend, kEstimator, kPipeline };
 bool parseStage(const std::string& text, Stage* stage);
 const char* toString(Stage stage);
 /// The channels a stage's node subscribes to (their default names), which a replay feeds.
@@ -25,7 +27,8 @@ struct ReplayOptions {
   pipeline::PipelineOptions pipeline;
 };
 
-/// One output channel of the stage. The log ends somewhere (a cut, or the logger stopped while
+/// One output channel of the stage. Channels the log does not hold (a compact recording's
+/// depth maps and features) are not compared. The log ends somewhere (a cut, or the logger stopped while
 /// the pipeline still worked): what the stage publishes after the last message recorded on a
 /// channel has no recording to compare with. Those are counted in `after_end`, not as a
 /// difference: every recorded message reproduced, in order, is identical.

@@ -30,6 +30,13 @@ struct RunOptions {
   /// --log-channels: the channels --log records (LCM regex, whole name), e.g.
   /// 'PPLVO_(POSE|ODOMETRY)' for a log of kilobytes instead of ~7 MB a frame.
   std::string log_channels = ".*";
+  /// --log-mode compact: the player sends colour as JPEG (`jpeg_quality`) and depth as
+  /// lossless zlib, so the pipeline runs on the frames the log keeps, and --log records only
+  /// msgs channels::kCompactLogChannels (unless --log-channels says otherwise): ~200 KB a
+  /// frame at 640x480 instead of 6.7 MB; `pplvo-replay --stage pipeline` reproduces the poses
+  /// from it.
+  bool compact_log = false;
+  int jpeg_quality = 90;  ///< --jpeg-quality (compact frames; the player's default)
   std::string covariance;   ///< --covariance: T_prev_curr + covariance per frame (main)
   int64_t max_frames = 0;   ///< --max-frames (0: all)
   int64_t start = 0;        ///< --start: first associated frame
