@@ -75,6 +75,12 @@ if grep -E 'ceres|opencv_(features2d|calib3d|ximgproc|line_descriptor)|pplvo_(pi
   fail "examples/fusion links more than it uses"
 fi
 
+step "pose_listener needs LCM alone at run time (no OpenCV, Ceres, yaml-cpp shared library)"
+if ldd "$tmp/example/pose_listener" | grep -E 'opencv|ceres|yaml|glog|cholmod'; then
+  fail "pose_listener loads libraries it does not use"
+fi
+ldd "$tmp/example/pose_listener" | grep -q liblcm || fail "pose_listener without liblcm?"
+
 step "pose_listener --log (file:// provider)"
 "$tmp/example/pose_listener" --log "$tmp/run.lcm" --tum "$tmp/file.txt" \
   --covariance "$tmp/file_cov.txt" > "$tmp/file.out"
@@ -100,6 +106,9 @@ export PKG_CONFIG_PATH=$prefix/lib/pkgconfig
 g++ -std=c++17 -O1 "$prefix/share/pplvo/examples/cpp/pose_listener.cpp" -o "$tmp/pc_listener" \
   $(pkg-config --cflags --libs pplvo) || fail "pkg-config build"
 "$tmp/pc_listener" --log "$tmp/run.lcm" --tum "$tmp/pc.txt" > /dev/null
+if ldd "$tmp/pc_listener" | grep -E 'opencv|ceres'; then
+  fail "the pkg-config build of pose_listener loads libraries it does not use"
+fi
 cmp "$tmp/run.txt" "$tmp/pc.txt" || fail "pkg-config build: trajectory differs"
 [[ $(pkg-config --cflags pplvo-msgs) == *"$prefix/lib/pkgconfig/../../include"* ]] ||
   fail "pplvo-msgs.pc: unexpected Cflags $(pkg-config --cflags pplvo-msgs)"
