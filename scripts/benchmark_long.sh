@@ -89,27 +89,9 @@ global_shutter_copy() {  # global_shutter_copy DIR -> prints a folder without th
   echo "$g"
 }
 
-eval_line() {  # eval_line GT EST FPS -> "ate rpe_t rpe_r pairs"
-  local fpsarg=()
-  [ "$3" != 0 ] && fpsarg=(--fps "$3")
-  "$bin/pplvo-eval" "$1" "$2" "${fpsarg[@]}" 2>/dev/null | awk '
-    /^ate.rmse_m /{a=$2} /^rpe.trans_rmse_m_per_s /{t=$2} /^rpe.rot_rmse_deg_per_s /{r=$2} /^ate.pairs /{p=$2}
-    END{ if (p == "") print "- - - 0"; else printf "%.4f %.4f %.3f %d\n", a, t, r, p }'
-}
-nees_cell() {  # nees_cell GT COV FPS EXACT -> "mean share"
-  local fpsarg=() exact=(--gt-offset-ms auto)
-  [ "$3" != 0 ] && fpsarg=(--fps "$3")
-  [ "$4" = 1 ] && exact=(--exact-gt)
-  "$bin/pplvo-eval" --nees "$1" "$2" "${fpsarg[@]}" "${exact[@]}" 2>/dev/null |
-    awk '/^nees.mean /{m=$2} /^nees.share_inside_95 /{s=$2} END{ if (m == "") print "- -"; else printf "%.2f %.2f\n", m, s }'
-}
 path_length() {  # path_length GT -> metres travelled
   awk '!/^#/ && NF { if (n++) d += sqrt(($2-x)^2 + ($3-y)^2 + ($4-z)^2); x=$2; y=$3; z=$4 } END { printf "%.3f\n", d }' "$1"
 }
-median_by_ate() {  # median_by_ate LINE... -> the line with the median ATE (failed runs last)
-  printf '%s\n' "$@" | sort -t' ' -k1,1g | awk '{ l[NR] = $0 } END { print l[int((NR + 1) / 2)] }'
-}
-
 rows=()
 row() { rows+=("$1"); echo "$1" >&2; }
 for i in "${!names[@]}"; do
