@@ -1,6 +1,7 @@
 // pplvo-depth-filter: see pplvo/depth_filter_node/depth_filter_node.h and docs/depth_filter.md.
 #include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
+#include "pplvo/msgs/frame_ledger.h"
 #include "pplvo/node/process.h"
 #include "pplvo/depth_filter_node/depth_filter_args.h"
 
@@ -25,9 +26,7 @@ int main(int argc, char** argv) {
       [&](const DepthFilterNode& n) {
         const msgs::NodeCounters& c = n.counters();
         std::string s = node::format(
-            "[pplvo-depth-filter] done: in %lld out %lld dropped %lld skipped %lld\n%s",
-            static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_out),
-            static_cast<long long>(c.frames_dropped), static_cast<long long>(c.frames_skipped),
+            "[pplvo-depth-filter] done: %s\n%s", msgs::countsText(c).c_str(),
             n.timings().table().c_str());
         const depth_filter::DepthFilterOverloadOptions& shed = o.filter.overload;
         if (o.filter.model == depth_filter::DepthModel::kOgm && shed.backlog > 0) {

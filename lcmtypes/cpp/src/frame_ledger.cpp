@@ -1,9 +1,22 @@
 #include "pplvo/msgs/frame_ledger.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <iterator>
 
 namespace pplvo::msgs {
+
+std::string countsText(const NodeCounters& c) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "in %lld = out %lld + dropped %lld + skipped %lld + pending %lld; lost %lld, "
+                "messages skipped %lld, errors %lld",
+                static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_out),
+                static_cast<long long>(c.frames_dropped), static_cast<long long>(c.frames_skipped),
+                static_cast<long long>(c.frames_pending), static_cast<long long>(c.frames_lost),
+                static_cast<long long>(c.messages_skipped), static_cast<long long>(c.errors));
+  return buf;
+}
 
 void FrameLedger::arrived(int64_t seq) {
   ++counters_.frames_in;

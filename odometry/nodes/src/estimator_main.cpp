@@ -1,6 +1,7 @@
 // pplvo-estimator: see pplvo/odometry_nodes/estimator_node.h and docs/estimator.md.
 #include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
+#include "pplvo/msgs/frame_ledger.h"
 #include "pplvo/node/process.h"
 #include "pplvo/odometry_nodes/odometry_args.h"
 
@@ -25,11 +26,9 @@ int main(int argc, char** argv) {
         const msgs::NodeCounters& c = n.counters();
         const nodes::EstimatorCounts& k = n.counts();
         return node::format(
-            "[pplvo-estimator] done: in %lld out %lld dropped %lld skipped %lld; tracking "
-            "%lld velocity %lld lost %lld reinit %lld; keyframes %lld (fallbacks %lld)\n%s",
-            static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_out),
-            static_cast<long long>(c.frames_dropped), static_cast<long long>(c.frames_skipped),
-            static_cast<long long>(k.tracking), static_cast<long long>(k.velocity_model),
+            "[pplvo-estimator] done: %s; tracking %lld velocity %lld lost %lld reinit %lld; "
+            "keyframes %lld (fallbacks %lld)\n%s",
+            msgs::countsText(c).c_str(), static_cast<long long>(k.tracking), static_cast<long long>(k.velocity_model),
             static_cast<long long>(k.lost), static_cast<long long>(k.reinitialised),
             static_cast<long long>(k.keyframes), static_cast<long long>(k.keyframe_fallbacks),
             n.allTimings().table().c_str());

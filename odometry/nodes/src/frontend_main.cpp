@@ -1,6 +1,7 @@
 // pplvo-frontend: see pplvo/odometry_nodes/frontend_node.h and docs/features.md.
 #include "pplvo/core/allocator.h"
 #include "pplvo/core/args.h"
+#include "pplvo/msgs/frame_ledger.h"
 #include "pplvo/node/process.h"
 #include "pplvo/odometry_nodes/odometry_args.h"
 
@@ -28,12 +29,9 @@ int main(int argc, char** argv) {
       [](const FrontendNode& n) {
         const msgs::NodeCounters& c = n.counters();
         return node::format(
-            "[pplvo-frontend] done: in %lld out %lld dropped %lld skipped %lld; %lld of the "
-            "drops before extraction, the pose -> fused depth loop behind; %lld extracted "
-            "without fused depth within the wait\n%s",
-            static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_out),
-            static_cast<long long>(c.frames_dropped), static_cast<long long>(c.frames_skipped),
-            static_cast<long long>(n.droppedLoopBehind()),
+            "[pplvo-frontend] done: %s; %lld of the drops before extraction, the pose -> "
+            "fused depth loop behind; %lld extracted without fused depth within the wait\n%s",
+            msgs::countsText(c).c_str(), static_cast<long long>(n.droppedLoopBehind()),
             static_cast<long long>(n.droppedUnliftedTimeout()), n.allTimings().table().c_str());
       });
 }

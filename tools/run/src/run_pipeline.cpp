@@ -106,16 +106,7 @@ std::string RunResult::text() const {
     out << buf << "  chosen for: " << keyframe_reasons << "\n";
   }
   for (const NodeReport& n : nodes) {
-    const msgs::NodeCounters& c = n.counters;
-    std::snprintf(buf, sizeof buf,
-                  "%s: in %lld = out %lld + dropped %lld + skipped %lld + pending %lld; lost %lld, "
-                  "messages skipped %lld, errors %lld\n",
-                  n.name.c_str(), static_cast<long long>(c.frames_in),
-                  static_cast<long long>(c.frames_out), static_cast<long long>(c.frames_dropped),
-                  static_cast<long long>(c.frames_skipped), static_cast<long long>(c.frames_pending),
-                  static_cast<long long>(c.frames_lost), static_cast<long long>(c.messages_skipped),
-                  static_cast<long long>(c.errors));
-    out << buf;
+    out << n.name << ": " << msgs::countsText(n.counters) << "\n";
     if (!n.counters.last_warning.empty())
       out << "  last warning: " << n.counters.last_warning << "\n";
     std::istringstream table(n.timings.table());

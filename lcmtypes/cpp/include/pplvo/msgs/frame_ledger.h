@@ -9,6 +9,7 @@
 /// node's other inputs that served no frame are `messages_skipped`.
 #include <cstdint>
 #include <deque>
+#include <string>
 
 #include "pplvo/msgs/convert.h"
 
@@ -18,6 +19,10 @@ namespace pplvo::msgs {
 inline bool countsAddUp(const NodeCounters& c) {
   return c.frames_in == c.frames_out + c.frames_dropped + c.frames_skipped + c.frames_pending;
 }
+
+/// "in 10 = out 7 + dropped 1 + skipped 1 + pending 1; lost 2, messages skipped 0, errors 0":
+/// how pplvo-run and the nodes' "done:" lines print a node's counts.
+std::string countsText(const NodeCounters& c);
 
 class FrameLedger {
  public:
