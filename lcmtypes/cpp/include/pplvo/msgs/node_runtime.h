@@ -9,6 +9,7 @@
 #include <optional>
 #include <pplvo_msgs/rgbd_frame_t.hpp>
 #include <string>
+#include <utility>
 
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/msgs/bus.h"
@@ -66,29 +67,50 @@ inline int64_t noteFrameSequence(NodeCounters& counters, int64_t seq) {
 /// node's skips and errors so far (the first few, then every 100th). Count before calling.
 void reportProblem(NodeCounters& counters, const std::string& node, const std::string& warning);
 
+namespace detail {
+
+/// The exception handling guarded() and guardedFrame() share: `bad_input()` counts a
+/// MessageError and returns how the report names it, `failed()` does what an error needs
+/// besides being counted; then the problem is reported. Never throws.
+template <typename Body, typename BadInput, typename Failed>
+bool runGuarded(NodeCounters& counters, const char* node, Body&& body, BadInput&& bad_input,
+                Failed&& failed) noexcept {
+  const char* kind = "error";
+  std::string what;
+  try {
+    body();
+    return true;
+  } catch (const MessageError& e) {
+    kind = bad_input();
+    what = e.what();
+  } catch (const std::exception& e) {
+    ++counters.errors;
+    failed();
+    what = e.what();
+  } catch (...) {
+    ++counters.errors;
+    failed();
+    what = "unknown exception";
+  }
+  reportProblem(counters, node, std::string(kind) + ": " + what);
+  return false;
+}
+
+}  // namespace detail
+
 /// Runs `body`; any exception is counted in `counters` (in messages_skipped when it is a
 /// MessageError: a bad message that served no frame; as an error otherwise), remembered as the
 /// last warning and printed (rate-limited to the first few and then every 100th). Never throws.
 /// For the handler of a node's frames use guardedFrame(), which closes the frame instead.
 template <typename Body>
 bool guarded(NodeCounters& counters, const char* node, Body&& body) noexcept {
-  auto report = [&](const char* kind, const char* what) {
-    reportProblem(counters, node, std::string(kind) + ": " + what);
-  };
-  try {
-    body();
-    return true;
-  } catch (const MessageError& e) {
-    ++counters.messages_skipped;
-    report("skipped bad message", e.what());
-  } catch (const std::exception& e) {
-    ++counters.errors;
-    report("error", e.what());
-  } catch (...) {
-    ++counters.errors;
-    report("error", "unknown exception");
-  }
-  return false;
+  return detail::runGuarded(
+      counters, node, std::forward<Body>(body),
+      [&] {
+        ++counters.messages_skipped;
+        return "skipped bad message";
+      },
+      [] {});
 }
 
 /// guarded() for the step that handles frame `seq` of the node's frame stream, after
@@ -97,25 +119,13 @@ bool guarded(NodeCounters& counters, const char* node, Body&& body) noexcept {
 template <typename Body>
 bool guardedFrame(FrameLedger& ledger, NodeCounters& counters, const char* node, int64_t seq,
                   Body&& body) noexcept {
-  auto report = [&](const char* kind, const char* what) {
-    reportProblem(counters, node, std::string(kind) + ": " + what);
-  };
-  try {
-    body();
-    return true;
-  } catch (const MessageError& e) {
-    if (!ledger.skipped(seq)) ++counters.messages_skipped;
-    report("skipped bad frame", e.what());
-  } catch (const std::exception& e) {
-    ++counters.errors;
-    ledger.dropped(seq);
-    report("error", e.what());
-  } catch (...) {
-    ++counters.errors;
-    ledger.dropped(seq);
-    report("error", "unknown exception");
-  }
-  return false;
+  return detail::runGuarded(
+      counters, node, std::forward<Body>(body),
+      [&] {
+        if (!ledger.skipped(seq)) ++counters.messages_skipped;
+        return "skipped bad frame";
+      },
+      [&] { ledger.dropped(seq); });
 }
 
 /// The step every node that reads frames (PPLVO_RGBD: depth filter, frontend) runs on one,
