@@ -56,8 +56,6 @@ mkdir -p "$out/scenes" "$out/runs"
 # shellcheck disable=SC2054  # the commas are pplvo-synth's list syntax
 effects=(--distortion fr1 --rolling-shutter-ms 25 --exposure-ms 8 --exposure-samples 4
   --depth-offset-ms -15,-13,16,-16,-12)
-rendered_error=(--set odometry.tracker.frame_error_sigma_t_m=0
-  --set odometry.tracker.frame_error_sigma_rot_deg=0)
 
 rows=()
 row() { rows+=("$1"); echo "$1" >&2; }
@@ -73,14 +71,12 @@ for scene in $scenes; do
         > "$d.log"
     fi
     total=$(awk '!/^#/ && NF' "$d/rgb.txt" | wc -l)
-    error_args=()
-    [ "$variant" = clean ] && error_args=("${rendered_error[@]}")
 
     pplvo_row() {  # pplvo_row LABEL ARGS...
       local label=$1; shift
       local base tracked
       base="$out/runs/$n.$(echo "$label" | tr -c 'a-z0-9' _)"
-      if ! "$bin/pplvo-run" --dataset "$d" "$@" "${error_args[@]}" --output "$base.txt" \
+      if ! "$bin/pplvo-run" --dataset "$d" "$@" --output "$base.txt" \
            --covariance "$base.cov" --no-progress > "$base.log" 2>&1; then
         row "| $n | $label | failed (see $base.log) | | | | | |"; return
       fi

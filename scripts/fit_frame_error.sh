@@ -26,7 +26,8 @@ for ds in "$@"; do
   cov="$work/$i-$(basename "$ds").cov"
   # shellcheck disable=SC2086
   "$build/bin/pplvo-run" --dataset "$ds" --output "$work/$i.txt" --covariance "$cov" --quiet \
-    --no-progress --set odometry.tracker.frame_error_sigma_t_m=0 \
+    --no-progress --set odometry.tracker.frame_error_online=false \
+    --set odometry.tracker.frame_error_sigma_t_m=0 \
     --set odometry.tracker.frame_error_sigma_rot_deg=0 ${PPLVO_RUN_ARGS:-} >/dev/null
   pairs+=("$ds/groundtruth.txt" "$cov")
 done

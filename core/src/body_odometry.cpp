@@ -106,16 +106,8 @@ void OdometryChain::compose(const Pose3& motion, const Matrix6d& motion_covarian
   T_odom_base_.linear() = Eigen::Quaterniond(T_odom_base_.linear()).normalized().toRotationMatrix();
 }
 
-BodyOdometryIntegrator::BodyOdometryIntegrator(BodyExtrinsic extrinsic,
-                                               const Matrix6d& frame_error_covariance)
-    : extrinsic_(extrinsic),
-      T_base_optical_(extrinsic_.baseFromOptical()),
-      frame_error_covariance_(frame_error_covariance) {
-  const Matrix6d J = bodyJacobian(T_base_optical_, Eigen::Matrix3d::Identity());
-  frame_error_body_ =
-      J * motionCovarianceFromQuaternionCovariance(Pose3::Identity(), frame_error_covariance_) *
-      J.transpose();
-}
+BodyOdometryIntegrator::BodyOdometryIntegrator(BodyExtrinsic extrinsic)
+    : extrinsic_(extrinsic), T_base_optical_(extrinsic_.baseFromOptical()) {}
 
 BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) {
   BodyOdometry out;
@@ -131,7 +123,12 @@ BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) 
     // error of its two frames, which does not accumulate.
     const Pose3 motion = T_base_optical_ * pose.T_prev_curr * T_base_optical_.inverse();
     const Matrix6d J_body = bodyJacobian(T_base_optical_, motion.linear());
-    const Matrix6d accumulating = clampedPsd(pose.rel_covariance - frame_error_covariance_);
+    const Matrix6d accumulating = clampedPsd(pose.rel_covariance - pose.frame_error_covariance);
+    const Matrix6d J_shared = bodyJacobian(T_base_optical_, Eigen::Matrix3d::Identity());
+    frame_error_body_ = J_shared *
+                        motionCovarianceFromQuaternionCovariance(Pose3::Identity(),
+                                                                 pose.frame_error_covariance) *
+                        J_shared.transpose();
     const Matrix6d motion_cov =
         J_body * motionCovarianceFromQuaternionCovariance(pose.T_prev_curr, accumulating) *
         J_body.transpose();

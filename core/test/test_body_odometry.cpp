@@ -182,13 +182,15 @@ TEST(BodyOdometry, SharedFrameErrorIsCountedOnceNotPerMotion) {
   Matrix6d shared = Matrix6d::Zero();
   shared.diagonal() << 4e-6, 4e-6, 4e-6, 1e-7, 1e-7, 1e-7;
   Matrix6d estimate = Matrix6d::Identity() * 1e-8;
-  BodyOdometryIntegrator with_shared({}, shared), without({}, Matrix6d::Zero());
+  BodyOdometryIntegrator with_shared, without;
   const Pose3 step = motion({0.0, 0.0, 0.03}, {0.0, 0.01, 0.0});
   with_shared.add(framePose(0, Pose3::Identity(), Matrix6d::Zero()), 0.0);
   without.add(framePose(0, Pose3::Identity(), Matrix6d::Zero()), 0.0);
   BodyOdometry a, b;
   for (int k = 1; k <= 100; ++k) {
-    a = with_shared.add(framePose(k, step, estimate + shared), k * kDt);
+    FramePose p = framePose(k, step, estimate + shared);
+    p.frame_error_covariance = shared;  // the estimator says which part is shared
+    a = with_shared.add(p, k * kDt);
     b = without.add(framePose(k, step, estimate), k * kDt);
   }
   EXPECT_TRUE(a.twist_covariance.isApprox(b.twist_covariance, 1e-9));

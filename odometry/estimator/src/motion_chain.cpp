@@ -44,17 +44,30 @@ Matrix6d velocityModelCovariance(const MotionChainOptions& o) {
 }
 }  // namespace
 
-Matrix6d frameErrorCovariance(const MotionChainOptions& o) {
-  const double var_t = o.frame_error_sigma_t_m * o.frame_error_sigma_t_m;
-  const double half_angle = 0.5 * o.frame_error_sigma_rot_deg * M_PI / 180.0;  // q_xyz
+Matrix6d frameErrorCovariance(const FrameErrorSigma& sigma) {
+  const double var_t = sigma.t_m * sigma.t_m;
+  const double half_angle = 0.5 * sigma.rot_rad;  // q_xyz
   Matrix6d C = Matrix6d::Zero();
   C.topLeftCorner<3, 3>().diagonal().setConstant(2 * var_t);
   C.bottomRightCorner<3, 3>().diagonal().setConstant(2 * half_angle * half_angle);
   return C;
 }
 
+Matrix6d frameErrorCovariance(const MotionChainOptions& o) {
+  return frameErrorCovariance(
+      FrameErrorSigma{o.frame_error_sigma_t_m, o.frame_error_sigma_rot_deg * M_PI / 180.0});
+}
+
 MotionChain::MotionChain(MotionChainOptions options)
-    : options_(std::move(options)), estimator_(options_.estimator) {}
+    : options_(std::move(options)),
+      estimator_(options_.estimator),
+      frame_error_(options_.frame_error_window, options_.frame_error_min_samples) {}
+
+FrameErrorSigma MotionChain::frameError() const {
+  if (options_.frame_error_online && frame_error_.ready()) return frame_error_.sigma();
+  return FrameErrorSigma{options_.frame_error_sigma_t_m,
+                         options_.frame_error_sigma_rot_deg * M_PI / 180.0};
+}
 
 MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
   initialised_ = true;
@@ -65,6 +78,7 @@ MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
   last_T_curr_prev_ = Pose3::Identity();
   last_cov_.setZero();
   window_.clear();
+  frame_error_.addGap();  // a sensor property: what was learnt stays, the differences restart
   WindowEntry self;
   self.seq = seq;
   window_.push_back(self);
@@ -154,6 +168,13 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
   T_w_c_.linear() = Eigen::Quaterniond(T_w_c_.linear()).normalized().toRotationMatrix();
   last_T_curr_prev_ = T_curr_prev;
   last_cov_ = Q;
+  // Only measured motions show the shared error; a predicted or combined one would smooth it.
+  if (good) {
+    frame_error_.addMeasuredMotion(T_curr_prev.inverse(),
+                                   invertedPoseCovariance(T_curr_prev, Q));
+  } else {
+    frame_error_.addGap();
+  }
   if (status_ == TrackingStatus::kLost) {
     window_.clear();  // nothing links older frames to this one
     WindowEntry self;
@@ -169,6 +190,8 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
 
 void MotionChain::propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q) {
   // Every entry held T^(k|j) and Sigma^(k|j); the last one is the previous frame (identity).
+  const double sigma_t = frameError().t_m;
+  const double var_t = sigma_t * sigma_t;
   for (WindowEntry& e : window_) {
     e.covariance = propagateCompositionCovariance(e.T_curr_frame, e.covariance, T_curr_prev, Q);
     e.T_curr_frame = T_curr_prev * e.T_curr_frame;
@@ -176,7 +199,6 @@ void MotionChain::propagateWindow(int64_t seq, const Pose3& T_curr_prev, const M
         Eigen::Quaterniond(e.T_curr_frame.linear()).normalized().toRotationMatrix();
     // Isotropic, so it adds to the largest eigenvalue as it is; it does not accumulate
     // along the chain (each frame's own error enters once).
-    const double var_t = options_.frame_error_sigma_t_m * options_.frame_error_sigma_t_m;
     e.max_translation_variance_m2 = maxTranslationVariance(e.covariance) + 2 * var_t;
   }
   WindowEntry self;
@@ -194,6 +216,7 @@ FramePose toFramePose(const MotionChainOutput& out) {
   p.T_w_c = out.T_w_c;
   p.T_prev_curr = out.T_prev_curr;
   p.rel_covariance = out.covariance_prev_curr;
+  p.frame_error_covariance = out.frame_error_covariance;
   p.max_translation_variance_m2 = maxTranslationVariance(out.covariance_prev_curr);
   p.n_point_matches = out.estimate.n_points_used;
   p.n_line_matches = out.estimate.n_lines_used;
@@ -216,7 +239,10 @@ MotionChainOutput MotionChain::makeOutput(int64_t seq) const {
   out.covariance = last_cov_;
   out.T_prev_curr = last_T_curr_prev_.inverse();
   out.covariance_prev_curr = invertedPoseCovariance(last_T_curr_prev_, last_cov_);
-  if (status_ != TrackingStatus::kFirstFrame) out.covariance_prev_curr += frameErrorCovariance(options_);
+  if (status_ != TrackingStatus::kFirstFrame) {
+    out.frame_error_covariance = frameErrorCovariance(frameError());
+    out.covariance_prev_curr += out.frame_error_covariance;
+  }
   out.max_translation_variance_m2 = maxTranslationVariance(last_cov_);
   out.consecutive_rejections = consecutive_rejections_;
   out.window.assign(window_.begin(), window_.end());

@@ -123,6 +123,7 @@ TEST(MotionChain, WindowCovarianceGrowsWithAgeAndMatchesDirectPropagation) {
 
 TEST(MotionChain, RelativePoseForMessagesIsPrevCurr) {
   MotionChainOptions opts;
+  opts.frame_error_online = false;
   opts.frame_error_sigma_t_m = opts.frame_error_sigma_rot_deg = 0;  // the estimate's alone
   MotionChain tracker(opts);
   tracker.initialise(0);
@@ -139,6 +140,7 @@ TEST(MotionChain, PerFrameSharedErrorEntersThePublishedCovarianceOnce) {
   // from both frames (2 Q), and so does every window transform, without accumulating along
   // the chain; the estimate's own covariance (the EKF's Q) and the pose do not change.
   MotionChainOptions plain, with_error;
+  plain.frame_error_online = with_error.frame_error_online = false;  // the fixed sigmas
   plain.frame_error_sigma_t_m = plain.frame_error_sigma_rot_deg = 0;
   with_error.frame_error_sigma_t_m = 2e-3;
   with_error.frame_error_sigma_rot_deg = 0.06;

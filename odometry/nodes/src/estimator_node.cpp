@@ -14,8 +14,7 @@ namespace pplvo::nodes {
 EstimatorNode::EstimatorNode(const EstimatorNodeOptions& options, msgs::Bus bus)
     : options_(options),
       bus_(std::move(bus)),
-      body_odometry_(options.odometry.body.extrinsic(),
-                     estimator::frameErrorCovariance(options.odometry.tracker)),
+      body_odometry_(options.odometry.body.extrinsic()),
       odometry_(options.odometry) {
   if (options_.max_waiting < 1) options_.max_waiting = 1;
   subscriptions_.push_back(bus_.subscribe(options_.features_channel, &EstimatorNode::onFeatures,

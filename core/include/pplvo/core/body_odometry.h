@@ -111,13 +111,12 @@ class OdometryChain {
 /// covariances (independent increments).
 class BodyOdometryIntegrator {
  public:
-  /// `frame_error_covariance`: the part of each pose_t.rel_covariance that does not
-  /// accumulate, the per-frame shared error of its two frames (estimator::frameErrorCovariance,
-  /// over [t; q_xyz]): a frame's error enters the motion before it and the one after it with
-  /// opposite signs, so a chain of motions carries it once. It is taken out of each motion
-  /// (and so of the twist) and added once to the pose covariance.
-  explicit BodyOdometryIntegrator(BodyExtrinsic extrinsic = {},
-                                  const Matrix6d& frame_error_covariance = Matrix6d::Zero());
+  /// Each pose's `frame_error_covariance` is the part of its rel_covariance that does not
+  /// accumulate, the per-frame shared error of its two frames: a frame's error enters the
+  /// motion before it and the one after it with opposite signs, so a chain of motions
+  /// carries it once. It is taken out of each motion (and so of the twist) and added once to
+  /// the pose covariance.
+  explicit BodyOdometryIntegrator(BodyExtrinsic extrinsic = {});
 
   /// The next pose of the estimator (in seq order). `stamp_s`: the frame's time in seconds
   /// (its stamp), for the twist.
@@ -128,8 +127,7 @@ class BodyOdometryIntegrator {
  private:
   BodyExtrinsic extrinsic_;
   Pose3 T_base_optical_;
-  Matrix6d frame_error_covariance_;  ///< over [t; q_xyz] of a motion
-  Matrix6d frame_error_body_;        ///< the same over [dt; dtheta] in base_link
+  Matrix6d frame_error_body_ = Matrix6d::Zero();  ///< the latest 2 Q over [dt; dtheta] in base_link
   bool started_ = false;
   double last_stamp_s_ = 0.0;
   OdometryChain chain_;

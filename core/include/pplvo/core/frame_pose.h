@@ -44,6 +44,9 @@ struct FramePose {
   Pose3 T_w_c = Pose3::Identity();
   Pose3 T_prev_curr = Pose3::Identity();
   Matrix6d rel_covariance = Matrix6d::Zero();  ///< over xi = [t; q_xyz] of T_prev_curr
+  /// The part of rel_covariance that is the per-frame shared error of the two frames, which
+  /// does not accumulate along a chain of motions (not in pose_t: zero when decoded).
+  Matrix6d frame_error_covariance = Matrix6d::Zero();
   double max_translation_variance_m2 = 0.0;
   int n_point_matches = 0, n_line_matches = 0, n_plane_matches = 0;
   int iterations = 0;

@@ -12,6 +12,7 @@
 #include "pplvo/core/config_schema.h"
 #include "pplvo/core/frame_pose.h"
 #include "pplvo/core/geometry.h"
+#include "pplvo/estimator/frame_error_estimator.h"
 #include "pplvo/estimator/pose_estimator.h"
 
 namespace pplvo::estimator {
@@ -46,13 +47,19 @@ struct MotionChainOptions {
   /// measurements (std per axis), which no number of matches averages away and which does
   /// not accumulate from frame to frame. A relative pose between two frames gains 2 Q, Q =
   /// diag(sigma_t^2 I, (sigma_rot / 2)^2 I) in [t; q_xyz]; so do the window's transforms
-  /// (the depth filter's drop rule). The estimate and the keyframe rule do not use it. Fitted
-  /// on real Kinect-class sequences by `pplvo-eval --fit-frame-error` (scripts/fit_frame_error.sh,
-  /// docs/estimator.md "The per-frame shared error"); 0 for rendered images, whose frames
-  /// have exact poses. Defaults: the pooled fit on TUM fr1_xyz and fr3_sitting_static (Kinect
-  /// and Xtion; each sequence's own fit 2.13 / 2.10 mm, 0.071 / 0.048 deg).
-  double frame_error_sigma_t_m = 0.0021;
-  double frame_error_sigma_rot_deg = 0.057;
+  /// (the depth filter's drop rule). The estimate and the keyframe rule do not use it.
+  /// Estimated online from the roughness of the measured motions (FrameErrorEstimator) over
+  /// the last `frame_error_window` of them; the sigmas below are used until
+  /// `frame_error_min_samples` are in, and always when `frame_error_online` is false.
+  bool frame_error_online = true;
+  int frame_error_window = 60;
+  int frame_error_min_samples = 10;
+  /// Until the data has spoken (the first ~13 frames), err on the large side: above what
+  /// Kinect-class cameras show (1-2 mm, 0.05-0.1 deg), so no early frame is over-confident.
+  /// With frame_error_online false, set a camera's value, e.g. from `pplvo-eval
+  /// --fit-frame-error` (scripts/fit_frame_error.sh), or 0 for exact rendered images.
+  double frame_error_sigma_t_m = 0.003;
+  double frame_error_sigma_rot_deg = 0.1;
 };
 
 /// Schema of MotionChainOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
@@ -80,17 +87,29 @@ void visit(V& v, MotionChainOptions& o) {
   v.field("velocity_model_sigma_q", o.velocity_model_sigma_q,
           "process noise std of q_xyz of a velocity-model step (~half-angle, rad)",
           config::atLeast(0));
+  v.field("frame_error_online", o.frame_error_online,
+          "estimate the per-frame shared error online from the roughness of the measured "
+          "motions (their second differences); false: the fixed sigmas below");
+  v.field("frame_error_window", o.frame_error_window,
+          "measured motion triples over which the shared error is estimated (frames)",
+          config::atLeast(1));
+  v.field("frame_error_min_samples", o.frame_error_min_samples,
+          "triples needed before the online estimate replaces the fixed sigmas",
+          config::atLeast(1));
   v.field("frame_error_sigma_t_m", o.frame_error_sigma_t_m,
           "per-frame pose error shared by all of a frame's measurements, translation std per "
-          "axis (m); added as 2 Q to the published relative covariance and the window (0 for "
-          "rendered images; fit: scripts/fit_frame_error.sh)",
+          "axis (m), added as 2 Q to the published relative covariance and the window: the "
+          "value before the online estimate is ready, or always when it is off "
+          "(fit: scripts/fit_frame_error.sh)",
           config::atLeast(0));
   v.field("frame_error_sigma_rot_deg", o.frame_error_sigma_rot_deg,
           "the same, rotation std per axis (deg)", config::atLeast(0));
 }
 
-/// 2 Q of a relative pose between two frames that each carry the per-frame shared error of
-/// `o` (frame_error_sigma_*), as a covariance of xi = [t; q_xyz].
+/// 2 Q of a relative pose between two frames that each carry a per-frame shared error of
+/// `sigma`, as a covariance of xi = [t; q_xyz].
+Matrix6d frameErrorCovariance(const FrameErrorSigma& sigma);
+/// The same for the fixed sigmas of `o` (frame_error_sigma_*).
 Matrix6d frameErrorCovariance(const MotionChainOptions& o);
 
 /// One frame of the window: the transform from that frame to the current one.
@@ -112,6 +131,8 @@ struct MotionChainOutput {
   /// per-frame shared error of both frames included (frameErrorCovariance).
   Pose3 T_prev_curr = Pose3::Identity();
   Matrix6d covariance_prev_curr = Matrix6d::Zero();
+  /// The shared-error part of covariance_prev_curr (2 Q; zero for the first frame).
+  Matrix6d frame_error_covariance = Matrix6d::Zero();
   double max_translation_variance_m2 = 0;  ///< of `covariance`
   int consecutive_rejections = 0;
   /// Oldest first; the last entry is the current frame (identity, zero covariance).
@@ -152,6 +173,9 @@ class MotionChain {
   bool initialised() const { return initialised_; }
   TrackingStatus status() const { return status_; }
   const Pose3& T_w_c() const { return T_w_c_; }
+  /// The per-frame shared error in use: the online estimate when it is ready, else the
+  /// fixed sigmas of the options.
+  FrameErrorSigma frameError() const;
 
  private:
   void propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q);
@@ -170,6 +194,7 @@ class MotionChain {
   Pose3 last_T_curr_prev_ = Pose3::Identity();
   Matrix6d last_cov_ = Matrix6d::Zero();
   std::deque<WindowEntry> window_;
+  FrameErrorEstimator frame_error_;
 };
 
 }  // namespace pplvo::estimator

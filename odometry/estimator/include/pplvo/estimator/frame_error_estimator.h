@@ -1,0 +1,68 @@
+#pragma once
+/// Online estimate of the per-frame shared error: an error of each frame's pose common to all
+/// of its measurements (time offsets, shutter, depth calibration, ...), which no per-measurement
+/// model contains and which the frame's own residuals cannot show (it moves every measurement
+/// of the frame alike, like a motion). What shows it is the trajectory's roughness: a camera's
+/// motion is smooth over four frames, while a white error e_k of each frame enters the motion
+/// into and out of frame k with opposite signs. The second difference of three consecutive
+/// motions (the third difference of four poses),
+///
+///     d_k = m_k - 2 m_{k-1} + m_{k-2},   m_k = xi(T_prev_curr of frame k) as [t; rotation vector]
+///         = (true jerk) + e_k - 3 e_{k-1} + 3 e_{k-2} - e_{k-3} + (estimation noise),
+///
+/// has per-axis variance 20 sigma^2 + (C_k + 4 C_{k-1} + C_{k-2}) / axis + (jerk dt^3)^2, with
+/// C the motions' published covariance without any shared error. A hand-held camera's jerk
+/// over 33 ms is far below the error (20 m/s^3: 0.7 mm against sqrt(20) * 2 mm = 9 mm); it
+/// only ever biases sigma up. The variance is the mean square over a window of samples (a
+/// covariance is a second moment: a median would read only the core of a heavy-tailed
+/// error, and real frames have tails: blur, a poor frame), each sample clipped at 10 times the
+/// median so that one wrong estimate cannot set it; the estimation noise (mean) is taken off,
+/// the rest divided by 20. The same idea estimates the ground truth's jitter in pplvo-eval
+/// (eval::estimateGtJitter). A true motion that is rough at the frame rate reads as shared
+/// error (ICL-NUIM's trajectories: docs/estimator.md). No LCM, deterministic, bounded memory.
+#include <deque>
+
+#include "pplvo/core/geometry.h"
+
+namespace pplvo::estimator {
+
+/// Per-axis standard deviation of the shared error of one frame.
+struct FrameErrorSigma {
+  double t_m = 0.0;      ///< translation (m)
+  double rot_rad = 0.0;  ///< rotation angle about each axis (rad)
+};
+
+class FrameErrorEstimator {
+ public:
+  /// `window_samples`: second differences kept (the newest); `min_samples`: needed before
+  /// ready(). Both at least 1.
+  FrameErrorEstimator(int window_samples, int min_samples);
+
+  /// The next frame's motion T_prev_curr, measured (an accepted estimate), with the
+  /// covariance of its xi = [t; q_xyz] without any shared error.
+  void addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance);
+  /// The next frame had no measured motion (velocity model, a combined weak estimate, lost,
+  /// restarted): the differences restart after it.
+  void addGap();
+
+  bool ready() const { return static_cast<int>(samples_.size()) >= min_samples_; }
+  int samples() const { return static_cast<int>(samples_.size()); }
+  /// The estimate from the samples in the window (zeros when there are none).
+  FrameErrorSigma sigma() const;
+
+ private:
+  struct Motion {
+    Vector6d m = Vector6d::Zero();  ///< [t; rotation vector]
+    double var_t = 0, var_r = 0;    ///< per-axis mean variance of t and of the rotation vector
+  };
+  struct Sample {
+    double d_t_sq = 0, d_r_sq = 0;    ///< |d_t|^2, |d_r|^2
+    double noise_t = 0, noise_r = 0;  ///< per-axis variance of d from the estimate's own C
+  };
+  int window_samples_;
+  int min_samples_;
+  std::deque<Motion> motions_;  ///< the last measured motions without a gap, at most 3
+  std::deque<Sample> samples_;
+};
+
+}  // namespace pplvo::estimator

@@ -1,0 +1,161 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "pplvo/estimator/frame_error_estimator.h"
+#include "pplvo/estimator/motion_chain.h"
+#include "pplvo/estimator/pose_parameterisation.h"
+
+namespace pplvo::estimator {
+namespace {
+
+Pose3 poseOf(const Eigen::Vector3d& t, const Eigen::Vector3d& rotation_vector) {
+  Pose3 T = Pose3::Identity();
+  const double angle = rotation_vector.norm();
+  if (angle > 0) T.linear() = Eigen::AngleAxisd(angle, rotation_vector / angle).toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+/// A hand-held sway at 30 Hz (0.3 m, 20 deg, periods of 2-4 s: accelerations up to ~3 m/s^2,
+/// jerks up to ~9 m/s^3) with a shared error of `sigma` on every frame's pose and an
+/// estimation noise of `noise_sd` per axis on every relative motion, whose covariance is
+/// reported; fed frame by frame to `estimator`.
+void feedSway(FrameErrorEstimator& estimator, const FrameErrorSigma& sigma, double noise_sd_t,
+              double noise_sd_q, int frames, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  auto truth = [](int k) {
+    const double s = k / 30.0;
+    const Eigen::Vector3d t(0.3 * std::sin(2 * M_PI * s / 2.0), 0.2 * std::sin(2 * M_PI * s / 3.0),
+                            0.1 * std::cos(2 * M_PI * s / 4.0));
+    const Eigen::Vector3d r(0.35 * std::sin(2 * M_PI * s / 3.0), 0.2 * std::sin(2 * M_PI * s / 2.5),
+                            0.1 * std::sin(2 * M_PI * s / 4.0));
+    return poseOf(t, r);
+  };
+  auto shared = [&] {
+    Eigen::Vector3d t, r;
+    for (int i = 0; i < 3; ++i) t[i] = sigma.t_m * n01(rng);
+    for (int i = 0; i < 3; ++i) r[i] = sigma.rot_rad * n01(rng);
+    return poseOf(t, r);
+  };
+  Matrix6d C = Matrix6d::Zero();
+  C.topLeftCorner<3, 3>().diagonal().setConstant(noise_sd_t * noise_sd_t);
+  C.bottomRightCorner<3, 3>().diagonal().setConstant(noise_sd_q * noise_sd_q);
+  Pose3 prev = truth(0) * shared();
+  for (int k = 1; k < frames; ++k) {
+    const Pose3 curr = truth(k) * shared();
+    Vector6d noise;
+    for (int i = 0; i < 3; ++i) noise[i] = noise_sd_t * n01(rng);
+    for (int i = 3; i < 6; ++i) noise[i] = noise_sd_q * n01(rng);
+    const Pose3 measured = xiToPose(poseToXi(prev.inverse() * curr) + noise);
+    estimator.addMeasuredMotion(measured, C);
+    prev = curr;
+  }
+}
+
+constexpr double kDeg = M_PI / 180.0;
+
+TEST(FrameErrorEstimator, RecoversTheSharedErrorAndFollowsItWhenItDoubles) {
+  // The estimation noise (0.3 mm, 0.005 rad of q) is known from the covariance and taken off.
+  for (const double scale : {1.0, 2.0}) {
+    const FrameErrorSigma truth{scale * 2e-3, scale * 0.06 * kDeg};
+    FrameErrorEstimator estimator(400, 10);
+    feedSway(estimator, truth, 3e-4, 5e-5, 402, 7);
+    ASSERT_TRUE(estimator.ready());
+    const FrameErrorSigma s = estimator.sigma();
+    std::printf("shared error x%.0f: %.2f mm / %.3f deg estimated (truth %.2f / %.3f)\n", scale,
+                1e3 * s.t_m, s.rot_rad / kDeg, 1e3 * truth.t_m, truth.rot_rad / kDeg);
+    // 400 samples of a 3-vector: the MAD-based variance is within ~10 % (one sigma ~5 %).
+    EXPECT_NEAR(s.t_m, truth.t_m, 0.12 * truth.t_m);
+    EXPECT_NEAR(s.rot_rad, truth.rot_rad, 0.12 * truth.rot_rad);
+  }
+}
+
+TEST(FrameErrorEstimator, NoSharedErrorGivesNoneBeyondTheEstimationNoise) {
+  // Only estimation noise (1 mm, 0.002 of q per axis), reported in the covariance: what is
+  // left is far below that noise (the motion's jerk alone).
+  FrameErrorEstimator estimator(400, 10);
+  feedSway(estimator, FrameErrorSigma{}, 1e-3, 2e-3, 402, 3);
+  const FrameErrorSigma s = estimator.sigma();
+  EXPECT_LT(s.t_m, 0.3e-3);
+  EXPECT_LT(s.rot_rad, 0.3 * 4e-3);
+}
+
+TEST(FrameErrorEstimator, OneWrongMotionDoesNotSetTheWindowsError) {
+  // A shared error of 2 mm, and one motion 5 cm off (a wrong estimate): its three samples are
+  // clipped at 10 times the median, so the window's estimate moves by less than a third.
+  FrameErrorEstimator clean(60, 10), with_jump(60, 10);
+  const FrameErrorSigma truth{2e-3, 0.06 * kDeg};
+  feedSway(clean, truth, 3e-4, 5e-5, 62, 11);
+  feedSway(with_jump, truth, 3e-4, 5e-5, 30, 11);
+  const Matrix6d C = Matrix6d::Identity() * 1e-10;
+  with_jump.addMeasuredMotion(poseOf({0.06, 0.0, 0.0}, {0, 0, 0}), C);
+  feedSway(with_jump, truth, 3e-4, 5e-5, 32, 12);
+  EXPECT_LT(with_jump.sigma().t_m, 1.33 * clean.sigma().t_m);
+  EXPECT_GT(with_jump.sigma().t_m, 0.7 * truth.t_m);
+}
+
+TEST(FrameErrorEstimator, GapsRestartTheDifferencesAndTheWindowIsBounded) {
+  FrameErrorEstimator estimator(30, 10);
+  const Pose3 step = poseOf({0.01, 0, 0}, {0, 0.01, 0});
+  const Matrix6d C = Matrix6d::Identity() * 1e-10;
+  estimator.addMeasuredMotion(step, C);
+  estimator.addMeasuredMotion(step, C);
+  EXPECT_EQ(estimator.samples(), 0);  // three motions make one sample
+  estimator.addGap();
+  estimator.addMeasuredMotion(poseOf({0.5, 0, 0}, {0, 0.3, 0}), C);  // a jump after a gap
+  estimator.addMeasuredMotion(step, C);
+  EXPECT_EQ(estimator.samples(), 0);
+  for (int k = 0; k < 100; ++k) estimator.addMeasuredMotion(step, C);
+  EXPECT_EQ(estimator.samples(), 30);
+  EXPECT_TRUE(estimator.ready());
+  EXPECT_EQ(estimator.sigma().t_m, 0.0);  // the jump's differences left the window
+  EXPECT_EQ(estimator.sigma().rot_rad, 0.0);
+}
+
+TEST(FrameErrorEstimator, NonFiniteMotionsAreAGap) {
+  FrameErrorEstimator estimator(30, 1);
+  const Matrix6d C = Matrix6d::Identity() * 1e-10;
+  Pose3 bad = Pose3::Identity();
+  bad.translation().x() = std::nan("");
+  for (int k = 0; k < 10; ++k) {
+    estimator.addMeasuredMotion(Pose3::Identity(), C);
+    estimator.addMeasuredMotion(bad, C);
+  }
+  EXPECT_EQ(estimator.samples(), 0);
+  EXPECT_FALSE(estimator.ready());
+  EXPECT_EQ(estimator.sigma().t_m, 0.0);
+}
+
+TEST(MotionChain, PublishesTheOnlineSharedErrorOnceItIsReady) {
+  // Motions that alternate by +-3 mm along x (a rough trajectory): once enough of them are
+  // in, the published 2 Q is the online estimator's, before that the configured sigma's.
+  MotionChainOptions opts;
+  opts.frame_error_min_samples = 5;
+  opts.frame_error_sigma_t_m = 1e-3;  // used until then
+  MotionChain chain(opts);
+  chain.initialise(0);
+  FrameErrorEstimator reference(opts.frame_error_window, opts.frame_error_min_samples);
+  PoseEstimate e;
+  e.status = EstimateStatus::kOk;
+  e.covariance = Matrix6d::Identity() * 1e-10;
+  for (int64_t s = 1; s <= 20; ++s) {
+    const double jitter = (s % 2 == 0 ? 1 : -1) * 3e-3;
+    e.T_curr_prev = poseOf({0.01 + jitter, 0, 0}, {0, 0, 0}).inverse();
+    const MotionChainOutput out = chain.update(s, e);
+    reference.addMeasuredMotion(out.T_prev_curr,
+                                invertedPoseCovariance(e.T_curr_prev, e.covariance));
+    const FrameErrorSigma expected =
+        reference.ready() ? reference.sigma() : FrameErrorSigma{1e-3, 0.0};
+    EXPECT_NEAR(out.frame_error_covariance(0, 0), 2 * expected.t_m * expected.t_m, 1e-12) << s;
+    EXPECT_TRUE((out.covariance_prev_curr - out.frame_error_covariance)
+                    .isApprox(invertedPoseCovariance(e.T_curr_prev, e.covariance), 1e-6))
+        << s;
+  }
+  EXPECT_GT(chain.frameError().t_m, 1e-3);  // the data's, not the starting value
+}
+
+}  // namespace
+}  // namespace pplvo::estimator
