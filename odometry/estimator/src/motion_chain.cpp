@@ -125,6 +125,13 @@ std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
   const Matrix6d prior_sqrt = prior.cwiseSqrt();  // diagonal
   const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(prior_sqrt * info_est * prior_sqrt);
   if ((whitened.eigenvalues().array() > 1.0).count() < 3) return std::nullopt;
+  // Innovation gate: the estimate must agree with the prediction within their joint spread.
+  const Vector6d innovation = poseToXi(est.T_curr_prev) - poseToXi(predictedMotion());
+  const Eigen::LDLT<Matrix6d> joint(est.covariance + prior);
+  if (joint.info() != Eigen::Success ||
+      !(innovation.dot(joint.solve(innovation)) <= options_.weak_estimate_gate_chi2)) {
+    return std::nullopt;
+  }
   Matrix6d cov = (info_est + info_prior).inverse();
   cov = 0.5 * (cov + cov.transpose());
   const Vector6d xi = cov * (info_est * poseToXi(est.T_curr_prev) +

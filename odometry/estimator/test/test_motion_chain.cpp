@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "pplvo/core/config_visitor.h"
 #include "pplvo/estimator/motion_chain.h"
@@ -292,6 +293,46 @@ TEST(MotionChain, WeakEstimateTakesTheUnconstrainedDirectionFromThePrediction) {
   strict.update(0, goodEstimate(Pose3::Identity()));
   strict.update(1, goodEstimate(M));
   EXPECT_EQ(strict.update(2, weak).status, TrackingStatus::kVelocityModel);
+}
+
+TEST(MotionChain, WeakEstimateThatDisagreesWithThePredictionIsRejected) {
+  // Walking along a corridor at 20 mm a frame: the features constrain everything but x. A weak
+  // estimate whose x wandered 1.5 m off with a claimed 0.1 m std would pull the combination
+  // ~80 mm along x, and that would become the velocity there for good (nothing corrects x):
+  // the innovation gate rejects it. One 30 mm off, within the joint spread, is combined.
+  MotionChainOptions o;
+  const Pose3 M = makePose({0.02, 0.0, 0.0}, Eigen::Quaterniond::Identity());
+  PoseEstimate weak;
+  weak.status = EstimateStatus::kUncertain;
+  weak.covariance = Matrix6d::Identity() * 1e-8;
+  weak.covariance(0, 0) = 0.1 * 0.1;
+  for (const double x : {1.5, 0.05}) {
+    MotionChain chain(o);
+    chain.update(0, goodEstimate(Pose3::Identity()));
+    chain.update(1, goodEstimate(M));
+    weak.T_curr_prev = makePose({x, 0.001, 0.0}, Eigen::Quaterniond::Identity());
+    const MotionChainOutput out = chain.update(2, weak);
+    if (x > 1.0) {
+      EXPECT_EQ(out.status, TrackingStatus::kVelocityModel);
+      EXPECT_EQ(chain.fusedEstimates(), 0);
+      EXPECT_NEAR(out.T_curr_prev.translation().x(), o.velocity_decay * 0.02, 1e-9);
+    } else {
+      EXPECT_EQ(out.status, TrackingStatus::kTracking);
+      EXPECT_EQ(chain.fusedEstimates(), 1);
+      EXPECT_GT(out.T_curr_prev.translation().x(), 0.02);
+      EXPECT_LT(out.T_curr_prev.translation().x(), 0.05);
+    }
+  }
+  // Without the gate the wandered estimate is combined and moves the velocity.
+  MotionChainOptions ungated;
+  ungated.weak_estimate_gate_chi2 = std::numeric_limits<double>::infinity();
+  MotionChain chain(ungated);
+  chain.update(0, goodEstimate(Pose3::Identity()));
+  chain.update(1, goodEstimate(M));
+  weak.T_curr_prev = makePose({1.5, 0.001, 0.0}, Eigen::Quaterniond::Identity());
+  const MotionChainOutput out = chain.update(2, weak);
+  EXPECT_EQ(out.status, TrackingStatus::kTracking);
+  EXPECT_GT(out.T_curr_prev.translation().x(), 0.07);
 }
 
 }  // namespace

@@ -43,6 +43,12 @@ struct MotionChainOptions {
   /// more than the prediction in at least half of the six directions. false: such an estimate
   /// is rejected as a whole (the velocity model, then LOST).
   bool fuse_weak_estimates = true;
+  /// A weak estimate is combined only if it agrees with the prediction: the Mahalanobis
+  /// distance of their difference, with the sum of their covariances, below this (chi-square,
+  /// 6 dof; 22.46 = its 99.9 % quantile). Otherwise it is rejected like any other: a weak
+  /// solution that wandered off along the direction it does not constrain would become the
+  /// velocity there, which nothing would ever correct.
+  double weak_estimate_gate_chi2 = 22.46;
   /// Per-frame shared error: each frame's pose carries an error common to all of its
   /// measurements (std per axis), which no number of matches averages away and which does
   /// not accumulate from frame to frame. A relative pose between two frames gains 2 Q, Q =
@@ -76,6 +82,10 @@ void visit(V& v, MotionChainOptions& o) {
   v.field("fuse_weak_estimates", o.fuse_weak_estimates,
           "combine an uncertain or degenerate estimate with the velocity model's prediction "
           "(information form) instead of rejecting it");
+  v.field("weak_estimate_gate_chi2", o.weak_estimate_gate_chi2,
+          "a weak estimate is combined only if its Mahalanobis distance to the prediction "
+          "(chi-square, 6 dof) is below this (22.46: the 99.9 % quantile)",
+          config::atLeast(0));
   v.field("predict_from_velocity", o.predict_from_velocity,
           "start each estimate from the constant-velocity prediction (false: identity)");
   v.field("window_length", o.window_length,
