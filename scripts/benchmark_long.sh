@@ -120,50 +120,9 @@ for i in "${!names[@]}"; do
   pplvo_row "pplvo local map" "$d" --set odometry.reference=local_map
   pplvo_row "pplvo frame to frame (paper)" "$d" --set odometry.reference=frame
 
-  peer_row() {  # peer_row LABEL TRAJECTORY [RUNS]
-    local label=$1 est=$2 runs=${3:-}
-    if [ ! -s "$est" ]; then row "| $n | $label | crashed or no trajectory$runs | | | 0 / $total | | |"; return; fi
-    read -r a t r p < <(eval_line "$d/groundtruth.txt" "$est" "$fps")
-    if [ "$p" -lt $((total / 2)) ]; then
-      row "| $n | $label | lost: $p of $total frames posed$runs | | | $p / $total | | |"; return
-    fi
-    row "| $n | $label$runs | $a | $t | $r | $p / $total | | |"
-  }
-  for method in "rgbd|OpenCV RgbdOdometry" "rgbd --keyframes|OpenCV RgbdOdometry (keyframes)"; do
-    args=${method%%|*}; label=${method#*|}
-    est="$out/runs/$n.opencv_$(echo "$args" | tr -c 'a-z' _).txt"
-    # shellcheck disable=SC2086
-    "$bin/pplvo-peer-odometry" --dataset "$d" --output "$est" --method $args > "$est.log" 2>&1 || true
-    peer_row "$label" "$est"
-  done
-  if [ -x "$peers_dir/run_fovis.sh" ]; then
-    est="$out/runs/$n.fovis.txt"
-    "$peers_dir/run_fovis.sh" "$d" "$est" > "$est.log" 2>&1 || rm -f "$est"
-    peer_row "fovis" "$est"
-  else
-    row "| $n | fovis | not built ($peers_dir; ../shared/peers/build.sh) | | | | | |"
-  fi
-  if [ -x "$peers_dir/run_orbslam2.sh" ]; then
-    for mode in "--vo|ORB-SLAM2 --vo (local map, no loop closing)" "|ORB-SLAM2 (with loop closing)"; do
-      flag=${mode%%|*}; label=${mode#*|}
-      results=()
-      for k in $(seq 1 "$orb_runs"); do
-        est="$out/runs/$n.orbslam2${flag//-/_}.$k.txt"
-        # shellcheck disable=SC2086
-        "$peers_dir/run_orbslam2.sh" "$d" "$est" "${fpsarg[@]}" $flag > /dev/null 2>&1 || true
-        if [ -s "$est" ]; then
-          read -r a t r p < <(eval_line "$d/groundtruth.txt" "$est" "$fps")
-          results+=("$a $t $r $p $est")
-        else
-          results+=("9e9 - - 0 $est")
-        fi
-      done
-      read -r a t r p est < <(median_by_ate "${results[@]}")
-      peer_row "$label" "$([ "$a" = 9e9 ] && echo /nonexistent || echo "$est")" " (median of $orb_runs)"
-    done
-  else
-    row "| $n | ORB-SLAM2 | not built ($peers_dir; ../shared/peers/build.sh) | | | | | |"
-  fi
+  peer_rows "$n" "$d" "$fps" "$out/runs" "$peers_dir" "$orb_runs" \
+    "rgbd|OpenCV RgbdOdometry;rgbd --keyframes|OpenCV RgbdOdometry (keyframes)" \
+    "--vo|ORB-SLAM2 --vo (local map, no loop closing);|ORB-SLAM2 (with loop closing)"
 done
 
 {

@@ -93,47 +93,9 @@ for scene in $scenes; do
     pplvo_row "pplvo all features, local map" --set odometry.reference=local_map
     pplvo_row "pplvo all features, frame to frame (paper)" --set odometry.reference=frame
 
-    peer_row() {  # peer_row LABEL TRAJECTORY [RUNS]
-      local label=$1 est=$2 runs=${3:-}
-      if [ ! -s "$est" ]; then row "| $n | $label | crashed or never initialised$runs | | | 0 / $total | | |"; return; fi
-      read -r a t r p < <(eval_line "$d/groundtruth.txt" "$est" 0)
-      if [ "$p" -lt $((total / 2)) ]; then
-        row "| $n | $label | lost: $p of $total frames posed$runs | | | $p / $total | | |"; return
-      fi
-      row "| $n | $label$runs | $a | $t | $r | $p / $total | | |"
-    }
-    for method in "rgbd|OpenCV RgbdOdometry" "icp|OpenCV ICPOdometry" \
-                  "rgbd_icp|OpenCV RgbdICPOdometry" "rgbd_icp --keyframes|OpenCV RgbdICPOdometry (keyframes)"; do
-      args=${method%%|*}; label=${method#*|}
-      est="$out/runs/$n.opencv_$(echo "$args" | tr -c 'a-z_' _).txt"
-      # shellcheck disable=SC2086
-      "$bin/pplvo-peer-odometry" --dataset "$d" --output "$est" --method $args > "$est.log" 2>&1 || rm -f "$est"
-      peer_row "$label" "$est"
-    done
-    if [ -x "$peers_dir/run_fovis.sh" ]; then
-      est="$out/runs/$n.fovis.txt"
-      "$peers_dir/run_fovis.sh" "$d" "$est" > "$est.log" 2>&1 || rm -f "$est"
-      peer_row "fovis" "$est"
-    else
-      row "| $n | fovis | not built ($peers_dir; ../shared/peers/build.sh) | | | | | |"
-    fi
-    if [ -x "$peers_dir/run_orbslam2.sh" ]; then
-      results=()
-      for k in $(seq 1 "$orb_runs"); do
-        est="$out/runs/$n.orbslam2_vo.$k.txt"
-        "$peers_dir/run_orbslam2.sh" "$d" "$est" --vo > /dev/null 2>&1 || true
-        if [ -s "$est" ]; then
-          read -r a t r p < <(eval_line "$d/groundtruth.txt" "$est" 0)
-          results+=("$a $t $r $p $est")
-        else
-          results+=("9e9 - - 0 $est")
-        fi
-      done
-      read -r a t r p est < <(median_by_ate "${results[@]}")
-      peer_row "ORB-SLAM2 --vo" "$([ "$a" = 9e9 ] && echo /nonexistent || echo "$est")" " (median of $orb_runs)"
-    else
-      row "| $n | ORB-SLAM2 | not built ($peers_dir; ../shared/peers/build.sh) | | | | | |"
-    fi
+    peer_rows "$n" "$d" 0 "$out/runs" "$peers_dir" "$orb_runs" \
+      "rgbd|OpenCV RgbdOdometry;icp|OpenCV ICPOdometry;rgbd_icp|OpenCV RgbdICPOdometry;rgbd_icp --keyframes|OpenCV RgbdICPOdometry (keyframes)" \
+      "--vo|ORB-SLAM2 --vo"
   done
 done
 

@@ -66,3 +66,69 @@ median_by_ate() {  # median_by_ate LINE... -> the line with the median ATE (fail
   printf '%s\n' "$@" | sort -t' ' -k1,1g | awk '{ l[NR] = $0 } END { print l[int((NR + 1) / 2)] }'
 }
 
+
+# The peers on one sequence, one table row each through the caller's row() (columns: name,
+# label, ATE, RPE m/s, RPE deg/s, posed / total, two empty cells), as benchmark_long.sh and
+# benchmark_scenes.sh print them:
+#   peer_rows NAME DIR FPS RUNS_DIR PEERS_DIR ORB_RUNS OPENCV ORB
+# OPENCV: ';'-separated "pplvo-peer-odometry --method arguments|label"; ORB: ';'-separated
+# "flag|label" (run_orbslam2.sh's flag: --vo, or empty for the full system), each run ORB_RUNS
+# times (it is multi-threaded) and shown by its median ATE. A peer that is not built in
+# PEERS_DIR (../shared/peers/build.sh) is a row saying so, one that writes no trajectory
+# "crashed or never initialised", one that poses under half the frames "lost".
+peer_rows() {
+  local n=$1 d=$2 fps=$3 runs_dir=$4 peers=$5 orb_runs=$6 opencv=$7 orb=$8
+  local total entry args label flag est k a t r p results=() entries=() fpsarg=()
+  [ "$fps" != 0 ] && fpsarg=(--fps "$fps")
+  total=$(awk '!/^#/ && NF' "$d/rgb.txt" | wc -l)
+  IFS=';' read -r -a entries <<< "$opencv"
+  for entry in "${entries[@]}"; do
+    args=${entry%%|*}; label=${entry#*|}
+    est="$runs_dir/$n.opencv_$(echo "$args" | tr -c 'a-z_' _).txt"
+    # shellcheck disable=SC2086  # the method and its options
+    "$bin/pplvo-peer-odometry" --dataset "$d" --output "$est" --method $args > "$est.log" 2>&1 || true
+    peer_row "$n" "$d" "$fps" "$total" "$label" "$est"
+  done
+  if [ -x "$peers/run_fovis.sh" ]; then
+    est="$runs_dir/$n.fovis.txt"
+    "$peers/run_fovis.sh" "$d" "$est" > "$est.log" 2>&1 || rm -f "$est"
+    peer_row "$n" "$d" "$fps" "$total" "fovis" "$est"
+  else
+    row "| $n | fovis | not built ($peers; ../shared/peers/build.sh) | | | | | |"
+  fi
+  if [ ! -x "$peers/run_orbslam2.sh" ]; then
+    row "| $n | ORB-SLAM2 | not built ($peers; ../shared/peers/build.sh) | | | | | |"
+    return
+  fi
+  IFS=';' read -r -a entries <<< "$orb"
+  for entry in "${entries[@]}"; do
+    flag=${entry%%|*}; label=${entry#*|}
+    results=()
+    for k in $(seq 1 "$orb_runs"); do
+      est="$runs_dir/$n.orbslam2${flag//-/_}.$k.txt"
+      # shellcheck disable=SC2086  # no flag: the full system
+      "$peers/run_orbslam2.sh" "$d" "$est" "${fpsarg[@]}" $flag > "$est.log" 2>&1 || true
+      if [ -s "$est" ]; then
+        read -r a t r p < <(eval_line "$d/groundtruth.txt" "$est" "$fps")
+        results+=("$a $t $r $p $est")
+      else
+        results+=("9e9 - - 0 $est")
+      fi
+    done
+    read -r a t r p est < <(median_by_ate "${results[@]}")
+    [ "$a" = 9e9 ] && est=/nonexistent
+    peer_row "$n" "$d" "$fps" "$total" "$label" "$est" " (median of $orb_runs)"
+  done
+}
+# peer_row NAME DIR FPS TOTAL LABEL TRAJECTORY [RUNS]: one peer's row (peer_rows).
+peer_row() {
+  local n=$1 d=$2 fps=$3 total=$4 label=$5 est=$6 runs=${7:-} a t r p
+  if [ ! -s "$est" ]; then
+    row "| $n | $label | crashed or never initialised$runs | | | 0 / $total | | |"; return
+  fi
+  read -r a t r p < <(eval_line "$d/groundtruth.txt" "$est" "$fps")
+  if [ "$p" -lt $((total / 2)) ]; then
+    row "| $n | $label | lost: $p of $total frames posed$runs | | | $p / $total | | |"; return
+  fi
+  row "| $n | $label$runs | $a | $t | $r | $p / $total | | |"
+}
