@@ -76,10 +76,13 @@ if grep -E 'ceres|opencv_(features2d|calib3d|ximgproc|line_descriptor)|pplvo_(pi
 fi
 
 step "pose_listener needs LCM alone at run time (no OpenCV, Ceres, yaml-cpp shared library)"
-if ldd "$tmp/example/pose_listener" | grep -E 'opencv|ceres|yaml|glog|cholmod'; then
+# ldd's output in a variable: `ldd | grep -q` under pipefail fails when grep exits at its
+# first match before ldd has written everything (SIGPIPE; seen on a loaded machine).
+libs=$(ldd "$tmp/example/pose_listener")
+if grep -E 'opencv|ceres|yaml|glog|cholmod' <<< "$libs"; then
   fail "pose_listener loads libraries it does not use"
 fi
-ldd "$tmp/example/pose_listener" | grep -q liblcm || fail "pose_listener without liblcm?"
+grep -q liblcm <<< "$libs" || fail "pose_listener without liblcm?"
 
 step "pose_listener --log (file:// provider)"
 "$tmp/example/pose_listener" --log "$tmp/run.lcm" --tum "$tmp/file.txt" \
