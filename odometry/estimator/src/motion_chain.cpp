@@ -246,8 +246,10 @@ MotionChainOutput MotionChain::makeOutput(int64_t seq) const {
   out.covariance = last_cov_;
   out.T_prev_curr = last_T_curr_prev_.inverse();
   out.covariance_prev_curr = invertedPoseCovariance(last_T_curr_prev_, last_cov_);
+  out.frame_error = frameError();
+  out.frame_error_estimated = options_.frame_error_online && frame_error_.ready();
   if (status_ != TrackingStatus::kFirstFrame) {
-    out.frame_error_covariance = frameErrorCovariance(frameError());
+    out.frame_error_covariance = frameErrorCovariance(out.frame_error);
     out.covariance_prev_curr += out.frame_error_covariance;
   }
   out.max_translation_variance_m2 = maxTranslationVariance(last_cov_);

@@ -142,6 +142,8 @@ void EstimatorNode::publish(const estimator::MotionChainOutput& out, const Frame
   pose.reference = odometry_.referenceRole(frame.seq);
   (void)stats;  // pose_t carries the inliers the estimate used (estimator::toFramePose)
   counts_.add(pose.status);
+  counts_.frame_error = out.frame_error;
+  counts_.frame_error_estimated = out.frame_error_estimated;
   {
     ScopedStageTimer t(timings_, "encode");
     const pplvo_msgs::pose_t m = msgs::toMsg(pose);

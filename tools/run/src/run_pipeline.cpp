@@ -105,6 +105,12 @@ std::string RunResult::text() const {
                   static_cast<long long>(keyframes), static_cast<long long>(keyframe_fallbacks));
     out << buf << "  chosen for: " << keyframe_reasons << "\n";
   }
+  if (poses > 1) {
+    std::snprintf(buf, sizeof buf, "shared frame error: %.2f mm, %.3f deg per axis (%s)\n",
+                  1e3 * frame_error_sigma_t_m, frame_error_sigma_rot_deg,
+                  frame_error_estimated ? "estimated online" : "configured");
+    out << buf;
+  }
   for (const NodeReport& n : nodes) {
     out << n.name << ": " << msgs::countsText(n.counters) << "\n";
     if (!n.counters.last_warning.empty())
@@ -131,6 +137,9 @@ std::string RunResult::yaml() const {
       << ", velocity_model: " << velocity_model << ", lost: " << lost
       << ", reinitialised: " << reinitialised << "}\n"
       << "keyframes: {taken: " << keyframes << ", fallbacks: " << keyframe_fallbacks << "}\n"
+      << "frame_error: {sigma_t_m: " << frame_error_sigma_t_m
+      << ", sigma_rot_deg: " << frame_error_sigma_rot_deg
+      << ", estimated: " << (frame_error_estimated ? "true" : "false") << "}\n"
       << "elapsed_s: " << elapsed_s << "\n"
       << "preload_s: " << preload_s << "\n"
       << "frames_per_s: " << framesPerSecond() << "\n"
@@ -253,6 +262,9 @@ RunResult runPipeline(const RunOptions& options) {
         {nodes::EstimatorNode::kName, estimator.counters(), estimator.allTimings()});
     result.keyframes = estimator.counts().keyframes;
     result.keyframe_fallbacks = estimator.counts().keyframe_fallbacks;
+    result.frame_error_sigma_t_m = estimator.counts().frame_error.t_m;
+    result.frame_error_sigma_rot_deg = estimator.counts().frame_error.rot_rad * 180.0 / M_PI;
+    result.frame_error_estimated = estimator.counts().frame_error_estimated;
     for (int r = 1; r < tracking::kKeyframeReasons; ++r) {
       result.keyframe_reasons += (r > 1 ? ", " : "");
       result.keyframe_reasons += tracking::toString(static_cast<tracking::KeyframeReason>(r));

@@ -141,8 +141,12 @@ struct MotionChainOutput {
   /// per-frame shared error of both frames included (frameErrorCovariance).
   Pose3 T_prev_curr = Pose3::Identity();
   Matrix6d covariance_prev_curr = Matrix6d::Zero();
-  /// The shared-error part of covariance_prev_curr (2 Q; zero for the first frame).
+  /// The shared-error part of covariance_prev_curr (2 Q; zero for the first frame), the
+  /// per-frame shared error it comes from, and whether that is the online estimate (else the
+  /// fixed sigmas of the options).
   Matrix6d frame_error_covariance = Matrix6d::Zero();
+  FrameErrorSigma frame_error;
+  bool frame_error_estimated = false;
   double max_translation_variance_m2 = 0;  ///< of `covariance`
   int consecutive_rejections = 0;
   /// Oldest first; the last entry is the current frame (identity, zero covariance).

@@ -71,6 +71,10 @@ struct EstimatorCounts : TrackingStatusCounts {
   int64_t keyframes = 0, keyframe_fallbacks = 0;
   /// Keyframes chosen, by tracking::KeyframeReason.
   std::array<int64_t, tracking::kKeyframeReasons> keyframe_reasons{};
+  /// The per-frame shared error of the last published pose, and whether it was estimated
+  /// online (odometry.tracker.frame_error_online) or the configured value.
+  estimator::FrameErrorSigma frame_error;
+  bool frame_error_estimated = false;
 };
 
 class EstimatorNode {

@@ -68,6 +68,10 @@ struct RunResult : TrackingStatusCounts {
   int64_t frames_published = 0, frames_skipped = 0;
   int64_t poses = 0;
   int64_t keyframes = 0, keyframe_fallbacks = 0;  ///< the estimator's (reference: keyframe)
+  /// The per-frame shared error at the last pose (std per axis) and whether it was estimated
+  /// online; zeros when nothing was posed.
+  double frame_error_sigma_t_m = 0.0, frame_error_sigma_rot_deg = 0.0;
+  bool frame_error_estimated = false;
   std::string keyframe_reasons;  ///< "overlap N, uncertainty N, ..." (chosen keyframes)
   double elapsed_s = 0.0;        ///< wall time of the run (reading the dataset included)
   double preload_s = 0.0;        ///< of which decoding the frames beforehand (--preload)
