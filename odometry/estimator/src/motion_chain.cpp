@@ -74,6 +74,7 @@ MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
   status_ = TrackingStatus::kFirstFrame;
   T_w_c_ = isValidPose(T_w_c0, 1e-6) ? T_w_c0 : Pose3::Identity();
   velocity_.setZero();
+  velocity_measured_ = false;
   consecutive_rejections_ = 0;
   last_T_curr_prev_ = Pose3::Identity();
   last_cov_.setZero();
@@ -125,13 +126,6 @@ std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
   const Matrix6d prior_sqrt = prior.cwiseSqrt();  // diagonal
   const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(prior_sqrt * info_est * prior_sqrt);
   if ((whitened.eigenvalues().array() > 1.0).count() < 3) return std::nullopt;
-  // Innovation gate: the estimate must agree with the prediction within their joint spread.
-  const Vector6d innovation = poseToXi(est.T_curr_prev) - poseToXi(predictedMotion());
-  const Eigen::LDLT<Matrix6d> joint(est.covariance + prior);
-  if (joint.info() != Eigen::Success ||
-      !(innovation.dot(joint.solve(innovation)) <= options_.weak_estimate_gate_chi2)) {
-    return std::nullopt;
-  }
   Matrix6d cov = (info_est + info_prior).inverse();
   cov = 0.5 * (cov + cov.transpose());
   const Vector6d xi = cov * (info_est * poseToXi(est.T_curr_prev) +
@@ -140,12 +134,29 @@ std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
   return std::make_pair(xiToPose(xi), cov);
 }
 
+bool MotionChain::agreesWithPrediction(const PoseEstimate& est) const {
+  if (!velocity_measured_ || !options_.predict_from_velocity) return true;
+  if (!isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) return true;  // not used
+  // Each frame since the last measured motion adds the velocity model's process noise.
+  const Matrix6d prior = (1.0 + consecutive_rejections_) * velocityModelCovariance(options_);
+  const Vector6d innovation = poseToXi(est.T_curr_prev) - poseToXi(predictedMotion());
+  const Eigen::LDLT<Matrix6d> joint(est.covariance + prior);
+  return joint.info() == Eigen::Success &&
+         innovation.dot(joint.solve(innovation)) <= options_.prediction_gate_chi2;
+}
+
 MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
   if (!initialised_) return initialise(seq);
-  const bool good =
+  const bool plausible = agreesWithPrediction(est);
+  const bool accepted =
       est.accepted() && isValidPose(est.T_curr_prev, 1e-6) && est.covariance.allFinite();
+  const bool good = accepted && plausible;
   const std::optional<std::pair<Pose3, Matrix6d>> fused =
-      good ? std::nullopt : fuseWithPrediction(est);
+      good || !plausible ? std::nullopt : fuseWithPrediction(est);
+  if (!plausible && (accepted || est.status == EstimateStatus::kUncertain ||
+                     est.status == EstimateStatus::kDegenerate)) {
+    ++gated_estimates_;
+  }
   Pose3 T_curr_prev = Pose3::Identity();
   Matrix6d Q = Matrix6d::Zero();
   if (good || fused) {
@@ -155,6 +166,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
     T_curr_prev = good ? est.T_curr_prev : fused->first;
     Q = good ? est.covariance : fused->second;
     velocity_ = motionToVector(T_curr_prev);
+    velocity_measured_ = true;
     if (fused) ++fused_estimates_;
   } else {
     ++consecutive_rejections_;
@@ -166,6 +178,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
     } else {
       status_ = TrackingStatus::kLost;
       velocity_.setZero();
+      velocity_measured_ = false;
       T_curr_prev = Pose3::Identity();
       Q = kLargeVariance * Matrix6d::Identity();
     }

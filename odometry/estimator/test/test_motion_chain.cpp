@@ -295,6 +295,33 @@ TEST(MotionChain, WeakEstimateTakesTheUnconstrainedDirectionFromThePrediction) {
   EXPECT_EQ(strict.update(2, weak).status, TrackingStatus::kVelocityModel);
 }
 
+TEST(MotionChain, ConfidentEstimateFarFromThePredictionIsRefused) {
+  // Walking at 20 mm a frame: an accepted estimate that jumps 0.35 m in one frame (wrong
+  // associations) is refused, the velocity model carries the frame and the velocity is kept,
+  // so the next frames do not inherit the jump; a quick but possible change (30 mm) is used.
+  MotionChainOptions o;
+  MotionChain chain(o);
+  chain.update(0, goodEstimate(Pose3::Identity()));
+  const Pose3 M = makePose({0.02, 0.0, 0.0}, Eigen::Quaterniond::Identity());
+  chain.update(1, goodEstimate(M));
+  chain.update(2, goodEstimate(M));
+  MotionChainOutput out =
+      chain.update(3, goodEstimate(makePose({0.37, 0.0, 0.0}, Eigen::Quaterniond::Identity())));
+  EXPECT_EQ(out.status, TrackingStatus::kVelocityModel);
+  EXPECT_EQ(chain.gatedEstimates(), 1);
+  EXPECT_NEAR(out.T_curr_prev.translation().x(), o.velocity_decay * 0.02, 1e-9);
+  out = chain.update(4, goodEstimate(makePose({0.05, 0.0, 0.0}, Eigen::Quaterniond::Identity())));
+  EXPECT_EQ(out.status, TrackingStatus::kTracking);
+  EXPECT_NEAR(out.T_curr_prev.translation().x(), 0.05, 1e-12);
+  EXPECT_EQ(chain.gatedEstimates(), 1);
+  // The first motion after a start has nothing to agree with: any is used.
+  MotionChain fresh(o);
+  fresh.update(0, goodEstimate(Pose3::Identity()));
+  EXPECT_EQ(fresh.update(1, goodEstimate(makePose({0.37, 0, 0}, Eigen::Quaterniond::Identity())))
+                .status,
+            TrackingStatus::kTracking);
+}
+
 TEST(MotionChain, WeakEstimateThatDisagreesWithThePredictionIsRejected) {
   // Walking along a corridor at 20 mm a frame: the features constrain everything but x. A weak
   // estimate whose x wandered 1.5 m off with a claimed 0.1 m std would pull the combination
@@ -325,7 +352,7 @@ TEST(MotionChain, WeakEstimateThatDisagreesWithThePredictionIsRejected) {
   }
   // Without the gate the wandered estimate is combined and moves the velocity.
   MotionChainOptions ungated;
-  ungated.weak_estimate_gate_chi2 = std::numeric_limits<double>::infinity();
+  ungated.prediction_gate_chi2 = std::numeric_limits<double>::infinity();
   MotionChain chain(ungated);
   chain.update(0, goodEstimate(Pose3::Identity()));
   chain.update(1, goodEstimate(M));

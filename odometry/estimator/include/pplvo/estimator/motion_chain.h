@@ -43,12 +43,15 @@ struct MotionChainOptions {
   /// more than the prediction in at least half of the six directions. false: such an estimate
   /// is rejected as a whole (the velocity model, then LOST).
   bool fuse_weak_estimates = true;
-  /// A weak estimate is combined only if it agrees with the prediction: the Mahalanobis
-  /// distance of their difference, with the sum of their covariances, below this (chi-square,
-  /// 6 dof; 22.46 = its 99.9 % quantile). Otherwise it is rejected like any other: a weak
-  /// solution that wandered off along the direction it does not constrain would become the
-  /// velocity there, which nothing would ever correct.
-  double weak_estimate_gate_chi2 = 22.46;
+  /// An estimate, accepted or weak, is used only if it agrees with the constant-velocity
+  /// prediction: the Mahalanobis distance of their difference, with the sum of the estimate's
+  /// covariance and the prediction's process noise (velocity_model_sigma_*, once more for
+  /// every frame since the last measured motion), below this (chi-square, 6 dof; 22.46 = its
+  /// 99.9 % quantile). Otherwise the frame is the velocity model's: a wrong solution (a weak
+  /// one wandered off along the direction it does not constrain, a confident one on wrong
+  /// associations) would otherwise become the velocity, which the next frames inherit.
+  /// Not applied before a motion has been measured, or without predict_from_velocity.
+  double prediction_gate_chi2 = 22.46;
   /// Per-frame shared error: each frame's pose carries an error common to all of its
   /// measurements (std per axis), which no number of matches averages away and which does
   /// not accumulate from frame to frame. A relative pose between two frames gains 2 Q, Q =
@@ -82,9 +85,9 @@ void visit(V& v, MotionChainOptions& o) {
   v.field("fuse_weak_estimates", o.fuse_weak_estimates,
           "combine an uncertain or degenerate estimate with the velocity model's prediction "
           "(information form) instead of rejecting it");
-  v.field("weak_estimate_gate_chi2", o.weak_estimate_gate_chi2,
-          "a weak estimate is combined only if its Mahalanobis distance to the prediction "
-          "(chi-square, 6 dof) is below this (22.46: the 99.9 % quantile)",
+  v.field("prediction_gate_chi2", o.prediction_gate_chi2,
+          "an estimate is used only if its Mahalanobis distance to the constant-velocity "
+          "prediction (chi-square, 6 dof) is below this (22.46: the 99.9 % quantile)",
           config::atLeast(0));
   v.field("predict_from_velocity", o.predict_from_velocity,
           "start each estimate from the constant-velocity prediction (false: identity)");
@@ -183,6 +186,8 @@ class MotionChain {
   MotionChainOutput update(int64_t seq, const PoseEstimate& estimate);
   /// Weak estimates combined with the prediction so far (fuse_weak_estimates).
   int64_t fusedEstimates() const { return fused_estimates_; }
+  /// Estimates (accepted or weak) refused by the prediction gate so far.
+  int64_t gatedEstimates() const { return gated_estimates_; }
 
   bool initialised() const { return initialised_; }
   TrackingStatus status() const { return status_; }
@@ -203,6 +208,11 @@ class MotionChain {
   Vector6d velocity_ = Vector6d::Zero();  ///< last good motion, [t; angle-axis] (tangent)
   int consecutive_rejections_ = 0;
   int64_t fused_estimates_ = 0;
+  int64_t gated_estimates_ = 0;
+  /// The velocity comes from a measured motion (not zero after a start or a loss).
+  bool velocity_measured_ = false;
+  /// Whether `est` agrees with the prediction (prediction_gate_chi2).
+  bool agreesWithPrediction(const PoseEstimate& est) const;
   /// A weak estimate combined with the prediction (fuse_weak_estimates), or nullopt.
   std::optional<std::pair<Pose3, Matrix6d>> fuseWithPrediction(const PoseEstimate& est) const;
   Pose3 last_T_curr_prev_ = Pose3::Identity();
