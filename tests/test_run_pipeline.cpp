@@ -175,6 +175,10 @@ TEST_F(RunPipelineTest, TracksTheSyntheticSequenceWithBoundedDrift) {
   EXPECT_LT(r.frame_error_sigma_rot_deg, 0.05);
   EXPECT_NE(y.find("frame_error: {sigma_t_m: "), std::string::npos) << y;
   EXPECT_NE(r.text().find("shared frame error: "), std::string::npos);
+  // Every estimate of the textured room constrains the pose and agrees with the prediction.
+  EXPECT_EQ(r.weak_estimates_combined, 0);
+  EXPECT_EQ(r.estimates_gated, 0);
+  EXPECT_NE(y.find("estimates_gated: 0"), std::string::npos) << y;
 }
 
 TEST_F(RunPipelineTest, CorruptFrameIsACountedSkipWithSkipBad) {

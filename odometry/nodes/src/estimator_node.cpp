@@ -144,6 +144,8 @@ void EstimatorNode::publish(const estimator::MotionChainOutput& out, const Frame
   counts_.add(pose.status);
   counts_.frame_error = out.frame_error;
   counts_.frame_error_estimated = out.frame_error_estimated;
+  counts_.weak_estimates_combined = odometry_.tracker().fusedEstimates();
+  counts_.estimates_gated = odometry_.tracker().gatedEstimates();
   {
     ScopedStageTimer t(timings_, "encode");
     const pplvo_msgs::pose_t m = msgs::toMsg(pose);

@@ -111,6 +111,14 @@ std::string RunResult::text() const {
                   frame_error_estimated ? "estimated online" : "configured");
     out << buf;
   }
+  if (weak_estimates_combined > 0 || estimates_gated > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "weak estimates combined with the prediction: %lld; estimates refused by the "
+                  "prediction gate: %lld\n",
+                  static_cast<long long>(weak_estimates_combined),
+                  static_cast<long long>(estimates_gated));
+    out << buf;
+  }
   for (const NodeReport& n : nodes) {
     out << n.name << ": " << msgs::countsText(n.counters) << "\n";
     if (!n.counters.last_warning.empty())
@@ -140,6 +148,8 @@ std::string RunResult::yaml() const {
       << "frame_error: {sigma_t_m: " << frame_error_sigma_t_m
       << ", sigma_rot_deg: " << frame_error_sigma_rot_deg
       << ", estimated: " << (frame_error_estimated ? "true" : "false") << "}\n"
+      << "weak_estimates_combined: " << weak_estimates_combined << "\n"
+      << "estimates_gated: " << estimates_gated << "\n"
       << "elapsed_s: " << elapsed_s << "\n"
       << "preload_s: " << preload_s << "\n"
       << "frames_per_s: " << framesPerSecond() << "\n"
@@ -265,6 +275,8 @@ RunResult runPipeline(const RunOptions& options) {
     result.frame_error_sigma_t_m = estimator.counts().frame_error.t_m;
     result.frame_error_sigma_rot_deg = estimator.counts().frame_error.rot_rad * 180.0 / M_PI;
     result.frame_error_estimated = estimator.counts().frame_error_estimated;
+    result.weak_estimates_combined = estimator.counts().weak_estimates_combined;
+    result.estimates_gated = estimator.counts().estimates_gated;
     for (int r = 1; r < tracking::kKeyframeReasons; ++r) {
       result.keyframe_reasons += (r > 1 ? ", " : "");
       result.keyframe_reasons += tracking::toString(static_cast<tracking::KeyframeReason>(r));

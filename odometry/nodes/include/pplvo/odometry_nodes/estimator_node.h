@@ -75,6 +75,9 @@ struct EstimatorCounts : TrackingStatusCounts {
   /// online (odometry.tracker.frame_error_online) or the configured value.
   estimator::FrameErrorSigma frame_error;
   bool frame_error_estimated = false;
+  /// Weak estimates combined with the prediction, and estimates refused by the prediction
+  /// gate (their frames are the velocity model's): estimator::MotionChain's counts.
+  int64_t weak_estimates_combined = 0, estimates_gated = 0;
 };
 
 class EstimatorNode {

@@ -72,6 +72,8 @@ struct RunResult : TrackingStatusCounts {
   /// online; zeros when nothing was posed.
   double frame_error_sigma_t_m = 0.0, frame_error_sigma_rot_deg = 0.0;
   bool frame_error_estimated = false;
+  /// Weak estimates combined with the prediction; estimates refused by the prediction gate.
+  int64_t weak_estimates_combined = 0, estimates_gated = 0;
   std::string keyframe_reasons;  ///< "overlap N, uncertainty N, ..." (chosen keyframes)
   double elapsed_s = 0.0;        ///< wall time of the run (reading the dataset included)
   double preload_s = 0.0;        ///< of which decoding the frames beforehand (--preload)
