@@ -107,7 +107,9 @@ void OdometryChain::compose(const Pose3& motion, const Matrix6d& motion_covarian
 }
 
 BodyOdometryIntegrator::BodyOdometryIntegrator(BodyExtrinsic extrinsic)
-    : extrinsic_(extrinsic), T_base_optical_(extrinsic_.baseFromOptical()) {}
+    : extrinsic_(extrinsic),
+      T_base_optical_(extrinsic_.baseFromOptical()),
+      J_shared_(bodyJacobian(T_base_optical_, Eigen::Matrix3d::Identity())) {}
 
 BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) {
   BodyOdometry out;
@@ -124,11 +126,10 @@ BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) 
     const Pose3 motion = T_base_optical_ * pose.T_prev_curr * T_base_optical_.inverse();
     const Matrix6d J_body = bodyJacobian(T_base_optical_, motion.linear());
     const Matrix6d accumulating = clampedPsd(pose.rel_covariance - pose.frame_error_covariance);
-    const Matrix6d J_shared = bodyJacobian(T_base_optical_, Eigen::Matrix3d::Identity());
-    frame_error_body_ = J_shared *
+    frame_error_body_ = J_shared_ *
                         motionCovarianceFromQuaternionCovariance(Pose3::Identity(),
                                                                  pose.frame_error_covariance) *
-                        J_shared.transpose();
+                        J_shared_.transpose();
     const Matrix6d motion_cov =
         J_body * motionCovarianceFromQuaternionCovariance(pose.T_prev_curr, accumulating) *
         J_body.transpose();

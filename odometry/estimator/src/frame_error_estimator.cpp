@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "pplvo/estimator/pose_parameterisation.h"
+
 namespace pplvo::estimator {
 
 namespace {
@@ -44,16 +46,15 @@ FrameErrorEstimator::FrameErrorEstimator(int window_samples, int min_samples)
       min_samples_(std::clamp(min_samples, 1, std::max(1, window_samples))) {}
 
 void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance) {
-  const Eigen::AngleAxisd aa(T_prev_curr.linear());
-  Motion motion;
-  motion.m << T_prev_curr.translation(), aa.angle() * aa.axis();
-  // The rotation vector is twice q_xyz to first order: 4 times its variance.
-  motion.var_t = covariance.topLeftCorner<3, 3>().trace() / 3.0;
-  motion.var_r = 4.0 * covariance.bottomRightCorner<3, 3>().trace() / 3.0;
-  if (!motion.m.allFinite() || !std::isfinite(motion.var_t) || !std::isfinite(motion.var_r)) {
+  if (!T_prev_curr.matrix().allFinite() || !covariance.allFinite()) {
     addGap();
     return;
   }
+  Motion motion;
+  motion.m = motionToVector(T_prev_curr);
+  // The rotation vector is twice q_xyz to first order: 4 times its variance.
+  motion.var_t = covariance.topLeftCorner<3, 3>().trace() / 3.0;
+  motion.var_r = 4.0 * covariance.bottomRightCorner<3, 3>().trace() / 3.0;
   motions_.push_back(motion);
   if (motions_.size() > 3) motions_.pop_front();
   if (motions_.size() < 3) return;
@@ -69,11 +70,12 @@ void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matr
   s.noise_r = c.var_r + 4.0 * b.var_r + a.var_r;
   samples_.push_back(s);
   while (static_cast<int>(samples_.size()) > window_samples_) samples_.pop_front();
+  sigma_ = estimate();
 }
 
 void FrameErrorEstimator::addGap() { motions_.clear(); }
 
-FrameErrorSigma FrameErrorEstimator::sigma() const {
+FrameErrorSigma FrameErrorEstimator::estimate() const {
   FrameErrorSigma out;
   if (samples_.empty()) return out;
   std::vector<double> dt, dr, nt, nr;

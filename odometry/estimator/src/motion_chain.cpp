@@ -11,28 +11,6 @@
 namespace pplvo::estimator {
 
 namespace {
-
-/// Motion as [t; angle-axis]; scaling this vector scales the motion (translation and rotation
-/// angle; we scale t directly rather than through the SE(3) log, which is the same to first
-/// order and keeps the prediction simple).
-Vector6d motionToVector(const Pose3& T) {
-  const Eigen::AngleAxisd aa(T.linear());
-  Vector6d v;
-  v << T.translation(), aa.angle() * aa.axis();
-  return v.allFinite() ? v : Vector6d::Zero();
-}
-
-Pose3 vectorToMotion(const Vector6d& v) {
-  Pose3 T = Pose3::Identity();
-  const double angle = v.tail<3>().norm();
-  if (angle > 1e-15) T.linear() = Eigen::AngleAxisd(angle, v.tail<3>() / angle).toRotationMatrix();
-  T.translation() = v.head<3>();
-  return T;
-}
-
-}  // namespace
-
-namespace {
 /// The process noise of a velocity-model step, over [t; q_xyz].
 Matrix6d velocityModelCovariance(const MotionChainOptions& o) {
   Matrix6d Q = Matrix6d::Zero();
@@ -63,8 +41,12 @@ MotionChain::MotionChain(MotionChainOptions options)
       estimator_(options_.estimator),
       frame_error_(options_.frame_error_window, options_.frame_error_min_samples) {}
 
+bool MotionChain::frameErrorEstimated() const {
+  return options_.frame_error_online && frame_error_.ready();
+}
+
 FrameErrorSigma MotionChain::frameError() const {
-  if (options_.frame_error_online && frame_error_.ready()) return frame_error_.sigma();
+  if (frameErrorEstimated()) return frame_error_.sigma();
   return FrameErrorSigma{options_.frame_error_sigma_t_m,
                          options_.frame_error_sigma_rot_deg * M_PI / 180.0};
 }
@@ -260,7 +242,7 @@ MotionChainOutput MotionChain::makeOutput(int64_t seq) const {
   out.T_prev_curr = last_T_curr_prev_.inverse();
   out.covariance_prev_curr = invertedPoseCovariance(last_T_curr_prev_, last_cov_);
   out.frame_error = frameError();
-  out.frame_error_estimated = options_.frame_error_online && frame_error_.ready();
+  out.frame_error_estimated = frameErrorEstimated();
   if (status_ != TrackingStatus::kFirstFrame) {
     out.frame_error_covariance = frameErrorCovariance(out.frame_error);
     out.covariance_prev_curr += out.frame_error_covariance;

@@ -36,6 +36,21 @@ Vector6d poseToXi(const Pose3& T) {
 
 Pose3 xiToPose(const Vector6d& xi) { return makePose(xi.head<3>(), quatOfXi(xi.tail<3>())); }
 
+Vector6d motionToVector(const Pose3& T) {
+  const Eigen::AngleAxisd aa(T.linear());
+  Vector6d v;
+  v << T.translation(), aa.angle() * aa.axis();
+  return v.allFinite() ? v : Vector6d::Zero();
+}
+
+Pose3 vectorToMotion(const Vector6d& v) {
+  Pose3 T = Pose3::Identity();
+  const double angle = v.tail<3>().norm();
+  if (angle > 1e-15) T.linear() = Eigen::AngleAxisd(angle, v.tail<3>() / angle).toRotationMatrix();
+  T.translation() = v.head<3>();
+  return T;
+}
+
 Eigen::Matrix3d rotatedPointJacobian(const Eigen::Vector3d& v, const Eigen::Vector3d& p) {
   // R(q) p = p + 2 w (u x p) + 2 u x (u x p), u = v, w = sqrt(1 - |v|^2).
   const double w = std::sqrt(std::max(1e-300, 1.0 - v.squaredNorm()));

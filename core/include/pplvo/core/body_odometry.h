@@ -127,6 +127,7 @@ class BodyOdometryIntegrator {
  private:
   BodyExtrinsic extrinsic_;
   Pose3 T_base_optical_;
+  Matrix6d J_shared_;  ///< [dt; dtheta] of a motion in the optical frame -> in base_link
   Matrix6d frame_error_body_ = Matrix6d::Zero();  ///< the latest 2 Q over [dt; dtheta] in base_link
   bool started_ = false;
   double last_stamp_s_ = 0.0;

@@ -47,8 +47,9 @@ class FrameErrorEstimator {
 
   bool ready() const { return static_cast<int>(samples_.size()) >= min_samples_; }
   int samples() const { return static_cast<int>(samples_.size()); }
-  /// The estimate from the samples in the window (zeros when there are none).
-  FrameErrorSigma sigma() const;
+  /// The estimate from the samples in the window (zeros when there are none); computed once
+  /// per sample.
+  const FrameErrorSigma& sigma() const { return sigma_; }
 
  private:
   struct Motion {
@@ -59,10 +60,13 @@ class FrameErrorEstimator {
     double d_t_sq = 0, d_r_sq = 0;    ///< |d_t|^2, |d_r|^2
     double noise_t = 0, noise_r = 0;  ///< per-axis variance of d from the estimate's own C
   };
+  FrameErrorSigma estimate() const;
+
   int window_samples_;
   int min_samples_;
   std::deque<Motion> motions_;  ///< the last measured motions without a gap, at most 3
   std::deque<Sample> samples_;
+  FrameErrorSigma sigma_;
 };
 
 }  // namespace pplvo::estimator

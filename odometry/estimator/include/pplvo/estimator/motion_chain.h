@@ -195,6 +195,8 @@ class MotionChain {
   /// The per-frame shared error in use: the online estimate when it is ready, else the
   /// fixed sigmas of the options.
   FrameErrorSigma frameError() const;
+  /// Whether frameError() is the online estimate (on, and enough samples in).
+  bool frameErrorEstimated() const;
 
  private:
   void propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q);

@@ -17,6 +17,13 @@ Vector6d poseToXi(const Pose3& T);
 /// Pose of xi; |q_xyz| is clamped to 1 (q_w = 0) if it exceeds it.
 Pose3 xiToPose(const Vector6d& xi);
 
+/// Motion as [t; angle-axis]: scaling this vector scales the motion (translation and rotation
+/// angle; t is scaled directly rather than through the SE(3) log, the same to first order).
+/// Zero when T is not finite. The velocity model's and the shared-error estimate's tangent.
+Vector6d motionToVector(const Pose3& T);
+/// The inverse of motionToVector.
+Pose3 vectorToMotion(const Vector6d& v);
+
 /// d(R(v) p)/dv (3x3) with R(v) the rotation of q = [v, sqrt(1 - |v|^2)] (q_w > 0 required).
 Eigen::Matrix3d rotatedPointJacobian(const Eigen::Vector3d& v, const Eigen::Vector3d& p);
 
