@@ -126,10 +126,10 @@ BodyOdometry BodyOdometryIntegrator::add(const FramePose& pose, double stamp_s) 
     const Pose3 motion = T_base_optical_ * pose.T_prev_curr * T_base_optical_.inverse();
     const Matrix6d J_body = bodyJacobian(T_base_optical_, motion.linear());
     const Matrix6d accumulating = clampedPsd(pose.rel_covariance - pose.frame_error_covariance);
-    frame_error_body_ = J_shared_ *
-                        motionCovarianceFromQuaternionCovariance(Pose3::Identity(),
-                                                                 pose.frame_error_covariance) *
-                        J_shared_.transpose();
+    frame_error_body_ =
+        J_shared_ *
+        motionCovarianceFromQuaternionCovariance(Pose3::Identity(), pose.frame_error_covariance) *
+        J_shared_.transpose();
     const Matrix6d motion_cov =
         J_body * motionCovarianceFromQuaternionCovariance(pose.T_prev_curr, accumulating) *
         J_body.transpose();
