@@ -1,7 +1,6 @@
 #include "pplvo/estimator/motion_chain.h"
 
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -110,8 +109,8 @@ std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
   if ((whitened.eigenvalues().array() > 1.0).count() < 3) return std::nullopt;
   Matrix6d cov = (info_est + info_prior).inverse();
   cov = 0.5 * (cov + cov.transpose());
-  const Vector6d xi = cov * (info_est * poseToXi(est.T_curr_prev) +
-                             info_prior * poseToXi(predictedMotion()));
+  const Vector6d xi =
+      cov * (info_est * poseToXi(est.T_curr_prev) + info_prior * poseToXi(predictedMotion()));
   if (!xi.allFinite() || !cov.allFinite()) return std::nullopt;
   return std::make_pair(xiToPose(xi), cov);
 }
@@ -172,8 +171,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
   last_cov_ = Q;
   // Only measured motions show the shared error; a predicted or combined one would smooth it.
   if (good) {
-    frame_error_.addMeasuredMotion(T_curr_prev.inverse(),
-                                   invertedPoseCovariance(T_curr_prev, Q));
+    frame_error_.addMeasuredMotion(T_curr_prev.inverse(), invertedPoseCovariance(T_curr_prev, Q));
   } else {
     frame_error_.addGap();
   }
@@ -188,6 +186,10 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
   MotionChainOutput out = makeOutput(seq);
   out.estimate = est;
   return out;
+}
+
+void MotionChain::correctPose(const Pose3& T_w_c) {
+  if (initialised_ && isValidPose(T_w_c, 1e-6)) T_w_c_ = T_w_c;
 }
 
 void MotionChain::propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q) {

@@ -164,9 +164,9 @@ TEST(MotionChain, PerFrameSharedErrorEntersThePublishedCovarianceOnce) {
   EXPECT_EQ(out_b.T_w_c.matrix(), out_a.T_w_c.matrix());
   ASSERT_EQ(out_a.window.size(), out_b.window.size());
   for (size_t i = 0; i + 1 < out_b.window.size(); ++i) {
-    EXPECT_NEAR(out_b.window[i].max_translation_variance_m2 -
-                    out_a.window[i].max_translation_variance_m2,
-                var_t, 1e-15);
+    EXPECT_NEAR(
+        out_b.window[i].max_translation_variance_m2 - out_a.window[i].max_translation_variance_m2,
+        var_t, 1e-15);
   }
   EXPECT_EQ(out_b.window.back().max_translation_variance_m2, 0.0);  // the current frame
   const FramePose published = toFramePose(out_b);
@@ -317,9 +317,36 @@ TEST(MotionChain, ConfidentEstimateFarFromThePredictionIsRefused) {
   // The first motion after a start has nothing to agree with: any is used.
   MotionChain fresh(o);
   fresh.update(0, goodEstimate(Pose3::Identity()));
-  EXPECT_EQ(fresh.update(1, goodEstimate(makePose({0.37, 0, 0}, Eigen::Quaterniond::Identity())))
-                .status,
-            TrackingStatus::kTracking);
+  EXPECT_EQ(
+      fresh.update(1, goodEstimate(makePose({0.37, 0, 0}, Eigen::Quaterniond::Identity()))).status,
+      TrackingStatus::kTracking);
+}
+
+TEST(MotionChain, CorrectedPoseMovesTheWorldPoseAndNotTheMotion) {
+  // A local map moves the current frame 5 cm (its adjustment): the next frame chains from the
+  // corrected pose, its published motion is what was measured, and the prediction (velocity)
+  // is untouched, so the next estimate is not gated as a jump.
+  MotionChain chain;
+  chain.update(0, goodEstimate(Pose3::Identity()));
+  const Pose3 M = makePose({0.02, 0.0, 0.0}, Eigen::Quaterniond::Identity());
+  chain.update(1, goodEstimate(M));
+  chain.update(2, goodEstimate(M));
+  Pose3 corrected = chain.T_w_c();
+  corrected.translation() += Eigen::Vector3d(0.0, 0.05, 0.0);
+  const Pose3 predicted = chain.predictedMotion();
+  chain.correctPose(corrected);
+  expectPoseNear(chain.T_w_c(), corrected);
+  expectPoseNear(chain.predictedMotion(), predicted);
+  const MotionChainOutput out = chain.update(3, goodEstimate(M));
+  EXPECT_EQ(out.status, TrackingStatus::kTracking);
+  EXPECT_EQ(chain.gatedEstimates(), 0);
+  expectPoseNear(out.T_curr_prev, M);
+  expectPoseNear(out.T_w_c, corrected * M.inverse());
+  // Not a pose: ignored.
+  Pose3 invalid = Pose3::Identity();
+  invalid.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  chain.correctPose(invalid);
+  expectPoseNear(chain.T_w_c(), out.T_w_c);
 }
 
 TEST(MotionChain, WeakEstimateThatDisagreesWithThePredictionIsRejected) {

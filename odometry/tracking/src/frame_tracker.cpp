@@ -61,6 +61,7 @@ estimator::MotionChainOutput FrameTracker::initialise(const FrameFeatures& first
   lifted_.setLastPosed(first.seq);
   resetKeyframes(first.seq, KeyframeReason::kStart);
   mapper_.reset();
+  tracked_from_keyframe_.reset();
   last_posed_stamp_ = {first.seq, first.utime};
   return tracker_.initialise(first.seq);
 }
@@ -71,6 +72,7 @@ estimator::MotionChainOutput FrameTracker::restart(const FrameFeatures& current)
   lifted_.setLastPosed(current.seq);
   resetKeyframes(current.seq, KeyframeReason::kStart);
   mapper_.reset();  // its landmarks are not related to the frames after a restart
+  tracked_from_keyframe_.reset();
   last_posed_stamp_ = {current.seq, current.utime};
   estimator::MotionChainOutput out = tracker_.initialise(current.seq, T_w_c);
   out.status = TrackingStatus::kReinitialised;
@@ -130,8 +132,9 @@ FeatureMatches FrameTracker::match(const FrameFeatures& reference, const FrameFe
   return m;
 }
 
-estimator::MotionChainOutput FrameTracker::track(const FrameFeatures& reference, const FrameFeatures& current,
-                                  TrackingStats* stats) {
+estimator::MotionChainOutput FrameTracker::track(const FrameFeatures& reference,
+                                                 const FrameFeatures& current,
+                                                 TrackingStats* stats) {
   TrackingStats local;
   TrackingStats& s = stats ? *stats : local;
   s = TrackingStats{};
@@ -162,8 +165,8 @@ std::optional<MapRelativePose> FrameTracker::structureMotion(const FrameFeatures
     return std::nullopt;
   }
   const Pose3 T_new_kf_predicted = tracker_.T_w_c().inverse() * keyframe->T_w_kf;
-  const FeatureMatches matches = match(keyframe->landmarks, lifted, T_new_kf_predicted,
-                                       structure_estimator_.options());
+  const FeatureMatches matches =
+      match(keyframe->landmarks, lifted, T_new_kf_predicted, structure_estimator_.options());
   if (matches.lines.empty() && matches.planes.empty()) return std::nullopt;
   const estimator::PoseEstimate est = structure_estimator_.estimate(
       estimator::buildCorrespondences(keyframe->landmarks, lifted, matches,
@@ -289,8 +292,17 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
     // are the keyframe's landmarks, its pose is the tracker's current one.
     if (options_.reference == TrackingReference::kLocalMap) {
       ScopedStageTimer t(timings_, "local_map");
+      std::optional<MapRelativePose> tracked;
+      if (tracked_from_keyframe_ && tracked_from_keyframe_->first == previous->seq) {
+        tracked = tracked_from_keyframe_->second;
+        tracked->covariance += estimator::frameErrorCovariance(tracker_.frameError());
+      }
       KeyframeInsertion inserted =
-          mapper_.insert(*previous, tracker_.T_w_c(), structureMotion(*previous));
+          mapper_.insert(*previous, tracker_.T_w_c(), structureMotion(*previous), tracked);
+      // The adjustment moved the keyframe, which is the last posed frame: the next motion is
+      // measured from its corrected pose (a jump in that motion would reach the velocity, the
+      // rolling-shutter model and the shared-error estimate).
+      tracker_.correctPose(inserted.T_w_kf);
       keyframes_.insert(std::move(inserted.reference), inserted.T_w_kf);
     } else {
       keyframes_.insert(*previous, tracker_.T_w_c());
@@ -301,8 +313,10 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
   }
   const Keyframe* keyframe = keyframes_.active();
   if (keyframes && keyframe && keyframe->seq() != *last && keyframe_rejected_seq_ != current.seq) {
-    if (std::optional<estimator::PoseEstimate> through_keyframe = estimateFromKeyframe(current, s)) {
+    if (std::optional<estimator::PoseEstimate> through_keyframe =
+            estimateFromKeyframe(current, s)) {
       out.pose = tracker_.update(current.seq, *through_keyframe);
+      followFromKeyframe(current.seq, *last, *out.pose, &*through_keyframe);
       if (out.pose->status != TrackingStatus::kTracking) {
         resetKeyframes(current.seq, KeyframeReason::kStart);
       }
@@ -322,6 +336,7 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
   s.keyframe_fallback = keyframe_rejected_seq_ == current.seq;
   keyframe_rejected_seq_.reset();
   out.pose = trackFromPrevious(*previous, current, s);
+  followFromKeyframe(current.seq, previous->seq, *out.pose, nullptr);
   if (keyframes) {
     const bool first_against_keyframe = keyframe && keyframe->seq() == previous->seq;
     if (first_against_keyframe && out.pose->estimate.accepted() &&
@@ -357,7 +372,8 @@ void FrameTracker::finishStep(const FrameFeatures& current, TrackingStats& stats
 }
 
 estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures& reference,
-                                              const FrameFeatures& current, TrackingStats& stats) {
+                                                             const FrameFeatures& current,
+                                                             TrackingStats& stats) {
   const Pose3 T_curr_prev_predicted = tracker_.predictedMotion();
   const FeatureMatches matches =
       match(reference, current, T_curr_prev_predicted, options_.tracker.estimator);
@@ -365,8 +381,8 @@ estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures
   stats.reference_seq = reference.seq;
   ScopedStageTimer t(timings_, "pose");
   const estimator::PoseEstimate est = estimator_.estimate(
-      estimator::buildCorrespondences(reference, current, matches, options_.tracker.estimator), current.camera,
-      T_curr_prev_predicted);
+      estimator::buildCorrespondences(reference, current, matches, options_.tracker.estimator),
+      current.camera, T_curr_prev_predicted);
   return tracker_.update(current.seq, est);
 }
 
@@ -376,8 +392,46 @@ ReferenceRole FrameTracker::referenceRole(int64_t seq) const {
                                                             : ReferenceRole::kFallbackOnly;
 }
 
-std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(const FrameFeatures& current,
-                                                               TrackingStats& stats) {
+void FrameTracker::followFromKeyframe(int64_t seq, int64_t previous_seq,
+                                      const estimator::MotionChainOutput& pose,
+                                      const estimator::PoseEstimate* through_keyframe) {
+  if (options_.reference != TrackingReference::kLocalMap) return;
+  const Keyframe* keyframe = keyframes_.active();
+  const bool posed =
+      pose.status == TrackingStatus::kTracking || pose.status == TrackingStatus::kVelocityModel;
+  if (keyframe == nullptr || !posed) {
+    tracked_from_keyframe_.reset();
+    return;
+  }
+  // The shared errors of the frames between cancel along the chain (each is in the motion into
+  // and out of its frame); the keyframe's is in here, this frame's is added when it is used.
+  const Matrix6d shared = estimator::frameErrorCovariance(tracker_.frameError());
+  if (through_keyframe != nullptr && keyframe_estimate_ && keyframe_estimate_->first == seq &&
+      pose.T_curr_prev.matrix() == through_keyframe->T_curr_prev.matrix()) {
+    // Measured against the keyframe and used as it was.
+    MapRelativePose direct = keyframe_estimate_->second;
+    direct.covariance += shared;
+    tracked_from_keyframe_ = {seq, direct};
+    return;
+  }
+  MapRelativePose chained{keyframe->seq(), Pose3::Identity(), Matrix6d::Zero()};
+  if (previous_seq == keyframe->seq()) {
+    chained.covariance = shared;
+  } else if (tracked_from_keyframe_ && tracked_from_keyframe_->first == previous_seq &&
+             tracked_from_keyframe_->second.from_seq == keyframe->seq()) {
+    chained = tracked_from_keyframe_->second;
+  } else {
+    tracked_from_keyframe_.reset();
+    return;
+  }
+  chained.covariance = propagateCompositionCovariance(chained.T_this_from, chained.covariance,
+                                                      pose.T_curr_prev, pose.covariance);
+  chained.T_this_from = pose.T_curr_prev * chained.T_this_from;
+  tracked_from_keyframe_ = {seq, chained};
+}
+
+std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(
+    const FrameFeatures& current, TrackingStats& stats) {
   const Keyframe& keyframe = *keyframes_.active();
   if (current.camera != keyframe.landmarks.camera) return std::nullopt;
   // The tracker's pose is the previous frame's: T_prev_kf chains the prediction.
@@ -390,14 +444,15 @@ std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(const 
   estimator::PoseEstimate est;
   {
     ScopedStageTimer t(timings_, "pose");
-    est = estimator_.estimate(
-        estimator::buildCorrespondences(keyframe.landmarks, current, matches, options_.tracker.estimator),
-        current.camera, T_curr_kf_predicted);
+    est = estimator_.estimate(estimator::buildCorrespondences(keyframe.landmarks, current, matches,
+                                                              options_.tracker.estimator),
+                              current.camera, T_curr_kf_predicted);
   }
   if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
     return std::nullopt;
   }
   const Pose3 T_curr_kf = est.T_curr_prev;
+  keyframe_estimate_ = {current.seq, MapRelativePose{keyframe.seq(), T_curr_kf, est.covariance}};
   if (options_.keyframe.fuse_landmarks) {
     lifted_.addObservation({current.seq, T_curr_kf.inverse(),
                             invertedPoseCovariance(T_curr_kf, est.covariance), matches.points});

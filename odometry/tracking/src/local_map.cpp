@@ -7,8 +7,9 @@
 namespace pplvo::tracking {
 
 void LocalMap::addKeyframe(int64_t seq, const Pose3& T_w_kf,
-                           const std::optional<MapRelativePose>& from_previous) {
-  keyframes_.push_back(MapKeyframe{seq, T_w_kf, {}, from_previous});
+                           const std::optional<MapRelativePose>& from_previous,
+                           const std::optional<MapRelativePose>& tracked) {
+  keyframes_.push_back(MapKeyframe{seq, T_w_kf, {}, from_previous, tracked});
 }
 
 MapKeyframe* LocalMap::keyframe(int64_t seq) {
@@ -26,8 +27,7 @@ MapPoint* LocalMap::point(int64_t id) {
   return it == points_.end() ? nullptr : &it->second;
 }
 
-int64_t LocalMap::addPoint(const MapObservation& observation,
-                           const cv::Mat& descriptor) {
+int64_t LocalMap::addPoint(const MapObservation& observation, const cv::Mat& descriptor) {
   const int64_t seq = observation.keyframe_seq;
   MapKeyframe* kf = keyframe(seq);
   if (kf == nullptr) return -1;

@@ -81,7 +81,8 @@ std::vector<int64_t> LocalMapper::window(const Pose3& T_w_kf) const {
 }
 
 KeyframeInsertion LocalMapper::insert(const FrameFeatures& lifted, const Pose3& T_w_kf,
-                                      const std::optional<MapRelativePose>& from_previous) {
+                                      const std::optional<MapRelativePose>& from_previous,
+                                      const std::optional<MapRelativePose>& tracked) {
   KeyframeInsertion out;
   out.T_w_kf = T_w_kf;
   camera_ = lifted.camera;
@@ -105,7 +106,7 @@ KeyframeInsertion LocalMapper::insert(const FrameFeatures& lifted, const Pose3& 
     }
   }
 
-  map_.addKeyframe(lifted.seq, T_w_kf, from_previous);
+  map_.addKeyframe(lifted.seq, T_w_kf, from_previous, tracked);
   for (size_t j = 0; j < lifted.points.size(); ++j) {
     const PointFeature& f = lifted.points[j];
     if (!f.has_3d || !f.point.p.allFinite() || !f.point.cov.allFinite()) continue;
@@ -156,13 +157,18 @@ void LocalMapper::adjust(KeyframeInsertion& out) {
   const std::set<int64_t> free_set(free_seqs.begin(), free_seqs.end());
   std::set<int64_t> involved;
   for (const int64_t id : ids) {
-    for (const MapObservation& o : map_.points().at(id).observations) involved.insert(o.keyframe_seq);
+    for (const MapObservation& o : map_.points().at(id).observations)
+      involved.insert(o.keyframe_seq);
   }
   for (const int64_t seq : free_seqs) {
     const MapKeyframe* kf = map_.keyframe(seq);
     if (kf->from_previous && map_.keyframe(kf->from_previous->from_seq)) {
       involved.insert(seq);
       involved.insert(kf->from_previous->from_seq);
+    }
+    if (kf->tracked && map_.keyframe(kf->tracked->from_seq)) {
+      involved.insert(seq);
+      involved.insert(kf->tracked->from_seq);
     }
   }
   if (involved.size() < 2) return;
@@ -199,6 +205,18 @@ void LocalMapper::adjust(KeyframeInsertion& out) {
     problem.relative_poses.push_back({index_of.at(kf->from_previous->from_seq), index_of.at(seq),
                                       kf->from_previous->T_this_from,
                                       kf->from_previous->covariance});
+  }
+  // What tracking measured (every feature): the window's points refine it, they cannot carry
+  // a keyframe where tracking says it is not (few points on plain surfaces moved whole windows
+  // by a metre). Points and lines/planes then each enter twice (as observations or their own
+  // relative pose, and in tracking's), which scales the information without moving its minimum.
+  for (const int64_t seq : free_seqs) {
+    const MapKeyframe* kf = map_.keyframe(seq);
+    if (!kf->tracked || index_of.count(kf->tracked->from_seq) == 0 || index_of.count(seq) == 0) {
+      continue;
+    }
+    problem.relative_poses.push_back({index_of.at(kf->tracked->from_seq), index_of.at(seq),
+                                      kf->tracked->T_this_from, kf->tracked->covariance});
   }
   estimator::BundleOptions bundle;
   bundle.max_iterations = options_.adjust_iterations;

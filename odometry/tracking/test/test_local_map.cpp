@@ -10,13 +10,14 @@
 #include "landmark_world.h"
 #include "pplvo/tracking/frame_tracker.h"
 #include "pplvo/tracking/local_map.h"
+#include "pplvo/tracking/local_mapper.h"
 
 namespace pplvo::tracking {
 namespace {
 
 using testing::LandmarkWorld;
-using testing::poseOf;
 using testing::pointsOnly;
+using testing::poseOf;
 using testing::residentKiB;
 
 MapObservation observationAt(int64_t seq, const Eigen::Vector3d& p, double sigma = 0.01) {
@@ -56,6 +57,59 @@ TEST(LocalMap, KeepsObservationsAndForgetsWhatNoKeyframeSees) {
   EXPECT_TRUE(map.keyframe(5)->point_ids.empty());
 }
 
+/// A keyframe's lifted points: `world` points seen from T_w_c, each measured as if the camera
+/// were at T_w_seen instead (a keyframe whose points disagree with where tracking put it).
+FrameFeatures keyframeSeeing(int64_t seq, const std::vector<Eigen::Vector3d>& world,
+                             const Pose3& T_w_seen) {
+  FrameFeatures f;
+  f.seq = seq;
+  f.camera = fixtures::kinectVgaCamera();
+  for (size_t i = 0; i < world.size(); ++i) {
+    PointFeature p;
+    p.point.p = T_w_seen.inverse() * world[i];
+    p.point.cov = 1e-6 * Eigen::Matrix3d::Identity();
+    p.px = f.camera.project(p.point.p);
+    p.has_3d = true;
+    f.points.push_back(p);
+    f.point_descriptors.push_back(descriptor(static_cast<uint8_t>(17 * i + 3)));
+  }
+  return f;
+}
+
+TEST(LocalMapper, TrackingsMeasurementHoldsKeyframesThatPointsWouldMove) {
+  // Twelve points 3 m ahead, seen by keyframe 0 and by keyframe 1, which tracking put 10 cm to
+  // the right; keyframe 1's points say it is 1.5 cm further.
+  std::vector<Eigen::Vector3d> world;
+  for (int i = 0; i < 12; ++i)
+    world.emplace_back(-1.0 + 0.18 * i, 0.3 * std::sin(i), 3.0 + 0.1 * i);
+  Pose3 T_w_1 = Pose3::Identity();
+  T_w_1.translation() = Eigen::Vector3d(0.10, 0, 0);
+  Pose3 T_w_seen = T_w_1;
+  T_w_seen.translation().x() += 0.015;
+  auto insertBoth = [&](const std::optional<MapRelativePose>& tracked) {
+    LocalMapper mapper;
+    mapper.insert(keyframeSeeing(0, world, Pose3::Identity()), Pose3::Identity());
+    return mapper.insert(keyframeSeeing(1, world, T_w_seen), T_w_1, std::nullopt, tracked);
+  };
+  auto moved = [&](const KeyframeInsertion& k) {
+    return (k.T_w_kf.translation() - T_w_1.translation()).norm();
+  };
+  // Without tracking's measurement the adjustment follows the points.
+  const KeyframeInsertion points_only = insertBoth(std::nullopt);
+  EXPECT_EQ(points_only.associated, 12);
+  EXPECT_TRUE(points_only.adjusted);
+  EXPECT_GT(moved(points_only), 0.01);
+  // Tracking measured 10 cm to 0.1 mm: the keyframe stays within a millimetre of it.
+  const MapRelativePose certain{0, T_w_1.inverse(), 1e-8 * Matrix6d::Identity()};
+  const KeyframeInsertion held = insertBoth(certain);
+  EXPECT_TRUE(held.adjusted);
+  EXPECT_LT(moved(held), 1e-3);
+  // To 5 cm: the points decide.
+  const MapRelativePose loose{0, T_w_1.inverse(), 2.5e-3 * Matrix6d::Identity()};
+  const KeyframeInsertion followed = insertBoth(loose);
+  EXPECT_TRUE(followed.adjusted);
+  EXPECT_GT(moved(followed), 0.01);
+}
 
 /// Two turns of a circle of 1.5 m radius looking outwards at the walls (500 frames a turn):
 /// the second turn passes every place of the first.
@@ -131,7 +185,6 @@ TEST(LocalMap, TrackingIsDeterministic) {
     EXPECT_EQ(a.poses[k].matrix(), b.poses[k].matrix()) << k;  // bit for bit
   }
 }
-
 
 TEST(LocalMap, MemoryStaysBounded) {
   // Twenty turns (5,000 frames) with at most 30 keyframes in the map.

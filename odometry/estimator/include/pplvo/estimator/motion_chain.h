@@ -3,10 +3,10 @@
 /// model when an estimate is rejected (paper Sec. "Pose Uncertainty"), and propagates the
 /// transform uncertainty from each frame of the depth-filter window to the current one
 /// (EKF step, eq. 24).
-#include <optional>
-#include <utility>
 #include <cstdint>
 #include <deque>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "pplvo/core/config_schema.h"
@@ -177,9 +177,9 @@ class MotionChain {
   /// previous frame is the one of the last call (or initialise()). If not initialised yet,
   /// this initialises at `seq`.
   MotionChainOutput track(int64_t seq, const Correspondences& correspondences,
-                      const PinholeCamera& camera);
+                          const PinholeCamera& camera);
   MotionChainOutput track(const FrameFeatures& prev, const FrameFeatures& curr,
-                      const FeatureMatches& matches);
+                          const FeatureMatches& matches);
 
   /// The state machine alone, given an estimate (used by track(); public for tests and for
   /// callers that run the estimator themselves).
@@ -188,6 +188,12 @@ class MotionChain {
   int64_t fusedEstimates() const { return fused_estimates_; }
   /// Estimates (accepted or weak) refused by the prediction gate so far.
   int64_t gatedEstimates() const { return gated_estimates_; }
+
+  /// Moves the current frame's world pose to `T_w_c` (a local map's adjustment of it) and
+  /// nothing else: the velocity, the shared-error estimate and the window hold measured
+  /// motions, which a correction of the world pose is not, so the next frame's motion is
+  /// measured from the corrected pose without a jump in it.
+  void correctPose(const Pose3& T_w_c);
 
   bool initialised() const { return initialised_; }
   TrackingStatus status() const { return status_; }

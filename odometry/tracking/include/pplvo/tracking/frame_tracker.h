@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "pplvo/core/body_odometry.h"
 #include "pplvo/core/config_schema.h"
 #include "pplvo/core/features.h"
 #include "pplvo/core/frame_pose.h"
@@ -22,7 +23,6 @@
 #include "pplvo/estimator/pose_estimator.h"
 #include "pplvo/features/matching.h"
 #include "pplvo/geometry/plane_matching.h"
-#include "pplvo/core/body_odometry.h"
 #include "pplvo/tracking/keyframe_rule.h"
 #include "pplvo/tracking/keyframe_store.h"
 #include "pplvo/tracking/lifted_stage_buffer.h"
@@ -146,7 +146,7 @@ class FrameTracker {
   /// is not that frame (frames lost in between, or the stream restarted), tracking restarts
   /// at `current` and stats->reinitialised is set.
   estimator::MotionChainOutput track(const FrameFeatures& reference, const FrameFeatures& current,
-                      TrackingStats* stats = nullptr);
+                                     TrackingStats* stats = nullptr);
 
   /// Sequence number of the last frame given a pose, if any.
   std::optional<int64_t> lastPosed() const { return lifted_.lastPosed(); }
@@ -183,12 +183,17 @@ class FrameTracker {
   /// by T_curr_ref, of the families `use` selects.
   FeatureMatches match(const FrameFeatures& reference, const FrameFeatures& current,
                        const Pose3& T_curr_ref, const estimator::PoseEstimatorOptions& use);
+  /// Keeps tracked_from_keyframe_ up to date after frame `seq` was posed (local map only).
+  void followFromKeyframe(int64_t seq, int64_t previous_seq,
+                          const estimator::MotionChainOutput& pose,
+                          const estimator::PoseEstimate* through_keyframe);
   /// The estimate of T_curr_prev through the active keyframe, or nullopt when rejected.
   std::optional<estimator::PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
-                                                   TrackingStats& stats);
+                                                              TrackingStats& stats);
   /// Tracks `current` against `reference`, the previous frame's 3D stage.
-  estimator::MotionChainOutput trackFromPrevious(const FrameFeatures& reference, const FrameFeatures& current,
-                                  TrackingStats& stats);
+  estimator::MotionChainOutput trackFromPrevious(const FrameFeatures& reference,
+                                                 const FrameFeatures& current,
+                                                 TrackingStats& stats);
   /// The pose of `lifted` (the next keyframe) relative to the active keyframe from lines and
   /// planes alone, for the local map's bundle adjustment; nullopt when they do not give one.
   std::optional<MapRelativePose> structureMotion(const FrameFeatures& lifted);
@@ -205,6 +210,12 @@ class FrameTracker {
   estimator::MotionChain tracker_;
   estimator::PoseEstimator estimator_;
   estimator::PoseEstimator structure_estimator_;  ///< lines and planes only
+  /// The last estimate against the active keyframe: the frame's seq, the measurement.
+  std::optional<std::pair<int64_t, MapRelativePose>> keyframe_estimate_;
+  /// The last posed frame's pose relative to the active keyframe as tracking measured it, with
+  /// its covariance, the keyframe's shared error in it (local map: a residual of the adjustment
+  /// if the frame becomes a keyframe).
+  std::optional<std::pair<int64_t, MapRelativePose>> tracked_from_keyframe_;
   /// Whether frames are tracked against keyframes (kKeyframe or kLocalMap).
   bool usesKeyframes() const { return options_.reference != TrackingReference::kFrame; }
 

@@ -14,10 +14,9 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "pplvo/core/geometry.h"
 
@@ -25,7 +24,7 @@ namespace pplvo::tracking {
 
 struct MapObservation {
   int64_t keyframe_seq = -1;
-  Eigen::Vector3d p_kf = Eigen::Vector3d::Zero();    ///< measured in the keyframe's camera frame
+  Eigen::Vector3d p_kf = Eigen::Vector3d::Zero();  ///< measured in the keyframe's camera frame
   Eigen::Matrix3d cov_kf = Eigen::Matrix3d::Zero();
   double sigma_px = 1.0;  ///< of its pixel (keypoint scale)
 };
@@ -33,11 +32,11 @@ struct MapObservation {
 struct MapPoint {
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   Eigen::Matrix3d cov_w = Eigen::Matrix3d::Identity();
-  cv::Mat descriptor;  ///< one row
+  cv::Mat descriptor;                        ///< one row
   std::vector<MapObservation> observations;  ///< in order of keyframes
 };
 
-/// A keyframe's pose relative to an earlier one as its lines and planes measured it.
+/// A keyframe's pose relative to an earlier one as a measurement gave it.
 struct MapRelativePose {
   int64_t from_seq = -1;
   Pose3 T_this_from = Pose3::Identity();
@@ -48,14 +47,20 @@ struct MapKeyframe {
   int64_t seq = -1;
   Pose3 T_w_kf = Pose3::Identity();
   std::vector<int64_t> point_ids;  ///< the landmarks it observed
+  /// Relative to an earlier keyframe as its lines and planes alone measured it (a residual of
+  /// the adjustment, which adjusts points).
   std::optional<MapRelativePose> from_previous;
+  /// Relative to the keyframe it was tracked against, as tracking measured it (every feature,
+  /// with both frames' shared error): a residual of the adjustment too.
+  std::optional<MapRelativePose> tracked;
 };
 
 class LocalMap {
  public:
   /// Appends a keyframe (sequence numbers increase); it observes nothing yet.
   void addKeyframe(int64_t seq, const Pose3& T_w_kf,
-                   const std::optional<MapRelativePose>& from_previous = std::nullopt);
+                   const std::optional<MapRelativePose>& from_previous = std::nullopt,
+                   const std::optional<MapRelativePose>& tracked = std::nullopt);
   /// A new landmark first measured by keyframe observation.keyframe_seq (which must be in the
   /// map); its id, -1 if the keyframe is unknown.
   int64_t addPoint(const MapObservation& observation, const cv::Mat& descriptor);

@@ -9,7 +9,9 @@
 /// landmarks back (keyframes near the new one join the window whatever their age).
 ///
 /// Which keyframes move: the last `adjust_keyframes`; every other keyframe that observed one of
-/// their landmarks is held fixed (the fixed lag, which is also the gauge). A keyframe that
+/// their landmarks is held fixed (the fixed lag, which is also the gauge). Each keyframe is tied
+/// to the keyframe it was tracked against by tracking's measurement (a residual), so the
+/// window's points refine the keyframes and cannot carry them where tracking says they are not. A keyframe that
 /// leaves the window keeps its pose: its information is dropped, not marginalised, so nothing
 /// in the window becomes more certain than its own observations make it (docs/estimator.md).
 /// Thread safety: none; the FrameTracker owns it.
@@ -68,7 +70,7 @@ struct KeyframeInsertion {
   /// The reference later frames are tracked against (points from the map, the keyframe's own
   /// lines and planes), in the keyframe's camera frame.
   FrameFeatures reference;
-  int associated = 0;   ///< keyframe points matched to existing landmarks
+  int associated = 0;  ///< keyframe points matched to existing landmarks
   int new_points = 0;
   int window_keyframes = 0;
   int adjusted_keyframes = 0, fixed_keyframes = 0;
@@ -87,8 +89,11 @@ class LocalMapper {
   /// renders the reference for the next frames.
   /// `from_previous`: the keyframe's pose relative to an earlier keyframe as measured by lines
   /// and planes alone (bundle adjustment adjusts points; this brings the other features in).
+  /// `tracked`: relative to the keyframe it was tracked against, as tracking measured it (every
+  /// feature, with its covariance): a residual of the adjustment as well.
   KeyframeInsertion insert(const FrameFeatures& lifted, const Pose3& T_w_kf,
-                           const std::optional<MapRelativePose>& from_previous = std::nullopt);
+                           const std::optional<MapRelativePose>& from_previous = std::nullopt,
+                           const std::optional<MapRelativePose>& tracked = std::nullopt);
   /// Forgets the map (tracking restarted).
   void reset() { map_.reset(); }
 
