@@ -945,6 +945,34 @@ TEST_F(LaunchProgram, LockstepEqualsPplvoRun) {
   EXPECT_LT(max_q, 1e-4);
 }
 
+// The local map (its bundle adjustment runs on the pose loop when a keyframe is taken): the
+// processes in lockstep give pplvo-run's trajectory, which is not the keyframe default's.
+TEST_F(LaunchProgram, LockstepEqualsPplvoRunWithTheLocalMap) {
+  const std::string local_map = " --set odometry.reference=local_map";
+  const fs::path keyframes = *dir_ / "run_keyframes.txt";
+  const fs::path ref = *dir_ / "run_local_map.txt";
+  for (const auto& [out, extra] : {std::pair{keyframes, std::string()}, {ref, local_map}}) {
+    const CommandRun run = runCommand(binDir() + "/pplvo-run --quiet --dataset " +
+                                          seq().string() + extra + " --output " + out.string(),
+                                      *dir_, "run_map");
+    ASSERT_EQ(run.code, 0) << run.err;
+  }
+  const auto [kf_t, kf_q] = maxDifference(keyframes, ref, 30);
+  EXPECT_GT(kf_t, 1e-6) << "the local map changed nothing: not exercised";
+  const fs::path traj = *dir_ / "launch_local_map.txt";
+  const CommandRun l = runCommand(launch("local_map") + "--lockstep" + local_map + " --dataset " +
+                                      seq().string() + " --output " + traj.string(),
+                                  *dir_, "lockstep_map");
+  ASSERT_EQ(l.code, 0) << l.out << l.err;
+  EXPECT_EQ(reportValue(l.out, "launch.trajectory_poses"), 30);
+  const auto [max_t, max_q] = maxDifference(ref, traj, 30);
+  std::printf("local map, lockstep vs pplvo-run: max |dt| %.3g m, max |dq| %.3g (keyframe "
+              "default vs local map: %.3g m)\n",
+              max_t, max_q, kf_t);
+  EXPECT_LT(max_t, 1e-4);
+  EXPECT_LT(max_q, 1e-4);
+}
+
 // The receive buffer of a stock kernel (net.core.rmem_max = 208 KiB, the usual CI value): small
 // frames, compressed, still go through in lockstep and give pplvo-run's trajectory.
 TEST_F(LaunchProgram, StockKernelReceiveBufferSmallFrames) {
