@@ -33,8 +33,9 @@ struct LocalMapOptions {
   int nearby_keyframes = 3;
   double nearby_distance_m = 0.5;
   double nearby_angle_deg = 30.0;
-  /// The most recent keyframes adjusted by local bundle adjustment (the others held fixed).
-  int adjust_keyframes = 5;
+  /// The most recent keyframes adjusted by local bundle adjustment (the others held fixed);
+  /// 2 from a sweep on the long suite (docs/estimator.md, "Local map").
+  int adjust_keyframes = 2;
   int adjust_iterations = 8;
   /// Keyframes kept in the map (memory bound); the oldest leave first.
   int max_keyframes = 200;
