@@ -52,6 +52,10 @@ ProjectedLandmarks project(const LocalMap& map, const std::vector<int64_t>& ids,
   return out;
 }
 
+/// A keyframe's measured poses relative to earlier keyframes (residuals of the adjustment).
+constexpr std::optional<MapRelativePose> MapKeyframe::*kRelativePoses[] = {
+    &MapKeyframe::from_previous, &MapKeyframe::tracked};
+
 }  // namespace
 
 LocalMapper::LocalMapper(const LocalMapOptions& options,
@@ -160,15 +164,13 @@ void LocalMapper::adjust(KeyframeInsertion& out) {
     for (const MapObservation& o : map_.points().at(id).observations)
       involved.insert(o.keyframe_seq);
   }
-  for (const int64_t seq : free_seqs) {
-    const MapKeyframe* kf = map_.keyframe(seq);
-    if (kf->from_previous && map_.keyframe(kf->from_previous->from_seq)) {
-      involved.insert(seq);
-      involved.insert(kf->from_previous->from_seq);
-    }
-    if (kf->tracked && map_.keyframe(kf->tracked->from_seq)) {
-      involved.insert(seq);
-      involved.insert(kf->tracked->from_seq);
+  for (const auto relative : kRelativePoses) {
+    for (const int64_t seq : free_seqs) {
+      const std::optional<MapRelativePose>& rel = map_.keyframe(seq)->*relative;
+      if (rel && map_.keyframe(rel->from_seq)) {
+        involved.insert(seq);
+        involved.insert(rel->from_seq);
+      }
     }
   }
   if (involved.size() < 2) return;
@@ -196,27 +198,18 @@ void LocalMapper::adjust(KeyframeInsertion& out) {
       observation_of.emplace_back(ids[l], o.keyframe_seq);
     }
   }
-  for (const int64_t seq : free_seqs) {
-    const MapKeyframe* kf = map_.keyframe(seq);
-    if (!kf->from_previous || index_of.count(kf->from_previous->from_seq) == 0 ||
-        index_of.count(seq) == 0) {
-      continue;
+  // Lines and planes alone, and what tracking measured (every feature): the window's points
+  // refine the keyframes but cannot carry one where tracking says it is not (few points on
+  // plain surfaces moved whole windows by a metre). Points and lines/planes then each enter
+  // twice (as observations or their own relative pose, and in tracking's), which scales the
+  // information without moving its minimum.
+  for (const auto relative : kRelativePoses) {
+    for (const int64_t seq : free_seqs) {
+      const std::optional<MapRelativePose>& rel = map_.keyframe(seq)->*relative;
+      if (!rel || index_of.count(rel->from_seq) == 0 || index_of.count(seq) == 0) continue;
+      problem.relative_poses.push_back(
+          {index_of.at(rel->from_seq), index_of.at(seq), rel->T_this_from, rel->covariance});
     }
-    problem.relative_poses.push_back({index_of.at(kf->from_previous->from_seq), index_of.at(seq),
-                                      kf->from_previous->T_this_from,
-                                      kf->from_previous->covariance});
-  }
-  // What tracking measured (every feature): the window's points refine it, they cannot carry
-  // a keyframe where tracking says it is not (few points on plain surfaces moved whole windows
-  // by a metre). Points and lines/planes then each enter twice (as observations or their own
-  // relative pose, and in tracking's), which scales the information without moving its minimum.
-  for (const int64_t seq : free_seqs) {
-    const MapKeyframe* kf = map_.keyframe(seq);
-    if (!kf->tracked || index_of.count(kf->tracked->from_seq) == 0 || index_of.count(seq) == 0) {
-      continue;
-    }
-    problem.relative_poses.push_back({index_of.at(kf->tracked->from_seq), index_of.at(seq),
-                                      kf->tracked->T_this_from, kf->tracked->covariance});
   }
   estimator::BundleOptions bundle;
   bundle.max_iterations = options_.adjust_iterations;
