@@ -15,6 +15,10 @@
 namespace pplvo::estimator {
 
 namespace {
+/// Fewest residual rows worth a solve: one more than the six pose parameters. Six rows are
+/// fitted exactly whatever the matches, so nothing would check the solution.
+constexpr int kMinRowsToSolve = 7;
+
 constexpr EnumName<EstimateStatus> kEstimateStatusNames[] = {
     {EstimateStatus::kOk, "ok"},
     {EstimateStatus::kNoConstraints, "no_constraints"},
@@ -418,7 +422,7 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
   est.plane_scale = problem.plane_scale;
   est.plane_weight = problem.plane_weight;
   for (int it = 0; it < o.max_irls_iterations; ++it) {
-    if (rw.rows < std::max(6, o.min_residuals)) break;
+    if (rw.rows < kMinRowsToSolve) break;
     const Vector6d xi_before = xi;
     JointCost cost(problem, rw.rows);
     ceres::Problem::Options popts;
@@ -505,10 +509,13 @@ void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
 EstimateStatus classify(const PoseEstimate& est, bool solver_failed, int rows,
                         const PoseEstimatorOptions& o) {
   if (solver_failed || !est.T_curr_prev.matrix().allFinite()) return EstimateStatus::kSolverFailure;
-  if (rows < std::max(6, o.min_residuals)) return EstimateStatus::kTooFewConstraints;
+  if (rows < kMinRowsToSolve) return EstimateStatus::kTooFewConstraints;
   if (est.min_relative_eigenvalue < o.min_relative_eigenvalue) return EstimateStatus::kDegenerate;
-  // The thresholds detect weak geometry (collinear points, near-parallel planes).
-  if (!(maxTranslationVariance(est.covariance) <= o.max_translation_variance_m2) ||
+  // Solved, but weak: too few rows for the robust scale and the Tukey weights to catch a wrong
+  // match (no redundancy to check the solution against), or weak geometry (collinear points,
+  // near-parallel planes). Such an estimate may still be combined with a prediction.
+  if (rows < o.min_residuals ||
+      !(maxTranslationVariance(est.covariance) <= o.max_translation_variance_m2) ||
       !(maxRotationVariance(est.covariance) <= o.max_rotation_variance)) {
     return EstimateStatus::kUncertain;
   }

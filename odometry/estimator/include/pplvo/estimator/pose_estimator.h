@@ -125,8 +125,11 @@ struct PoseEstimatorOptions {
   /// Points (and line endpoints) closer than this to the current image plane are dropped.
   double min_depth_m = 1e-3;
 
-  /// Rejection (status != kOk). Minimum number of inlier residual rows (points and lines count
-  /// 2, planes 3); 6 parameters need at least 6; 9 admits 3 planes alone or 5 points.
+  /// Rejection (status != kOk). Inlier residual rows (points and lines count 2, planes 3) an
+  /// estimate needs to stand alone; 9 admits 3 planes alone or 5 points. From 7 rows (one
+  /// more than the six parameters) to this the pose is solved but weak (kUncertain): with so little
+  /// redundancy a wrong match cannot be told from a right one, so it is only combined with a
+  /// prediction (MotionChainOptions::fuse_weak_estimates).
   int min_residuals = 9;
   /// Smallest / largest eigenvalue of the Jacobi-scaled information J^T W J; below this the
   /// configuration is degenerate (an unobservable direction).
@@ -182,7 +185,9 @@ void visit(V& v, PoseEstimatorOptions& o) {
   v.field("min_depth_m", o.min_depth_m,
           "points closer than this to the current image plane are dropped (m)", config::atLeast(0));
   v.field("min_residuals", o.min_residuals,
-          "reject with fewer inlier residual rows (points, lines 2; planes 3)", config::atLeast(6));
+          "inlier residual rows (points, lines 2; planes 3) to stand alone; from 7 to this the "
+          "pose is solved but weak (uncertain: only combined with the prediction)",
+          config::atLeast(6));
   v.field("min_relative_eigenvalue", o.min_relative_eigenvalue,
           "degenerate if the smallest/largest eigenvalue of the scaled J^T W J is below this",
           config::atLeast(0));
@@ -198,9 +203,9 @@ void visit(V& v, PoseEstimatorOptions& o) {
 enum class EstimateStatus : int8_t {
   kOk = 0,
   kNoConstraints,      ///< no usable match at all
-  kTooFewConstraints,  ///< fewer inlier residual rows than min_residuals
+  kTooFewConstraints,  ///< 6 inlier residual rows or fewer: nothing solved
   kDegenerate,         ///< J^T W J (numerically) singular: unobservable direction
-  kUncertain,          ///< covariance above the thresholds
+  kUncertain,          ///< covariance above the thresholds, or fewer rows than min_residuals
   kSolverFailure,      ///< Ceres failed or produced a non-finite pose
 };
 const char* toString(EstimateStatus s);
