@@ -69,9 +69,11 @@ MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
 
 Pose3 MotionChain::predictedMotion() const {
   if (!options_.predict_from_velocity) return Pose3::Identity();
-  // The next frame after k rejections would move by decay^(k+1) * velocity.
-  const double scale = std::pow(options_.velocity_decay, consecutive_rejections_);
-  return vectorToMotion(scale * velocity_);
+  return decayedMotion(consecutive_rejections_);
+}
+
+Pose3 MotionChain::decayedMotion(int rejected_frames) const {
+  return vectorToMotion(std::pow(options_.velocity_decay, rejected_frames) * velocity_);
 }
 
 MotionChainOutput MotionChain::track(int64_t seq, const Correspondences& correspondences,
@@ -109,8 +111,13 @@ std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
   if ((whitened.eigenvalues().array() > 1.0).count() < 3) return std::nullopt;
   Matrix6d cov = (info_est + info_prior).inverse();
   cov = 0.5 * (cov + cov.transpose());
+  // Where the estimate knows little the prediction's mean decides: the constant velocity, or
+  // what the velocity model would give this frame if it were rejected.
+  const Pose3 prediction = options_.decay_unconstrained_velocity && options_.predict_from_velocity
+                               ? decayedMotion(consecutive_rejections_ + 1)
+                               : predictedMotion();
   const Vector6d xi =
-      cov * (info_est * poseToXi(est.T_curr_prev) + info_prior * poseToXi(predictedMotion()));
+      cov * (info_est * poseToXi(est.T_curr_prev) + info_prior * poseToXi(prediction));
   if (!xi.allFinite() || !cov.allFinite()) return std::nullopt;
   return std::make_pair(xiToPose(xi), cov);
 }
@@ -153,8 +160,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
     ++consecutive_rejections_;
     if (consecutive_rejections_ <= options_.max_velocity_model_frames) {
       status_ = TrackingStatus::kVelocityModel;
-      T_curr_prev =
-          vectorToMotion(std::pow(options_.velocity_decay, consecutive_rejections_) * velocity_);
+      T_curr_prev = decayedMotion(consecutive_rejections_);
       Q = velocityModelCovariance(options_);
     } else {
       status_ = TrackingStatus::kLost;

@@ -354,6 +354,33 @@ TEST(MotionChain, WeakEstimateTakesTheUnconstrainedDirectionFromThePrediction) {
   EXPECT_EQ(strict.update(2, weak).status, TrackingStatus::kVelocityModel);
 }
 
+TEST(MotionChain, WeakEstimateCanTakeTheDecayedVelocityWhereItKnowsNothing) {
+  // decay_unconstrained_velocity: the unconstrained direction moves as a rejected frame's
+  // would (velocity_decay times the velocity), and a run of such frames lets it fade; the
+  // constrained directions still come from the estimate.
+  MotionChainOptions o;
+  o.decay_unconstrained_velocity = true;
+  MotionChain tracker(o);
+  tracker.update(0, goodEstimate(Pose3::Identity()));
+  const Pose3 M = makePose({0.02, 0.0, 0.0}, Eigen::Quaterniond::Identity());
+  tracker.update(1, goodEstimate(M));
+  PoseEstimate weak;
+  weak.status = EstimateStatus::kDegenerate;
+  weak.T_curr_prev = makePose({0.0, 0.004, -0.002}, Eigen::Quaterniond::Identity());
+  weak.covariance = Matrix6d::Identity() * 1e-8;
+  weak.covariance(0, 0) = kLargeVariance;
+  double expected_x = 0.02;
+  for (int64_t s = 2; s < 8; ++s) {
+    const MotionChainOutput out = tracker.update(s, weak);
+    expected_x *= o.velocity_decay;
+    EXPECT_EQ(out.status, TrackingStatus::kTracking);
+    EXPECT_NEAR(out.T_curr_prev.translation().x(), expected_x, 1e-6) << "frame " << s;
+    EXPECT_NEAR(out.T_curr_prev.translation().y(), 0.004, 1e-6);
+    EXPECT_NEAR(std::sqrt(out.covariance(0, 0)), o.velocity_model_sigma_t_m, 1e-6);
+  }
+  EXPECT_EQ(tracker.fusedEstimates(), 6);
+}
+
 TEST(MotionChain, ConfidentEstimateFarFromThePredictionIsRefused) {
   // Walking at 20 mm a frame: an accepted estimate that jumps 0.35 m in one frame (wrong
   // associations) is refused, the velocity model carries the frame and the velocity is kept,

@@ -43,6 +43,13 @@ struct MotionChainOptions {
   /// more than the prediction in at least half of the six directions. false: such an estimate
   /// is rejected as a whole (the velocity model, then LOST).
   bool fuse_weak_estimates = true;
+  /// What a weak estimate's unconstrained directions take from the prediction. false: the
+  /// constant-velocity motion (a vehicle's steady motion along a corridor keeps going). true:
+  /// the velocity model's motion for a rejected frame, decayed by velocity_decay once more
+  /// (a hand-held camera's motion does not persist: the velocity there fades over a few
+  /// frames instead of carrying one frame's error on). Measured in docs/estimator.md,
+  /// "Degenerate structure": a trade between the two kinds of motion, hence an option.
+  bool decay_unconstrained_velocity = false;
   /// An estimate, accepted or weak, is used only if it agrees with the constant-velocity
   /// prediction: the Mahalanobis distance of their difference, with the sum of the estimate's
   /// covariance and the prediction's process noise (velocity_model_sigma_*, once more for
@@ -85,6 +92,9 @@ void visit(V& v, MotionChainOptions& o) {
   v.field("fuse_weak_estimates", o.fuse_weak_estimates,
           "combine an uncertain or degenerate estimate with the velocity model's prediction "
           "(information form) instead of rejecting it");
+  v.field("decay_unconstrained_velocity", o.decay_unconstrained_velocity,
+          "a weak estimate's unconstrained directions follow the decayed velocity model "
+          "(hand-held) instead of the constant velocity (a vehicle)");
   v.field("prediction_gate_chi2", o.prediction_gate_chi2,
           "an estimate is used only if its Mahalanobis distance to the constant-velocity "
           "prediction (chi-square, 6 dof) is below this (22.46: the 99.9 % quantile)",
@@ -172,6 +182,9 @@ class MotionChain {
 
   /// Prediction of T_curr_prev for the next frame (constant velocity).
   Pose3 predictedMotion() const;
+  /// The velocity model's T_curr_prev after `rejected_frames` consecutive rejections:
+  /// velocity_decay^rejected_frames times the last good motion.
+  Pose3 decayedMotion(int rejected_frames) const;
 
   /// Estimates the motion from the previous frame to `seq` and updates the state. The
   /// previous frame is the one of the last call (or initialise()). If not initialised yet,
