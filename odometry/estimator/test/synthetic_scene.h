@@ -117,27 +117,36 @@ class SceneGenerator {
         ok = len > 40.0 && len < 300.0;
       }
       if (!ok) continue;
-      LineMatch3D2D m;
-      m.L_prev.p1 = sampleWithCov(P1, cov1);
-      m.L_prev.p2 = sampleWithCov(P2, cov2);
-      m.L_prev.cov1 = cov1;
-      m.L_prev.cov2 = cov2;
-      const Eigen::Vector2d q1 =
-          cam_.project(T_curr_prev * P1) + cfg_.line_sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
-      const Eigen::Vector2d q2 =
-          cam_.project(T_curr_prev * P2) + cfg_.line_sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
-      Eigen::Vector3d l =
-          Eigen::Vector3d(q1.x(), q1.y(), 1.0).cross(Eigen::Vector3d(q2.x(), q2.y(), 1.0));
-      l /= l.head<2>().norm();
-      m.l_curr = l;
-      m.sigma_px = cfg_.line_sigma_px;
-      c.lines.push_back(m);
+      c.lines.push_back(lineMatch(P1, cov1, P2, cov2, T_curr_prev));
     }
     const std::vector<Eigen::Vector4d> room = roomPlanes();
     for (int i = 0; i < std::min<int>(cfg_.n_planes, static_cast<int>(room.size())); ++i) {
       c.planes.push_back(planeMatch(room[i], T_curr_prev));
     }
     return c;
+  }
+
+  /// The segment P1-P2 of the previous frame (true endpoints, their covariances): its 3D
+  /// endpoints sampled with those, its current image line through the projected endpoints
+  /// with line_sigma_px of pixel noise.
+  LineMatch3D2D lineMatch(const Eigen::Vector3d& P1, const Eigen::Matrix3d& cov1,
+                          const Eigen::Vector3d& P2, const Eigen::Matrix3d& cov2,
+                          const Pose3& T_curr_prev) {
+    LineMatch3D2D m;
+    m.L_prev.p1 = sampleWithCov(P1, cov1);
+    m.L_prev.p2 = sampleWithCov(P2, cov2);
+    m.L_prev.cov1 = cov1;
+    m.L_prev.cov2 = cov2;
+    const Eigen::Vector2d q1 =
+        cam_.project(T_curr_prev * P1) + cfg_.line_sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
+    const Eigen::Vector2d q2 =
+        cam_.project(T_curr_prev * P2) + cfg_.line_sigma_px * Eigen::Vector2d(n_(rng_), n_(rng_));
+    Eigen::Vector3d l =
+        Eigen::Vector3d(q1.x(), q1.y(), 1.0).cross(Eigen::Vector3d(q2.x(), q2.y(), 1.0));
+    l /= l.head<2>().norm();
+    m.l_curr = l;
+    m.sigma_px = cfg_.line_sigma_px;
+    return m;
   }
 
   /// Non-parallel planes of a room around the previous camera ([n; d], d > 0).
