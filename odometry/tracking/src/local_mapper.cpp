@@ -1,9 +1,12 @@
 #include "pplvo/tracking/local_mapper.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
+
+#include "pplvo/estimator/pose_parameterisation.h"
 
 namespace pplvo::tracking {
 
@@ -50,6 +53,57 @@ ProjectedLandmarks project(const LocalMap& map, const std::vector<int64_t>& ids,
     out.descriptors.push_back(p.descriptor);
   }
   return out;
+}
+
+/// Every keyframe reachable from keyframe `seq` along the chain of measured relative poses
+/// (tracking's, else lines' and planes' alone), with the covariance of xi(T_seq_i): how
+/// uncertain keyframe i's pose is relative to `seq` (zero for `seq` itself).
+std::map<int64_t, Matrix6d> chainedPoseCovariances(const LocalMap& map, int64_t seq) {
+  std::map<int64_t, Matrix6d> out;
+  Pose3 T_seq_m = Pose3::Identity();
+  Matrix6d cov = Matrix6d::Zero();
+  out.emplace(seq, cov);
+  for (const MapKeyframe* m = map.keyframe(seq); m != nullptr;) {
+    const std::optional<MapRelativePose>& link = m->tracked ? m->tracked : m->from_previous;
+    if (!link || link->from_seq >= m->seq) break;
+    const MapKeyframe* from = map.keyframe(link->from_seq);
+    if (from == nullptr) break;
+    cov = propagateCompositionCovariance(link->T_this_from, link->covariance, T_seq_m, cov);
+    T_seq_m = T_seq_m * link->T_this_from;
+    out.emplace(from->seq, cov);
+    m = from;
+  }
+  return out;
+}
+
+/// The covariance of landmark `p` in keyframe k's camera frame: the information of its
+/// observations, each carried into k with its keyframe's uncertainty relative to k
+/// (`chained`). Without the latter, a landmark measured by earlier keyframes would claim their
+/// precision in k as if their poses relative to k were known. Observations by keyframes off the
+/// chain carry nothing; nullopt when none is on it.
+std::optional<Eigen::Matrix3d> covarianceIn(const LocalMap& map, const MapPoint& p,
+                                            const Pose3& T_k_w,
+                                            const std::map<int64_t, Matrix6d>& chained) {
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  for (const MapObservation& o : p.observations) {
+    const auto pose_cov = chained.find(o.keyframe_seq);
+    const MapKeyframe* kf = map.keyframe(o.keyframe_seq);
+    if (pose_cov == chained.end() || kf == nullptr) continue;
+    const Pose3 T_k_i = T_k_w * kf->T_w_kf;
+    // d(T_k_i p)/d xi(T_k_i), xi = [t, q_xyz] (pose_parameterisation.h).
+    Eigen::Matrix<double, 3, 6> J;
+    J << Eigen::Matrix3d::Identity(), rotatedPointJacobian(poseToXi(T_k_i).tail<3>(), o.p_kf);
+    const Eigen::Matrix3d R = T_k_i.linear();
+    const Eigen::Matrix3d cov = R * o.cov_kf * R.transpose() + J * pose_cov->second * J.transpose();
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(cov);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) continue;
+    information += ldlt.solve(Eigen::Matrix3d::Identity());
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(information);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) return std::nullopt;
+  const Eigen::Matrix3d cov = ldlt.solve(Eigen::Matrix3d::Identity());
+  if (!cov.allFinite()) return std::nullopt;
+  return Eigen::Matrix3d(0.5 * (cov + cov.transpose()));
 }
 
 /// A keyframe's measured poses relative to earlier keyframes (residuals of the adjustment).
@@ -236,8 +290,23 @@ FrameFeatures LocalMapper::render(const FrameFeatures& lifted, const Pose3& T_w_
   // Landmarks a little outside the keyframe's view too: the next frames move away from it.
   const double margin = -0.25 * lifted.camera.width;
   ProjectedLandmarks seen = project(map_, observedBy(map_, window), T_w_kf, lifted.camera, margin);
-  reference.points = std::move(seen.points);
-  reference.point_descriptors = seen.descriptors;
+  if (!options_.landmark_pose_uncertainty) {
+    reference.points = std::move(seen.points);
+    reference.point_descriptors = seen.descriptors;
+    return reference;
+  }
+  const std::map<int64_t, Matrix6d> chained = chainedPoseCovariances(map_, lifted.seq);
+  const Pose3 T_kf_w = T_w_kf.inverse();
+  reference.points.clear();
+  reference.point_descriptors = cv::Mat();
+  for (size_t l = 0; l < seen.ids.size(); ++l) {
+    const std::optional<Eigen::Matrix3d> cov =
+        covarianceIn(map_, map_.points().at(seen.ids[l]), T_kf_w, chained);
+    if (!cov) continue;
+    reference.points.push_back(seen.points[l]);
+    reference.points.back().point.cov = *cov;
+    reference.point_descriptors.push_back(seen.descriptors.row(static_cast<int>(l)));
+  }
   return reference;
 }
 

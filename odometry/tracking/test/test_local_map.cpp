@@ -8,6 +8,7 @@
 #include <set>
 
 #include "landmark_world.h"
+#include "pplvo/estimator/pose_parameterisation.h"
 #include "pplvo/tracking/frame_tracker.h"
 #include "pplvo/tracking/local_map.h"
 #include "pplvo/tracking/local_mapper.h"
@@ -109,6 +110,69 @@ TEST(LocalMapper, TrackingsMeasurementHoldsKeyframesThatPointsWouldMove) {
   const KeyframeInsertion followed = insertBoth(loose);
   EXPECT_TRUE(followed.adjusted);
   EXPECT_GT(moved(followed), 0.01);
+}
+
+TEST(LocalMapper, LandmarksCarryTheirKeyframesUncertaintyIntoTheNewOne) {
+  // Twelve points 3 m ahead, measured to 1 mm by keyframe 0; keyframe 1, 10 cm to the right,
+  // measures the first six as well. Tracking measured keyframe 1 relative to keyframe 0 with
+  // covariance `pose_cov`.
+  std::vector<Eigen::Vector3d> world;
+  for (int i = 0; i < 12; ++i)
+    world.emplace_back(-1.0 + 0.18 * i, 0.3 * std::sin(i), 3.0 + 0.1 * i);
+  Pose3 T_w_1 = Pose3::Identity();
+  T_w_1.translation() = Eigen::Vector3d(0.10, 0, 0);
+  T_w_1.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Pose3 T_1_0 = T_w_1.inverse();
+  const std::vector<Eigen::Vector3d> first_six(world.begin(), world.begin() + 6);
+  auto render = [&](const Matrix6d& pose_cov) {
+    LocalMapOptions o;
+    o.adjust_keyframes = 0;  // nothing moves: the covariances alone are compared
+    o.landmark_pose_uncertainty = true;
+    LocalMapper mapper(o);
+    mapper.insert(keyframeSeeing(0, world, Pose3::Identity()), Pose3::Identity());
+    return mapper.insert(keyframeSeeing(1, first_six, T_w_1), T_w_1, std::nullopt,
+                         MapRelativePose{0, T_1_0, pose_cov});
+  };
+  // Keyframe 0's measurement of point i carried into keyframe 1 (the Jacobian numerically).
+  auto carried = [&](const Eigen::Vector3d& p_0, const Matrix6d& pose_cov) {
+    const Vector6d xi = poseToXi(T_1_0);
+    Eigen::Matrix<double, 3, 6> J;
+    for (int j = 0; j < 6; ++j) {
+      Vector6d d = Vector6d::Zero();
+      d(j) = 1e-6;
+      J.col(j) = (xiToPose(xi + d) * p_0 - xiToPose(xi - d) * p_0) / 2e-6;
+    }
+    const Eigen::Matrix3d R = T_1_0.linear();
+    return Eigen::Matrix3d(1e-6 * R * R.transpose() + J * pose_cov * J.transpose());
+  };
+  auto covarianceOf = [&](const KeyframeInsertion& k, int i) -> Eigen::Matrix3d {
+    const Eigen::Vector3d p_1 = T_1_0 * world[i];
+    for (const PointFeature& f : k.reference.points) {
+      if ((f.point.p - p_1).norm() < 1e-9) return f.point.cov;
+    }
+    ADD_FAILURE() << "point " << i << " not rendered";
+    return Eigen::Matrix3d::Zero();
+  };
+
+  Matrix6d pose_cov = Matrix6d::Zero();
+  pose_cov.diagonal() << 1e-4, 1e-4, 1e-4, 1e-6, 1e-6, 1e-6;  // 1 cm, ~0.1 deg
+  const KeyframeInsertion k = render(pose_cov);
+  EXPECT_EQ(k.associated, 6);
+  ASSERT_EQ(k.reference.points.size(), 12u);
+  for (int i = 0; i < 12; ++i) {
+    const Eigen::Matrix3d from_0 = carried(world[i], pose_cov);
+    // Seen by keyframe 1 too: the information of both measurements (its own is 1 mm).
+    const Eigen::Matrix3d expected =
+        i < 6 ? Eigen::Matrix3d((from_0.inverse() + 1e6 * Eigen::Matrix3d::Identity()).inverse())
+              : from_0;
+    EXPECT_LT((covarianceOf(k, i) - expected).norm(), 1e-6 * expected.norm()) << i;
+  }
+  // Keyframe 0's points alone are no more certain in keyframe 1 than keyframe 1's pose.
+  EXPECT_GT(covarianceOf(k, 8)(0, 0), 1e-4);
+  // Relative poses known exactly: two equal measurements, half the variance.
+  const KeyframeInsertion known = render(Matrix6d::Zero());
+  EXPECT_NEAR(covarianceOf(known, 2).trace(), 1.5e-6, 1e-12);
+  EXPECT_NEAR(covarianceOf(known, 8).trace(), 3e-6, 1e-12);
 }
 
 /// Two turns of a circle of 1.5 m radius looking outwards at the walls (500 frames a turn):

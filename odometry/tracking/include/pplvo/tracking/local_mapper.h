@@ -41,6 +41,11 @@ struct LocalMapOptions {
   int max_keyframes = 200;
   /// Association of a keyframe's points with the landmarks projected into it (pixels).
   double association_px = 8.0;
+  /// A landmark's covariance in the keyframe it is tracked from: false, its observations'
+  /// information with every keyframe pose taken as known; true, each observation carried in
+  /// with its keyframe's pose uncertainty relative to that keyframe (the chain of tracking's
+  /// relative poses). Measured on ten long seeds in docs/estimator.md ("Ten seeds").
+  bool landmark_pose_uncertainty = false;
 };
 
 template <class V>
@@ -63,6 +68,9 @@ void visit(V& v, LocalMapOptions& o) {
           config::between(2, 100000));
   v.field("association_px", o.association_px,
           "gate of a keyframe point around a landmark's projection (px)", config::positive());
+  v.field("landmark_pose_uncertainty", o.landmark_pose_uncertainty,
+          "a landmark's covariance as tracked carries its keyframes' pose uncertainty relative "
+          "to the new keyframe (false: their poses taken as known)");
 }
 
 /// What inserting a keyframe did.
