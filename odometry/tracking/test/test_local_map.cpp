@@ -77,14 +77,26 @@ FrameFeatures keyframeSeeing(int64_t seq, const std::vector<Eigen::Vector3d>& wo
   return f;
 }
 
-TEST(LocalMapper, TrackingsMeasurementHoldsKeyframesThatPointsWouldMove) {
-  // Twelve points 3 m ahead, seen by keyframe 0 and by keyframe 1, which tracking put 10 cm to
-  // the right; keyframe 1's points say it is 1.5 cm further.
+/// Twelve points about 3 m ahead of the first keyframe (the world frame).
+std::vector<Eigen::Vector3d> twelvePointsAhead() {
   std::vector<Eigen::Vector3d> world;
   for (int i = 0; i < 12; ++i)
     world.emplace_back(-1.0 + 0.18 * i, 0.3 * std::sin(i), 3.0 + 0.1 * i);
+  return world;
+}
+
+/// A second keyframe 10 cm to the right of the first.
+Pose3 tenCentimetresRight() {
   Pose3 T_w_1 = Pose3::Identity();
   T_w_1.translation() = Eigen::Vector3d(0.10, 0, 0);
+  return T_w_1;
+}
+
+TEST(LocalMapper, TrackingsMeasurementHoldsKeyframesThatPointsWouldMove) {
+  // Twelve points 3 m ahead, seen by keyframe 0 and by keyframe 1, which tracking put 10 cm to
+  // the right; keyframe 1's points say it is 1.5 cm further.
+  const std::vector<Eigen::Vector3d> world = twelvePointsAhead();
+  const Pose3 T_w_1 = tenCentimetresRight();
   Pose3 T_w_seen = T_w_1;
   T_w_seen.translation().x() += 0.015;
   auto insertBoth = [&](const std::optional<MapRelativePose>& tracked) {
@@ -116,11 +128,8 @@ TEST(LocalMapper, LandmarksCarryTheirKeyframesUncertaintyIntoTheNewOne) {
   // Twelve points 3 m ahead, measured to 1 mm by keyframe 0; keyframe 1, 10 cm to the right,
   // measures the first six as well. Tracking measured keyframe 1 relative to keyframe 0 with
   // covariance `pose_cov`.
-  std::vector<Eigen::Vector3d> world;
-  for (int i = 0; i < 12; ++i)
-    world.emplace_back(-1.0 + 0.18 * i, 0.3 * std::sin(i), 3.0 + 0.1 * i);
-  Pose3 T_w_1 = Pose3::Identity();
-  T_w_1.translation() = Eigen::Vector3d(0.10, 0, 0);
+  const std::vector<Eigen::Vector3d> world = twelvePointsAhead();
+  Pose3 T_w_1 = tenCentimetresRight();
   T_w_1.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitY()).toRotationMatrix();
   const Pose3 T_1_0 = T_w_1.inverse();
   const std::vector<Eigen::Vector3d> first_six(world.begin(), world.begin() + 6);
