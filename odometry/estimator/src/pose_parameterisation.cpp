@@ -96,6 +96,15 @@ Matrix6d propagateCompositionCovariance(const Pose3& T_k_1, const Matrix6d& cov_
   return 0.5 * (out + out.transpose());
 }
 
+Eigen::Matrix3d transformedPointCovariance(const Eigen::Matrix3d& R, const Eigen::Vector3d& q_xyz,
+                                           const Matrix6d& cov_xi, const Eigen::Vector3d& p,
+                                           const Eigen::Matrix3d& cov_p) {
+  Eigen::Matrix<double, 3, 6> J;
+  J.leftCols<3>().setIdentity();
+  J.rightCols<3>() = rotatedPointJacobian(q_xyz, p);
+  return R * cov_p * R.transpose() + J * cov_xi * J.transpose();
+}
+
 Matrix6d invertedPoseCovariance(const Pose3& T, const Matrix6d& cov) {
   // T^-1: t' = -R(v')^T... with v' = -v (conjugate, same q_w), t' = -R(v') t.
   const Vector6d xi = poseToXi(T);

@@ -43,11 +43,8 @@ int KeyframeStore::fuse(const KeyframeObservation& observation, const FrameFeatu
     if (!landmark.has_3d || !seen.has_3d) continue;
     // The observation in the keyframe, with the pose's uncertainty (first order in xi).
     const Eigen::Vector3d p = T * seen.point.p;
-    Eigen::Matrix<double, 3, 6> J;
-    J.leftCols<3>().setIdentity();
-    J.rightCols<3>() = rotatedPointJacobian(q_xyz, seen.point.p);
     const Eigen::Matrix3d C =
-        R * seen.point.cov * R.transpose() + J * observation.covariance * J.transpose();
+        transformedPointCovariance(R, q_xyz, observation.covariance, seen.point.p, seen.point.cov);
     const Eigen::Vector3d d = p - landmark.point.p;
     const Eigen::Matrix3d S = landmark.point.cov + C;
     const Eigen::LDLT<Eigen::Matrix3d> S_ldlt(S);

@@ -76,25 +76,40 @@ std::map<int64_t, Matrix6d> chainedPoseCovariances(const LocalMap& map, int64_t 
   return out;
 }
 
+/// A keyframe on the chain back from keyframe k: its pose in k and that pose's covariance.
+struct CarriedKeyframe {
+  Pose3 T_k_i = Pose3::Identity();
+  Eigen::Vector3d q_xyz = Eigen::Vector3d::Zero();  ///< of xi(T_k_i)
+  Matrix6d cov = Matrix6d::Zero();
+};
+
+/// The keyframes of `chained` (chainedPoseCovariances) as seen from keyframe k at T_k_w.
+std::map<int64_t, CarriedKeyframe> carriedInto(const LocalMap& map, const Pose3& T_k_w,
+                                               const std::map<int64_t, Matrix6d>& chained) {
+  std::map<int64_t, CarriedKeyframe> out;
+  for (const auto& [seq, cov] : chained) {
+    const MapKeyframe* kf = map.keyframe(seq);
+    if (kf == nullptr) continue;
+    const Pose3 T_k_i = T_k_w * kf->T_w_kf;
+    out.emplace(seq, CarriedKeyframe{T_k_i, poseToXi(T_k_i).tail<3>(), cov});
+  }
+  return out;
+}
+
 /// The covariance of landmark `p` in keyframe k's camera frame: the information of its
 /// observations, each carried into k with its keyframe's uncertainty relative to k
-/// (`chained`). Without the latter, a landmark measured by earlier keyframes would claim their
+/// (`carried`). Without the latter, a landmark measured by earlier keyframes would claim their
 /// precision in k as if their poses relative to k were known. Observations by keyframes off the
 /// chain carry nothing; nullopt when none is on it.
-std::optional<Eigen::Matrix3d> covarianceIn(const LocalMap& map, const MapPoint& p,
-                                            const Pose3& T_k_w,
-                                            const std::map<int64_t, Matrix6d>& chained) {
+std::optional<Eigen::Matrix3d> covarianceIn(const MapPoint& p,
+                                            const std::map<int64_t, CarriedKeyframe>& carried) {
   Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
   for (const MapObservation& o : p.observations) {
-    const auto pose_cov = chained.find(o.keyframe_seq);
-    const MapKeyframe* kf = map.keyframe(o.keyframe_seq);
-    if (pose_cov == chained.end() || kf == nullptr) continue;
-    const Pose3 T_k_i = T_k_w * kf->T_w_kf;
-    // d(T_k_i p)/d xi(T_k_i), xi = [t, q_xyz] (pose_parameterisation.h).
-    Eigen::Matrix<double, 3, 6> J;
-    J << Eigen::Matrix3d::Identity(), rotatedPointJacobian(poseToXi(T_k_i).tail<3>(), o.p_kf);
-    const Eigen::Matrix3d R = T_k_i.linear();
-    const Eigen::Matrix3d cov = R * o.cov_kf * R.transpose() + J * pose_cov->second * J.transpose();
+    const auto kf = carried.find(o.keyframe_seq);
+    if (kf == carried.end()) continue;
+    const CarriedKeyframe& c = kf->second;
+    const Eigen::Matrix3d cov =
+        transformedPointCovariance(c.T_k_i.linear(), c.q_xyz, c.cov, o.p_kf, o.cov_kf);
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(cov);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) continue;
     information += ldlt.solve(Eigen::Matrix3d::Identity());
@@ -295,13 +310,12 @@ FrameFeatures LocalMapper::render(const FrameFeatures& lifted, const Pose3& T_w_
     reference.point_descriptors = seen.descriptors;
     return reference;
   }
-  const std::map<int64_t, Matrix6d> chained = chainedPoseCovariances(map_, lifted.seq);
-  const Pose3 T_kf_w = T_w_kf.inverse();
+  const std::map<int64_t, CarriedKeyframe> carried =
+      carriedInto(map_, T_w_kf.inverse(), chainedPoseCovariances(map_, lifted.seq));
   reference.points.clear();
   reference.point_descriptors = cv::Mat();
   for (size_t l = 0; l < seen.ids.size(); ++l) {
-    const std::optional<Eigen::Matrix3d> cov =
-        covarianceIn(map_, map_.points().at(seen.ids[l]), T_kf_w, chained);
+    const std::optional<Eigen::Matrix3d> cov = covarianceIn(map_.points().at(seen.ids[l]), carried);
     if (!cov) continue;
     reference.points.push_back(seen.points[l]);
     reference.points.back().point.cov = *cov;

@@ -40,6 +40,13 @@ CompositionJacobians compositionJacobians(const Pose3& T_k_1, const Pose3& T_k1_
 Matrix6d propagateCompositionCovariance(const Pose3& T_k_1, const Matrix6d& cov_k_1,
                                         const Pose3& T_k1_k, const Matrix6d& cov_k1_k);
 
+/// Covariance of the point T p (first order in xi(T)): p's covariance rotated by R plus the
+/// pose's, J cov_xi J^T with J = d(T p)/d xi = [I, rotatedPointJacobian(q_xyz, p)].
+/// `q_xyz` is xi(T)'s rotation part (poseToXi(T).tail<3>(), passed in: one per pose, many points).
+Eigen::Matrix3d transformedPointCovariance(const Eigen::Matrix3d& R, const Eigen::Vector3d& q_xyz,
+                                           const Matrix6d& cov_xi, const Eigen::Vector3d& p,
+                                           const Eigen::Matrix3d& cov_p);
+
 /// Covariance of xi(T^-1) given the covariance of xi(T) (first order).
 Matrix6d invertedPoseCovariance(const Pose3& T, const Matrix6d& cov);
 
