@@ -16,6 +16,9 @@ namespace {
 constexpr double kClipTimesMedian = 10.0;
 /// Sum of the squared coefficients of e_k - 3 e_{k-1} + 3 e_{k-2} - e_{k-3}.
 constexpr double kThirdDifferenceGain = 20.0;
+/// Motions against a held reference: the published C of a motion should be 2 W, and
+/// E|d|^2 / 3 = 20 W, so C + 2 sigma^2 = 2 W takes 20 / 2 = 10 mean C off E|d|^2 / 3.
+constexpr double kHeldReferenceGain = kThirdDifferenceGain / 2.0;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -45,7 +48,8 @@ FrameErrorEstimator::FrameErrorEstimator(int window_samples, int min_samples)
     : window_samples_(std::max(1, window_samples)),
       min_samples_(std::clamp(min_samples, 1, std::max(1, window_samples))) {}
 
-void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance) {
+void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance,
+                                            std::optional<int64_t> held_reference) {
   if (!T_prev_curr.matrix().allFinite() || !covariance.allFinite()) {
     addGap();
     return;
@@ -55,6 +59,7 @@ void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matr
   // The rotation vector is twice q_xyz to first order: 4 times its variance.
   motion.var_t = covariance.topLeftCorner<3, 3>().trace() / 3.0;
   motion.var_r = 4.0 * covariance.bottomRightCorner<3, 3>().trace() / 3.0;
+  motion.held_reference = held_reference;
   motions_.push_back(motion);
   if (motions_.size() > 3) motions_.pop_front();
   if (motions_.size() < 3) return;
@@ -65,9 +70,17 @@ void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matr
   Sample s;
   s.d_t_sq = d.head<3>().squaredNorm();
   s.d_r_sq = d.tail<3>().squaredNorm();
-  // Independent motion errors: C_k + 4 C_{k-1} + C_{k-2}.
-  s.noise_t = c.var_t + 4.0 * b.var_t + a.var_t;
-  s.noise_r = c.var_r + 4.0 * b.var_r + a.var_r;
+  if (a.held_reference && a.held_reference == b.held_reference &&
+      b.held_reference == c.held_reference) {
+    // Differences of estimates against one reference: take off what makes the published
+    // C + 2 sigma^2 the motions' whole white error, 10 times their mean C (header).
+    s.noise_t = kHeldReferenceGain * (a.var_t + b.var_t + c.var_t) / 3.0;
+    s.noise_r = kHeldReferenceGain * (a.var_r + b.var_r + c.var_r) / 3.0;
+  } else {
+    // Independent motion errors: C_k + 4 C_{k-1} + C_{k-2}.
+    s.noise_t = c.var_t + 4.0 * b.var_t + a.var_t;
+    s.noise_r = c.var_r + 4.0 * b.var_r + a.var_r;
+  }
   samples_.push_back(s);
   while (static_cast<int>(samples_.size()) > window_samples_) samples_.pop_front();
   sigma_ = estimate();

@@ -134,6 +134,11 @@ bool MotionChain::agreesWithPrediction(const PoseEstimate& est) const {
 }
 
 MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
+  return update(seq, est, std::nullopt);
+}
+
+MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
+                                      std::optional<int64_t> held_reference) {
   if (!initialised_) return initialise(seq);
   const bool plausible = agreesWithPrediction(est);
   const bool accepted =
@@ -177,7 +182,8 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
   last_cov_ = Q;
   // Only measured motions show the shared error; a predicted or combined one would smooth it.
   if (good) {
-    frame_error_.addMeasuredMotion(T_curr_prev.inverse(), invertedPoseCovariance(T_curr_prev, Q));
+    frame_error_.addMeasuredMotion(T_curr_prev.inverse(), invertedPoseCovariance(T_curr_prev, Q),
+                                   held_reference);
   } else {
     frame_error_.addGap();
   }

@@ -11,7 +11,14 @@
 ///         = (true jerk) + e_k - 3 e_{k-1} + 3 e_{k-2} - e_{k-3} + (estimation noise),
 ///
 /// has per-axis variance 20 sigma^2 + (C_k + 4 C_{k-1} + C_{k-2}) / axis + (jerk dt^3)^2, with
-/// C the motions' published covariance without any shared error. A hand-held camera's jerk
+/// C the motions' published covariance without any shared error, when each motion was
+/// measured on its own (frame to frame: the estimation errors of consecutive motions are
+/// independent). When the frames were each measured against one reference held over them (a
+/// keyframe), a motion is the difference of two frames' estimates: their estimation errors
+/// enter like the shared error (into and out of each frame, the reference's own error
+/// cancelling), so no model of them can be taken off; the white per-frame error of every kind
+/// then has variance W = E|d|^2 / 60 per axis, a motion's is 2 W, and sigma^2 = W - C / 2 makes
+/// the published C + 2 sigma^2 equal to it. A hand-held camera's jerk
 /// over 33 ms is far below the error (20 m/s^3: 0.7 mm against sqrt(20) * 2 mm = 9 mm); it
 /// only ever biases sigma up. The variance is the mean square over a window of samples (a
 /// covariance is a second moment: a median would read only the core of a heavy-tailed
@@ -20,7 +27,9 @@
 /// the rest divided by 20. The same idea estimates the ground truth's jitter in pplvo-eval
 /// (eval::estimateGtJitter). A true motion that is rough at the frame rate reads as shared
 /// error (ICL-NUIM's trajectories: docs/estimator.md). No LCM, deterministic, bounded memory.
+#include <cstdint>
 #include <deque>
+#include <optional>
 
 #include "pplvo/core/geometry.h"
 
@@ -39,8 +48,11 @@ class FrameErrorEstimator {
   FrameErrorEstimator(int window_samples, int min_samples);
 
   /// The next frame's motion T_prev_curr, measured (an accepted estimate), with the
-  /// covariance of its xi = [t; q_xyz] without any shared error.
-  void addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance);
+  /// covariance of its xi = [t; q_xyz] without any shared error. `held_reference`: the frame
+  /// (a keyframe) this frame's and the previous frame's poses were both measured against, if
+  /// any; a motion measured on its own has none.
+  void addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance,
+                         std::optional<int64_t> held_reference = std::nullopt);
   /// The next frame had no measured motion (velocity model, a combined weak estimate, lost,
   /// restarted): the differences restart after it.
   void addGap();
@@ -55,6 +67,7 @@ class FrameErrorEstimator {
   struct Motion {
     Vector6d m = Vector6d::Zero();  ///< [t; rotation vector]
     double var_t = 0, var_r = 0;    ///< per-axis mean variance of t and of the rotation vector
+    std::optional<int64_t> held_reference;
   };
   struct Sample {
     double d_t_sq = 0, d_r_sq = 0;    ///< |d_t|^2, |d_r|^2

@@ -197,6 +197,11 @@ class MotionChain {
   /// The state machine alone, given an estimate (used by track(); public for tests and for
   /// callers that run the estimator themselves).
   MotionChainOutput update(int64_t seq, const PoseEstimate& estimate);
+  /// The same for an estimate of this frame against `held_reference` (a keyframe) that the
+  /// previous frame's pose was measured against too: the motion is the difference of two
+  /// estimates, which the shared-error estimate reads differently (FrameErrorEstimator).
+  MotionChainOutput update(int64_t seq, const PoseEstimate& estimate,
+                           std::optional<int64_t> held_reference);
   /// Weak estimates combined with the prediction so far (fuse_weak_estimates).
   int64_t fusedEstimates() const { return fused_estimates_; }
   /// Estimates (accepted or weak) refused by the prediction gate so far.

@@ -216,6 +216,10 @@ class FrameTracker {
   /// its covariance, the keyframe's shared error in it (local map: a residual of the adjustment
   /// if the frame becomes a keyframe).
   std::optional<std::pair<int64_t, MapRelativePose>> tracked_from_keyframe_;
+  /// The last posed frame and the keyframe its pose was measured against (through the
+  /// keyframe, or from the keyframe's own frame): the next motion through that keyframe is the
+  /// difference of two estimates against it (the shared-error estimate reads it so).
+  std::optional<std::pair<int64_t, int64_t>> measured_against_keyframe_;
   /// Whether frames are tracked against keyframes (kKeyframe or kLocalMap).
   bool usesKeyframes() const { return options_.reference != TrackingReference::kFrame; }
 
