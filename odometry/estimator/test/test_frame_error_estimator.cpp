@@ -18,6 +18,16 @@ Pose3 poseOf(const Eigen::Vector3d& t, const Eigen::Vector3d& rotation_vector) {
   return T;
 }
 
+/// Frame k of a hand-held sway at 30 Hz (0.3 m, 20 deg, periods of 2-4 s).
+Pose3 swayAt(int k) {
+  const double s = k / 30.0;
+  const Eigen::Vector3d t(0.3 * std::sin(2 * M_PI * s / 2.0), 0.2 * std::sin(2 * M_PI * s / 3.0),
+                          0.1 * std::cos(2 * M_PI * s / 4.0));
+  const Eigen::Vector3d r(0.35 * std::sin(2 * M_PI * s / 3.0), 0.2 * std::sin(2 * M_PI * s / 2.5),
+                          0.1 * std::sin(2 * M_PI * s / 4.0));
+  return poseOf(t, r);
+}
+
 /// A hand-held sway at 30 Hz (0.3 m, 20 deg, periods of 2-4 s: accelerations up to ~3 m/s^2,
 /// jerks up to ~9 m/s^3) with a shared error of `sigma` on every frame's pose and an
 /// estimation noise of `noise_sd` per axis on every relative motion, whose covariance is
@@ -26,14 +36,7 @@ void feedSway(FrameErrorEstimator& estimator, const FrameErrorSigma& sigma, doub
               double noise_sd_q, int frames, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
-  auto truth = [](int k) {
-    const double s = k / 30.0;
-    const Eigen::Vector3d t(0.3 * std::sin(2 * M_PI * s / 2.0), 0.2 * std::sin(2 * M_PI * s / 3.0),
-                            0.1 * std::cos(2 * M_PI * s / 4.0));
-    const Eigen::Vector3d r(0.35 * std::sin(2 * M_PI * s / 3.0), 0.2 * std::sin(2 * M_PI * s / 2.5),
-                            0.1 * std::sin(2 * M_PI * s / 4.0));
-    return poseOf(t, r);
-  };
+  const auto truth = swayAt;
   auto shared = [&] {
     Eigen::Vector3d t, r;
     for (int i = 0; i < 3; ++i) t[i] = sigma.t_m * n01(rng);
@@ -67,13 +70,7 @@ void feedSwayAgainstKeyframes(FrameErrorEstimator& estimator, const FrameErrorSi
                               unsigned seed, bool give_reference = true) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
-  auto truth = [](int k) {
-    const double s = k / 30.0;
-    return poseOf(Eigen::Vector3d(0.3 * std::sin(2 * M_PI * s / 2.0),
-                                  0.2 * std::sin(2 * M_PI * s / 3.0), 0.1 * std::cos(2 * M_PI * s / 4.0)),
-                  Eigen::Vector3d(0.35 * std::sin(2 * M_PI * s / 3.0),
-                                  0.2 * std::sin(2 * M_PI * s / 2.5), 0.1 * std::sin(2 * M_PI * s / 4.0)));
-  };
+  const auto truth = swayAt;
   auto noise = [&](double sd_t, double sd_r) {
     Vector6d v;
     for (int i = 0; i < 3; ++i) v[i] = sd_t * n01(rng);
