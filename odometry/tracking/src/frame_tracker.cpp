@@ -315,10 +315,10 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
   if (keyframes && keyframe && keyframe->seq() != *last && keyframe_rejected_seq_ != current.seq) {
     if (std::optional<estimator::PoseEstimate> through_keyframe =
             estimateFromKeyframe(current, s)) {
+      const int64_t keyframe_seq = keyframe->seq();
       const bool previous_against_it = measured_against_keyframe_ &&
                                        measured_against_keyframe_->first == *last &&
-                                       measured_against_keyframe_->second == keyframe->seq();
-      const int64_t keyframe_seq = keyframe->seq();
+                                       measured_against_keyframe_->second == keyframe_seq;
       out.pose = tracker_.update(current.seq, *through_keyframe,
                                  previous_against_it ? std::optional<int64_t>(keyframe_seq)
                                                      : std::nullopt);
@@ -347,13 +347,12 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
   keyframe_rejected_seq_.reset();
   out.pose = trackFromPrevious(*previous, current, s);
   followFromKeyframe(current.seq, previous->seq, *out.pose, nullptr);
+  const bool first_against_keyframe = keyframes && keyframe && keyframe->seq() == previous->seq;
   measured_against_keyframe_.reset();
-  if (keyframes && keyframe && keyframe->seq() == previous->seq &&
-      out.pose->status == TrackingStatus::kTracking) {
+  if (first_against_keyframe && out.pose->status == TrackingStatus::kTracking) {
     measured_against_keyframe_ = {current.seq, keyframe->seq()};
   }
   if (keyframes) {
-    const bool first_against_keyframe = keyframe && keyframe->seq() == previous->seq;
     if (first_against_keyframe && out.pose->estimate.accepted() &&
         out.pose->status == TrackingStatus::kTracking) {
       // The keyframe's reference quality: what the next frames are compared with.
