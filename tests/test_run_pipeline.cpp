@@ -170,7 +170,7 @@ TEST_F(RunPipelineTest, TracksTheSyntheticSequenceWithBoundedDrift) {
   }
   // The per-frame shared error, estimated online from the motions: rendered frames have none,
   // so what is read is the estimator's own roughness, well under a Kinect's ~2 mm.
-  EXPECT_TRUE(r.frame_error_estimated);
+  EXPECT_TRUE(r.frame_error_source.online());
   EXPECT_LT(r.frame_error_sigma_t_m, 1e-3);
   EXPECT_LT(r.frame_error_sigma_rot_deg, 0.05);
   EXPECT_NE(y.find("frame_error: {sigma_t_m: "), std::string::npos) << y;

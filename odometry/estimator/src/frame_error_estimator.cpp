@@ -44,69 +44,81 @@ double clippedMean(const std::vector<double>& v) {
 
 }  // namespace
 
+const char* FrameErrorSource::describe() const {
+  if (online()) return "estimated online";
+  if (translation_online) return "translation estimated online, rotation configured";
+  if (rotation_online) return "rotation estimated online, translation configured";
+  return "configured";
+}
+
 FrameErrorEstimator::FrameErrorEstimator(int window_samples, int min_samples)
     : window_samples_(std::max(1, window_samples)),
       min_samples_(std::clamp(min_samples, 1, std::max(1, window_samples))) {}
 
 void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance,
-                                            std::optional<int64_t> held_reference) {
+                                            std::optional<int64_t> held_reference,
+                                            MeasuredBlocks measured) {
   if (!T_prev_curr.matrix().allFinite() || !covariance.allFinite()) {
     addGap();
     return;
   }
-  Motion motion;
-  motion.m = motionToVector(T_prev_curr);
-  // The rotation vector is twice q_xyz to first order: 4 times its variance.
-  motion.var_t = covariance.topLeftCorner<3, 3>().trace() / 3.0;
-  motion.var_r = 4.0 * covariance.bottomRightCorner<3, 3>().trace() / 3.0;
-  motion.held_reference = held_reference;
+  const Vector6d m = motionToVector(T_prev_curr);  // [t; rotation vector]
+  if (measured.translation) {
+    const BlockMotion t{m.head<3>(), covariance.topLeftCorner<3, 3>().trace() / 3.0,
+                        held_reference};
+    if (translation_.add(t, window_samples_)) sigma_.t_m = translation_.sigma();
+  } else {
+    translation_.gap();
+  }
+  if (measured.rotation) {
+    // The rotation vector is twice q_xyz to first order: 4 times its variance.
+    const BlockMotion r{m.tail<3>(), 4.0 * covariance.bottomRightCorner<3, 3>().trace() / 3.0,
+                        held_reference};
+    if (rotation_.add(r, window_samples_)) sigma_.rot_rad = rotation_.sigma();
+  } else {
+    rotation_.gap();
+  }
+}
+
+void FrameErrorEstimator::addGap() {
+  translation_.gap();
+  rotation_.gap();
+}
+
+bool FrameErrorEstimator::Block::add(const BlockMotion& motion, int window_samples) {
   motions_.push_back(motion);
   if (motions_.size() > 3) motions_.pop_front();
-  if (motions_.size() < 3) return;
-  const Motion& a = motions_[0];
-  const Motion& b = motions_[1];
-  const Motion& c = motions_[2];
-  const Vector6d d = c.m - 2.0 * b.m + a.m;
+  if (motions_.size() < 3) return false;
+  const BlockMotion& a = motions_[0];
+  const BlockMotion& b = motions_[1];
+  const BlockMotion& c = motions_[2];
   Sample s;
-  s.d_t_sq = d.head<3>().squaredNorm();
-  s.d_r_sq = d.tail<3>().squaredNorm();
+  s.d_sq = (c.m - 2.0 * b.m + a.m).squaredNorm();
   if (a.held_reference && a.held_reference == b.held_reference &&
       b.held_reference == c.held_reference) {
     // Differences of estimates against one reference: take off what makes the published
     // C + 2 sigma^2 the motions' whole white error, 10 times their mean C (header).
-    s.noise_t = kHeldReferenceGain * (a.var_t + b.var_t + c.var_t) / 3.0;
-    s.noise_r = kHeldReferenceGain * (a.var_r + b.var_r + c.var_r) / 3.0;
+    s.noise = kHeldReferenceGain * (a.var + b.var + c.var) / 3.0;
   } else {
     // Independent motion errors: C_k + 4 C_{k-1} + C_{k-2}.
-    s.noise_t = c.var_t + 4.0 * b.var_t + a.var_t;
-    s.noise_r = c.var_r + 4.0 * b.var_r + a.var_r;
+    s.noise = c.var + 4.0 * b.var + a.var;
   }
   samples_.push_back(s);
-  while (static_cast<int>(samples_.size()) > window_samples_) samples_.pop_front();
-  sigma_ = estimate();
+  while (static_cast<int>(samples_.size()) > window_samples) samples_.pop_front();
+  return true;
 }
 
-void FrameErrorEstimator::addGap() { motions_.clear(); }
-
-FrameErrorSigma FrameErrorEstimator::estimate() const {
-  FrameErrorSigma out;
-  if (samples_.empty()) return out;
-  std::vector<double> dt, dr, nt, nr;
-  dt.reserve(samples_.size());
-  dr.reserve(samples_.size());
-  nt.reserve(samples_.size());
-  nr.reserve(samples_.size());
+double FrameErrorEstimator::Block::sigma() const {
+  if (samples_.empty()) return 0.0;
+  std::vector<double> d_sq, noise;
+  d_sq.reserve(samples_.size());
+  noise.reserve(samples_.size());
   for (const Sample& s : samples_) {
-    dt.push_back(s.d_t_sq);
-    dr.push_back(s.d_r_sq);
-    nt.push_back(s.noise_t);
-    nr.push_back(s.noise_r);
+    d_sq.push_back(s.d_sq);
+    noise.push_back(s.noise);
   }
-  const double excess_t = clippedMean(dt) / 3.0 - mean(nt);
-  const double excess_r = clippedMean(dr) / 3.0 - mean(nr);
-  out.t_m = std::sqrt(std::max(0.0, excess_t / kThirdDifferenceGain));
-  out.rot_rad = std::sqrt(std::max(0.0, excess_r / kThirdDifferenceGain));
-  return out;
+  const double excess = clippedMean(d_sq) / 3.0 - mean(noise);
+  return std::sqrt(std::max(0.0, excess / kThirdDifferenceGain));
 }
 
 }  // namespace pplvo::estimator

@@ -40,14 +40,32 @@ MotionChain::MotionChain(MotionChainOptions options)
       estimator_(options_.estimator),
       frame_error_(options_.frame_error_window, options_.frame_error_min_samples) {}
 
-bool MotionChain::frameErrorEstimated() const {
-  return options_.frame_error_online && frame_error_.ready();
+FrameErrorSource MotionChain::frameErrorSource() const {
+  // Each block online once it has its samples: a plain corridor measures only the rotation.
+  const bool online = options_.frame_error_online;
+  return FrameErrorSource{online && frame_error_.translationReady(),
+                          online && frame_error_.rotationReady()};
 }
 
 FrameErrorSigma MotionChain::frameError() const {
-  if (frameErrorEstimated()) return frame_error_.sigma();
-  return FrameErrorSigma{options_.frame_error_sigma_t_m,
-                         options_.frame_error_sigma_rot_deg * M_PI / 180.0};
+  const FrameErrorSource source = frameErrorSource();
+  return FrameErrorSigma{source.translation_online ? frame_error_.sigma().t_m
+                                                   : options_.frame_error_sigma_t_m,
+                         source.rotation_online
+                             ? frame_error_.sigma().rot_rad
+                             : options_.frame_error_sigma_rot_deg * M_PI / 180.0};
+}
+
+MeasuredBlocks MotionChain::blocksMeasuredBy(const PoseEstimate& est) const {
+  if (est.accepted()) return MeasuredBlocks{};
+  // A weak estimate measured a block if that block alone would have been accepted, with the
+  // redundancy to tell a wrong match (min_residuals); the combination took the rest from the
+  // prediction.
+  const PoseEstimatorOptions& o = options_.estimator;
+  const bool redundant = est.n_residuals >= o.min_residuals;
+  return MeasuredBlocks{
+      redundant && est.max_translation_variance_m2 <= o.max_translation_variance_m2,
+      redundant && est.max_rotation_variance <= o.max_rotation_variance};
 }
 
 MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
@@ -180,10 +198,11 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
   T_w_c_.linear() = Eigen::Quaterniond(T_w_c_.linear()).normalized().toRotationMatrix();
   last_T_curr_prev_ = T_curr_prev;
   last_cov_ = Q;
-  // Only measured motions show the shared error; a predicted or combined one would smooth it.
-  if (good) {
+  // Only measured motions show the shared error; a predicted one would smooth it. A weak
+  // estimate combined with the prediction shows it in the blocks it measured.
+  if (good || fused) {
     frame_error_.addMeasuredMotion(T_curr_prev.inverse(), invertedPoseCovariance(T_curr_prev, Q),
-                                   held_reference);
+                                   held_reference, blocksMeasuredBy(est));
   } else {
     frame_error_.addGap();
   }
@@ -256,7 +275,7 @@ MotionChainOutput MotionChain::makeOutput(int64_t seq) const {
   out.T_prev_curr = last_T_curr_prev_.inverse();
   out.covariance_prev_curr = invertedPoseCovariance(last_T_curr_prev_, last_cov_);
   out.frame_error = frameError();
-  out.frame_error_estimated = frameErrorEstimated();
+  out.frame_error_source = frameErrorSource();
   if (status_ != TrackingStatus::kFirstFrame) {
     out.frame_error_covariance = frameErrorCovariance(out.frame_error);
     out.covariance_prev_curr += out.frame_error_covariance;

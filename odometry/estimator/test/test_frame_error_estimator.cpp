@@ -31,9 +31,10 @@ Pose3 swayAt(int k) {
 /// A hand-held sway at 30 Hz (0.3 m, 20 deg, periods of 2-4 s: accelerations up to ~3 m/s^2,
 /// jerks up to ~9 m/s^3) with a shared error of `sigma` on every frame's pose and an
 /// estimation noise of `noise_sd` per axis on every relative motion, whose covariance is
-/// reported; fed frame by frame to `estimator`.
+/// reported; fed frame by frame to `estimator`. A block not in `measured` is the constant
+/// velocity's (a prediction: smooth), as a weak estimate combined with it would give.
 void feedSway(FrameErrorEstimator& estimator, const FrameErrorSigma& sigma, double noise_sd_t,
-              double noise_sd_q, int frames, unsigned seed) {
+              double noise_sd_q, int frames, unsigned seed, MeasuredBlocks measured = {}) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
   const auto truth = swayAt;
@@ -52,8 +53,10 @@ void feedSway(FrameErrorEstimator& estimator, const FrameErrorSigma& sigma, doub
     Vector6d noise;
     for (int i = 0; i < 3; ++i) noise[i] = noise_sd_t * n01(rng);
     for (int i = 3; i < 6; ++i) noise[i] = noise_sd_q * n01(rng);
-    const Pose3 measured = xiToPose(poseToXi(prev.inverse() * curr) + noise);
-    estimator.addMeasuredMotion(measured, C);
+    Vector6d xi = poseToXi(prev.inverse() * curr) + noise;
+    if (!measured.translation) xi.head<3>() = Eigen::Vector3d(0.01, 0.0, 0.0);
+    if (!measured.rotation) xi.tail<3>() = Eigen::Vector3d(0.0, 0.001, 0.0);
+    estimator.addMeasuredMotion(xiToPose(xi), C, std::nullopt, measured);
     prev = curr;
   }
 }
@@ -116,6 +119,35 @@ TEST(FrameErrorEstimator, RecoversTheSharedErrorAndFollowsItWhenItDoubles) {
     EXPECT_NEAR(s.t_m, truth.t_m, 0.12 * truth.t_m);
     EXPECT_NEAR(s.rot_rad, truth.rot_rad, 0.12 * truth.rot_rad);
   }
+}
+
+TEST(FrameErrorEstimator, EachBlockIsReadFromTheMotionsThatMeasuredIt) {
+  // A plain corridor: the weak estimates fix the rotation, the prediction (smooth) gives the
+  // translation. The rotation's shared error is read from them; the translation is not ready
+  // and reads none, where taking the predicted translation as measured would read ~0 as the
+  // camera's error.
+  const FrameErrorSigma truth{2e-3, 0.06 * kDeg};
+  FrameErrorEstimator rotation_only(400, 10), both(400, 10);
+  feedSway(rotation_only, truth, 3e-4, 5e-5, 402, 7, MeasuredBlocks{false, true});
+  feedSway(both, truth, 3e-4, 5e-5, 402, 7, MeasuredBlocks{true, true});
+  EXPECT_TRUE(rotation_only.rotationReady());
+  EXPECT_FALSE(rotation_only.translationReady());
+  EXPECT_FALSE(rotation_only.ready());
+  EXPECT_EQ(rotation_only.sigma().t_m, 0.0);
+  EXPECT_NEAR(rotation_only.sigma().rot_rad, truth.rot_rad, 0.12 * truth.rot_rad);
+  // The rotation reads the same whether the translation was measured or not.
+  EXPECT_DOUBLE_EQ(rotation_only.sigma().rot_rad, both.sigma().rot_rad);
+
+  // Blocks measured on alternate frames never make three in a row: no sample in either.
+  FrameErrorEstimator alternating(400, 1);
+  const Matrix6d C = Matrix6d::Identity() * 1e-10;
+  for (int k = 0; k < 20; ++k) {
+    const MeasuredBlocks blocks{k % 2 == 0, k % 2 == 1};
+    alternating.addMeasuredMotion(poseOf({0.01, 0, 0}, {0, 0.01, 0}), C, std::nullopt, blocks);
+  }
+  EXPECT_EQ(alternating.samples(), 0);
+  EXPECT_FALSE(alternating.translationReady());
+  EXPECT_FALSE(alternating.rotationReady());
 }
 
 TEST(FrameErrorEstimator, NoSharedErrorGivesNoneBeyondTheEstimationNoise) {
@@ -231,6 +263,44 @@ TEST(MotionChain, PublishesTheOnlineSharedErrorOnceItIsReady) {
         << s;
   }
   EXPECT_GT(chain.frameError().t_m, 1e-3);  // the data's, not the starting value
+}
+
+TEST(MotionChain, WeakEstimatesGiveTheSharedErrorOfTheBlockTheyMeasure) {
+  // A corridor's weak estimates: nothing along x, the rotation fixed, rough by +-0.05 deg
+  // about z. Combined with the prediction, they give the rotation's shared error online; the
+  // translation keeps the configured sigma. With too few rows to tell a wrong match
+  // (min_residuals) a weak estimate measures nothing.
+  for (const int rows : {40, 8}) {
+    MotionChainOptions opts;
+    opts.frame_error_min_samples = 5;
+    opts.frame_error_sigma_t_m = 3e-3;
+    opts.frame_error_sigma_rot_deg = 0.5;
+    MotionChain chain(opts);
+    chain.initialise(0);
+    PoseEstimate e;
+    e.status = EstimateStatus::kUncertain;
+    e.n_residuals = rows;
+    e.covariance = Matrix6d::Identity() * 1e-10;
+    e.covariance(0, 0) = 1.0;  // along the corridor: unconstrained
+    e.max_translation_variance_m2 = 1.0;
+    e.max_rotation_variance = 1e-10;
+    for (int64_t s = 1; s <= 30; ++s) {
+      const double jitter = (s % 2 == 0 ? 1 : -1) * 0.05 * kDeg;
+      e.T_curr_prev = poseOf({0.0, 0.0, 0.0}, {0, 0, jitter}).inverse();
+      const MotionChainOutput out = chain.update(s, e);
+      ASSERT_EQ(out.status, TrackingStatus::kTracking) << s;
+    }
+    EXPECT_EQ(chain.frameError().t_m, 3e-3);
+    EXPECT_FALSE(chain.frameErrorSource().translation_online);
+    EXPECT_EQ(chain.frameErrorSource().rotation_online, rows >= opts.estimator.min_residuals);
+    if (rows >= opts.estimator.min_residuals) {
+      // Motions alternating by +-j have second differences of 4 j: |d|^2 / 3 = 16 j^2 / 3 per
+      // axis = 20 sigma^2, sigma = 0.516 j (the combination keeps the estimate's rotation).
+      EXPECT_NEAR(chain.frameError().rot_rad, 0.516 * 0.05 * kDeg, 0.02 * 0.05 * kDeg);
+    } else {
+      EXPECT_DOUBLE_EQ(chain.frameError().rot_rad, 0.5 * kDeg);
+    }
+  }
 }
 
 }  // namespace

@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
             static_cast<long long>(k.keyframes), static_cast<long long>(k.keyframe_fallbacks),
             static_cast<long long>(k.weak_estimates_combined),
             static_cast<long long>(k.estimates_gated), 1e3 * k.frame_error.t_m, k.frame_error.rot_rad * 180.0 / M_PI,
-            k.frame_error_estimated ? "estimated online" : "configured",
+            k.frame_error_source.describe(),
             n.allTimings().table().c_str());
       });
 }

@@ -143,7 +143,7 @@ void EstimatorNode::publish(const estimator::MotionChainOutput& out, const Frame
   (void)stats;  // pose_t carries the inliers the estimate used (estimator::toFramePose)
   counts_.add(pose.status);
   counts_.frame_error = out.frame_error;
-  counts_.frame_error_estimated = out.frame_error_estimated;
+  counts_.frame_error_source = out.frame_error_source;
   counts_.weak_estimates_combined = odometry_.tracker().fusedEstimates();
   counts_.estimates_gated = odometry_.tracker().gatedEstimates();
   {

@@ -108,7 +108,7 @@ std::string RunResult::text() const {
   if (poses > 1) {
     std::snprintf(buf, sizeof buf, "shared frame error: %.2f mm, %.3f deg per axis (%s)\n",
                   1e3 * frame_error_sigma_t_m, frame_error_sigma_rot_deg,
-                  frame_error_estimated ? "estimated online" : "configured");
+                  frame_error_source.describe());
     out << buf;
   }
   if (weak_estimates_combined > 0 || estimates_gated > 0) {
@@ -147,7 +147,10 @@ std::string RunResult::yaml() const {
       << "keyframes: {taken: " << keyframes << ", fallbacks: " << keyframe_fallbacks << "}\n"
       << "frame_error: {sigma_t_m: " << frame_error_sigma_t_m
       << ", sigma_rot_deg: " << frame_error_sigma_rot_deg
-      << ", estimated: " << (frame_error_estimated ? "true" : "false") << "}\n"
+      << ", estimated: " << (frame_error_source.online() ? "true" : "false")
+      << ", translation_estimated: " << (frame_error_source.translation_online ? "true" : "false")
+      << ", rotation_estimated: " << (frame_error_source.rotation_online ? "true" : "false")
+      << "}\n"
       << "weak_estimates_combined: " << weak_estimates_combined << "\n"
       << "estimates_gated: " << estimates_gated << "\n"
       << "elapsed_s: " << elapsed_s << "\n"
@@ -274,7 +277,7 @@ RunResult runPipeline(const RunOptions& options) {
     result.keyframe_fallbacks = estimator.counts().keyframe_fallbacks;
     result.frame_error_sigma_t_m = estimator.counts().frame_error.t_m;
     result.frame_error_sigma_rot_deg = estimator.counts().frame_error.rot_rad * 180.0 / M_PI;
-    result.frame_error_estimated = estimator.counts().frame_error_estimated;
+    result.frame_error_source = estimator.counts().frame_error_source;
     result.weak_estimates_combined = estimator.counts().weak_estimates_combined;
     result.estimates_gated = estimator.counts().estimates_gated;
     for (int r = 1; r < tracking::kKeyframeReasons; ++r) {

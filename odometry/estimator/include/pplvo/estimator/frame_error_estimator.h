@@ -26,7 +26,11 @@
 /// median so that one wrong estimate cannot set it; the estimation noise (mean) is taken off,
 /// the rest divided by 20. The same idea estimates the ground truth's jitter in pplvo-eval
 /// (eval::estimateGtJitter). A true motion that is rough at the frame rate reads as shared
-/// error (ICL-NUIM's trajectories: docs/estimator.md). No LCM, deterministic, bounded memory.
+/// error (ICL-NUIM's trajectories: docs/estimator.md). The translation and the rotation are
+/// read apart, each from the motions that measured it: a weak estimate (a plain corridor:
+/// planes and lines fix the rotation, nothing fixes the translation along it) still measures
+/// its rotation. No LCM, deterministic, bounded memory.
+#include <algorithm>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -34,6 +38,23 @@
 #include "pplvo/core/geometry.h"
 
 namespace pplvo::estimator {
+
+/// Which blocks of a motion's xi = [t; q_xyz] a measurement fixed (the rest came from a
+/// prediction, which is smooth and would read as no error).
+struct MeasuredBlocks {
+  bool translation = true;
+  bool rotation = true;
+};
+
+/// Where each block of the shared error in use comes from: the online estimate or the
+/// configured sigma.
+struct FrameErrorSource {
+  bool translation_online = false;
+  bool rotation_online = false;
+  bool online() const { return translation_online && rotation_online; }
+  /// "estimated online", "configured", or which block is which.
+  const char* describe() const;
+};
 
 /// Per-axis standard deviation of the shared error of one frame.
 struct FrameErrorSigma {
@@ -50,35 +71,55 @@ class FrameErrorEstimator {
   /// The next frame's motion T_prev_curr, measured (an accepted estimate), with the
   /// covariance of its xi = [t; q_xyz] without any shared error. `held_reference`: the frame
   /// (a keyframe) this frame's and the previous frame's poses were both measured against, if
-  /// any; a motion measured on its own has none.
+  /// any; a motion measured on its own has none. `measured`: the blocks the measurement
+  /// fixed; a block it did not fix is a gap for that block (below).
   void addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance,
-                         std::optional<int64_t> held_reference = std::nullopt);
-  /// The next frame had no measured motion (velocity model, a combined weak estimate, lost,
-  /// restarted): the differences restart after it.
+                         std::optional<int64_t> held_reference = std::nullopt,
+                         MeasuredBlocks measured = {});
+  /// The next frame had no measured motion (velocity model, lost, restarted): the
+  /// differences of both blocks restart after it.
   void addGap();
 
-  bool ready() const { return static_cast<int>(samples_.size()) >= min_samples_; }
-  int samples() const { return static_cast<int>(samples_.size()); }
-  /// The estimate from the samples in the window (zeros when there are none); computed once
-  /// per sample.
+  /// Enough samples of the translation / the rotation; ready(): of both.
+  bool translationReady() const { return translation_.samples() >= min_samples_; }
+  bool rotationReady() const { return rotation_.samples() >= min_samples_; }
+  bool ready() const { return translationReady() && rotationReady(); }
+  /// Second differences in the window, of the block with fewer.
+  int samples() const { return std::min(translation_.samples(), rotation_.samples()); }
+  /// The estimate from the samples in each block's window (zero for a block without any);
+  /// computed once per sample.
   const FrameErrorSigma& sigma() const { return sigma_; }
 
  private:
-  struct Motion {
-    Vector6d m = Vector6d::Zero();  ///< [t; rotation vector]
-    double var_t = 0, var_r = 0;    ///< per-axis mean variance of t and of the rotation vector
+  /// One block (translation or rotation vector) of a measured motion.
+  struct BlockMotion {
+    Eigen::Vector3d m = Eigen::Vector3d::Zero();
+    double var = 0;  ///< per-axis mean variance
     std::optional<int64_t> held_reference;
   };
-  struct Sample {
-    double d_t_sq = 0, d_r_sq = 0;    ///< |d_t|^2, |d_r|^2
-    double noise_t = 0, noise_r = 0;  ///< per-axis variance of d from the estimate's own C
+  /// The second differences of one block: its last three motions without a gap and its
+  /// window of samples.
+  class Block {
+   public:
+    /// Adds a motion; returns whether it made a new sample.
+    bool add(const BlockMotion& motion, int window_samples);
+    void gap() { motions_.clear(); }
+    int samples() const { return static_cast<int>(samples_.size()); }
+    /// The shared error's per-axis std read from the window (0 without samples).
+    double sigma() const;
+
+   private:
+    struct Sample {
+      double d_sq = 0;   ///< |d|^2
+      double noise = 0;  ///< per-axis variance of d from the estimate's own C
+    };
+    std::deque<BlockMotion> motions_;  ///< at most 3
+    std::deque<Sample> samples_;
   };
-  FrameErrorSigma estimate() const;
 
   int window_samples_;
   int min_samples_;
-  std::deque<Motion> motions_;  ///< the last measured motions without a gap, at most 3
-  std::deque<Sample> samples_;
+  Block translation_, rotation_;
   FrameErrorSigma sigma_;
 };
 

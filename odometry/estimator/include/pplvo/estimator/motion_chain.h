@@ -65,8 +65,10 @@ struct MotionChainOptions {
   /// diag(sigma_t^2 I, (sigma_rot / 2)^2 I) in [t; q_xyz]; so do the window's transforms
   /// (the depth filter's drop rule). The estimate and the keyframe rule do not use it.
   /// Estimated online from the roughness of the measured motions (FrameErrorEstimator) over
-  /// the last `frame_error_window` of them; the sigmas below are used until
-  /// `frame_error_min_samples` are in, and always when `frame_error_online` is false.
+  /// the last `frame_error_window` of them, the translation and the rotation apart (a weak
+  /// estimate combined with the prediction measures the blocks it constrains); each block's
+  /// sigma below is used until `frame_error_min_samples` of that block are in, and always
+  /// when `frame_error_online` is false.
   bool frame_error_online = true;
   int frame_error_window = 60;
   int frame_error_min_samples = 10;
@@ -117,7 +119,8 @@ void visit(V& v, MotionChainOptions& o) {
           "measured motion triples over which the shared error is estimated (frames)",
           config::atLeast(1));
   v.field("frame_error_min_samples", o.frame_error_min_samples,
-          "triples needed before the online estimate replaces the fixed sigmas",
+          "triples needed before the online estimate replaces the fixed sigmas (each of "
+          "translation and rotation apart)",
           config::atLeast(1));
   v.field("frame_error_sigma_t_m", o.frame_error_sigma_t_m,
           "per-frame pose error shared by all of a frame's measurements, translation std per "
@@ -155,11 +158,11 @@ struct MotionChainOutput {
   Pose3 T_prev_curr = Pose3::Identity();
   Matrix6d covariance_prev_curr = Matrix6d::Zero();
   /// The shared-error part of covariance_prev_curr (2 Q; zero for the first frame), the
-  /// per-frame shared error it comes from, and whether that is the online estimate (else the
-  /// fixed sigmas of the options).
+  /// per-frame shared error it comes from, and which of its blocks are the online estimate
+  /// (else the fixed sigmas of the options).
   Matrix6d frame_error_covariance = Matrix6d::Zero();
   FrameErrorSigma frame_error;
-  bool frame_error_estimated = false;
+  FrameErrorSource frame_error_source;
   double max_translation_variance_m2 = 0;  ///< of `covariance`
   int consecutive_rejections = 0;
   /// Oldest first; the last entry is the current frame (identity, zero covariance).
@@ -216,13 +219,17 @@ class MotionChain {
   bool initialised() const { return initialised_; }
   TrackingStatus status() const { return status_; }
   const Pose3& T_w_c() const { return T_w_c_; }
-  /// The per-frame shared error in use: the online estimate when it is ready, else the
-  /// fixed sigmas of the options.
+  /// The per-frame shared error in use: per block (translation, rotation) the online
+  /// estimate when that block is ready, else the fixed sigma of the options.
   FrameErrorSigma frameError() const;
-  /// Whether frameError() is the online estimate (on, and enough samples in).
-  bool frameErrorEstimated() const;
+  /// Which blocks of frameError() are the online estimate (on, and enough samples of that
+  /// block in).
+  FrameErrorSource frameErrorSource() const;
 
  private:
+  /// The blocks of xi an estimate measured: all when accepted; of a weak one, those that
+  /// pass the estimator's acceptance on their own.
+  MeasuredBlocks blocksMeasuredBy(const PoseEstimate& est) const;
   void propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q);
   MotionChainOutput makeOutput(int64_t seq) const;
 

@@ -71,10 +71,10 @@ struct EstimatorCounts : TrackingStatusCounts {
   int64_t keyframes = 0, keyframe_fallbacks = 0;
   /// Keyframes chosen, by tracking::KeyframeReason.
   std::array<int64_t, tracking::kKeyframeReasons> keyframe_reasons{};
-  /// The per-frame shared error of the last published pose, and whether it was estimated
-  /// online (odometry.tracker.frame_error_online) or the configured value.
+  /// The per-frame shared error of the last published pose, and which of its blocks were
+  /// estimated online (odometry.tracker.frame_error_online), the others configured.
   estimator::FrameErrorSigma frame_error;
-  bool frame_error_estimated = false;
+  estimator::FrameErrorSource frame_error_source;
   /// Weak estimates combined with the prediction, and estimates refused by the prediction
   /// gate (their frames are the velocity model's): estimator::MotionChain's counts.
   int64_t weak_estimates_combined = 0, estimates_gated = 0;

@@ -13,6 +13,7 @@
 #include "pplvo/core/frame_pose.h"
 #include "pplvo/core/stage_timer.h"
 #include "pplvo/core/trajectory.h"
+#include "pplvo/estimator/frame_error_estimator.h"
 #include "pplvo/msgs/convert.h"
 #include "pplvo/pipeline/pipeline_options.h"
 #include "pplvo/player/player_node.h"
@@ -68,10 +69,10 @@ struct RunResult : TrackingStatusCounts {
   int64_t frames_published = 0, frames_skipped = 0;
   int64_t poses = 0;
   int64_t keyframes = 0, keyframe_fallbacks = 0;  ///< the estimator's (reference: keyframe)
-  /// The per-frame shared error at the last pose (std per axis) and whether it was estimated
-  /// online; zeros when nothing was posed.
+  /// The per-frame shared error at the last pose (std per axis) and which of its blocks were
+  /// estimated online; zeros when nothing was posed.
   double frame_error_sigma_t_m = 0.0, frame_error_sigma_rot_deg = 0.0;
-  bool frame_error_estimated = false;
+  estimator::FrameErrorSource frame_error_source;
   /// Weak estimates combined with the prediction; estimates refused by the prediction gate.
   int64_t weak_estimates_combined = 0, estimates_gated = 0;
   std::string keyframe_reasons;  ///< "overlap N, uncertainty N, ..." (chosen keyframes)
