@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "pplvo/estimator/pose_parameterisation.h"
 
 namespace pplvo::estimator {
@@ -57,27 +59,29 @@ FrameErrorEstimator::FrameErrorEstimator(int window_samples, int min_samples)
 
 void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance,
                                             std::optional<int64_t> held_reference,
-                                            MeasuredBlocks measured) {
+                                            MeasuredDirections measured) {
   if (!T_prev_curr.matrix().allFinite() || !covariance.allFinite()) {
     addGap();
     return;
   }
   const Vector6d m = motionToVector(T_prev_curr);  // [t; rotation vector]
-  if (measured.translation) {
-    const BlockMotion t{m.head<3>(), covariance.topLeftCorner<3, 3>().trace() / 3.0,
-                        held_reference};
-    if (translation_.add(t, window_samples_)) sigma_.t_m = translation_.sigma();
-  } else {
-    translation_.gap();
-  }
-  if (measured.rotation) {
-    // The rotation vector is twice q_xyz to first order: 4 times its variance.
-    const BlockMotion r{m.tail<3>(), 4.0 * covariance.bottomRightCorner<3, 3>().trace() / 3.0,
-                        held_reference};
-    if (rotation_.add(r, window_samples_)) sigma_.rot_rad = rotation_.sigma();
-  } else {
-    rotation_.gap();
-  }
+  auto block = [&](const Eigen::Vector3d& motion, const Eigen::Matrix3d& cov,
+                   double max_variance) {
+    BlockMotion b;
+    b.m = motion;
+    b.cov = cov;
+    b.var = cov.trace() / 3.0;
+    b.max_variance = max_variance;
+    b.held_reference = held_reference;
+    return b;
+  };
+  const BlockMotion t = block(m.head<3>(), covariance.topLeftCorner<3, 3>(),
+                              measured.translation_max_variance);
+  // The rotation vector is twice q_xyz to first order: 4 times its variance.
+  const BlockMotion r = block(m.tail<3>(), 4.0 * covariance.bottomRightCorner<3, 3>(),
+                              4.0 * measured.rotation_max_variance);
+  if (translation_.add(t, window_samples_)) sigma_.t_m = translation_.sigma();
+  if (rotation_.add(r, window_samples_)) sigma_.rot_rad = rotation_.sigma();
 }
 
 void FrameErrorEstimator::addGap() {
@@ -86,22 +90,54 @@ void FrameErrorEstimator::addGap() {
 }
 
 bool FrameErrorEstimator::Block::add(const BlockMotion& motion, int window_samples) {
+  if (!(motion.cov.diagonal().minCoeff() <= motion.max_variance) &&
+      !(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(motion.cov, Eigen::EigenvaluesOnly)
+            .eigenvalues()(0) <= motion.max_variance)) {
+    gap();  // nothing of this block was measured
+    return false;
+  }
   motions_.push_back(motion);
   if (motions_.size() > 3) motions_.pop_front();
   if (motions_.size() < 3) return false;
   const BlockMotion& a = motions_[0];
   const BlockMotion& b = motions_[1];
   const BlockMotion& c = motions_[2];
+  const Eigen::Vector3d d = c.m - 2.0 * b.m + a.m;
+  // Per-axis variances of the three motions, over the directions all three measured.
+  double var_a = a.var, var_b = b.var, var_c = c.var;
   Sample s;
-  s.d_sq = (c.m - 2.0 * b.m + a.m).squaredNorm();
+  if (std::isinf(a.max_variance) && std::isinf(b.max_variance) && std::isinf(c.max_variance)) {
+    s.d_sq = d.squaredNorm();
+  } else {
+    // The newest motion's measured directions that the two before measured as well.
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(c.cov);
+    int k = 0;
+    double d_sq = 0.0;
+    var_a = var_b = var_c = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d v = es.eigenvectors().col(i);
+      const double va = v.dot(a.cov * v), vb = v.dot(b.cov * v), vc = es.eigenvalues()(i);
+      if (!(vc <= c.max_variance && va <= a.max_variance && vb <= b.max_variance)) continue;
+      ++k;
+      d_sq += v.dot(d) * v.dot(d);
+      var_a += va;
+      var_b += vb;
+      var_c += vc;
+    }
+    if (k == 0) return false;  // the three share no measured direction: no sample
+    s.d_sq = 3.0 * d_sq / k;  // as over three axes
+    var_a /= k;
+    var_b /= k;
+    var_c /= k;
+  }
   if (a.held_reference && a.held_reference == b.held_reference &&
       b.held_reference == c.held_reference) {
     // Differences of estimates against one reference: take off what makes the published
     // C + 2 sigma^2 the motions' whole white error, 10 times their mean C (header).
-    s.noise = kHeldReferenceGain * (a.var + b.var + c.var) / 3.0;
+    s.noise = kHeldReferenceGain * (var_a + var_b + var_c) / 3.0;
   } else {
     // Independent motion errors: C_k + 4 C_{k-1} + C_{k-2}.
-    s.noise = c.var + 4.0 * b.var + a.var;
+    s.noise = var_c + 4.0 * var_b + var_a;
   }
   samples_.push_back(s);
   while (static_cast<int>(samples_.size()) > window_samples) samples_.pop_front();

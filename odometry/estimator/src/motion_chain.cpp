@@ -56,16 +56,14 @@ FrameErrorSigma MotionChain::frameError() const {
                              : options_.frame_error_sigma_rot_deg * M_PI / 180.0};
 }
 
-MeasuredBlocks MotionChain::blocksMeasuredBy(const PoseEstimate& est) const {
-  if (est.accepted()) return MeasuredBlocks{};
-  // A weak estimate measured a block if that block alone would have been accepted, with the
-  // redundancy to tell a wrong match (min_residuals); the combination took the rest from the
-  // prediction.
+MeasuredDirections MotionChain::directionsMeasuredBy(const PoseEstimate& est) const {
+  if (est.accepted()) return MeasuredDirections::all();
+  // A weak estimate, combined with the prediction, measured the directions in which the
+  // combination is as certain as an accepted estimate must be, given the redundancy to tell a
+  // wrong match (min_residuals); the prediction gave the rest.
   const PoseEstimatorOptions& o = options_.estimator;
-  const bool redundant = est.n_residuals >= o.min_residuals;
-  return MeasuredBlocks{
-      redundant && est.max_translation_variance_m2 <= o.max_translation_variance_m2,
-      redundant && est.max_rotation_variance <= o.max_rotation_variance};
+  if (est.n_residuals < o.min_residuals) return MeasuredDirections::none();
+  return MeasuredDirections{o.max_translation_variance_m2, o.max_rotation_variance};
 }
 
 MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
@@ -199,10 +197,10 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
   last_T_curr_prev_ = T_curr_prev;
   last_cov_ = Q;
   // Only measured motions show the shared error; a predicted one would smooth it. A weak
-  // estimate combined with the prediction shows it in the blocks it measured.
+  // estimate combined with the prediction shows it in the directions it measured.
   if (good || fused) {
     frame_error_.addMeasuredMotion(T_curr_prev.inverse(), invertedPoseCovariance(T_curr_prev, Q),
-                                   held_reference, blocksMeasuredBy(est));
+                                   held_reference, directionsMeasuredBy(est));
   } else {
     frame_error_.addGap();
   }

@@ -70,13 +70,13 @@ TEST(DegenerateScenes, CorridorNeverGivesAConfidentPoseAlongItsAxis) {
   // Combined with the velocity model: every frame tracked, the uncertainty along the corridor.
   Matrix6d frame_error;
   EXPECT_EQ(runCorridor(true, &frame_error), 39);
-  // The combined estimates measured the rotation: its shared error is read online (rendered
-  // frames: far below the configured start value), the translation's is still the configured
-  // one (the corridor never measured all of it).
+  // The combined estimates measured the rotation and the translation across the corridor:
+  // the shared error is read online from those (rendered frames: far below the configured
+  // start value), not the start value for good.
   const estimator::MotionChainOptions defaults;
   const double sigma_t = defaults.frame_error_sigma_t_m;
   const double half_angle = 0.5 * defaults.frame_error_sigma_rot_deg * M_PI / 180.0;
-  EXPECT_DOUBLE_EQ(frame_error(0, 0), 2 * sigma_t * sigma_t);
+  EXPECT_LT(frame_error(0, 0), 0.25 * 2 * sigma_t * sigma_t);
   EXPECT_LT(frame_error(3, 3), 0.25 * 2 * half_angle * half_angle);
   std::printf("shared error published with the last frame: %.2f mm, %.4f deg (configured %.2f "
               "mm, %.4f deg)\n",

@@ -27,23 +27,28 @@
 /// the rest divided by 20. The same idea estimates the ground truth's jitter in pplvo-eval
 /// (eval::estimateGtJitter). A true motion that is rough at the frame rate reads as shared
 /// error (ICL-NUIM's trajectories: docs/estimator.md). The translation and the rotation are
-/// read apart, each from the motions that measured it: a weak estimate (a plain corridor:
-/// planes and lines fix the rotation, nothing fixes the translation along it) still measures
-/// its rotation. No LCM, deterministic, bounded memory.
+/// read apart, each from the directions the motions measured: a weak estimate (a plain
+/// corridor: planes and lines fix the rotation and the translation across it, nothing the
+/// translation along it) still measures those. No LCM, deterministic, bounded memory.
 #include <algorithm>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <optional>
 
 #include "pplvo/core/geometry.h"
 
 namespace pplvo::estimator {
 
-/// Which blocks of a motion's xi = [t; q_xyz] a measurement fixed (the rest came from a
-/// prediction, which is smooth and would read as no error).
-struct MeasuredBlocks {
-  bool translation = true;
-  bool rotation = true;
+/// The directions of a motion's xi = [t; q_xyz] a measurement fixed: in each block, those
+/// along which the motion's variance is at most the bound (m^2; q_xyz). An accepted estimate
+/// fixed all of them; a weak one combined with a prediction those it constrains (the others
+/// are the prediction's, smooth: they would read as no error).
+struct MeasuredDirections {
+  double translation_max_variance = std::numeric_limits<double>::infinity();
+  double rotation_max_variance = std::numeric_limits<double>::infinity();
+  static MeasuredDirections all() { return {}; }
+  static MeasuredDirections none() { return {0.0, 0.0}; }
 };
 
 /// Where each block of the shared error in use comes from: the online estimate or the
@@ -71,11 +76,12 @@ class FrameErrorEstimator {
   /// The next frame's motion T_prev_curr, measured (an accepted estimate), with the
   /// covariance of its xi = [t; q_xyz] without any shared error. `held_reference`: the frame
   /// (a keyframe) this frame's and the previous frame's poses were both measured against, if
-  /// any; a motion measured on its own has none. `measured`: the blocks the measurement
-  /// fixed; a block it did not fix is a gap for that block (below).
+  /// any; a motion measured on its own has none. `measured`: the directions the measurement
+  /// fixed; a block in which it fixed none is a gap for that block (below). A sample of three
+  /// motions reads the directions all three measured.
   void addMeasuredMotion(const Pose3& T_prev_curr, const Matrix6d& covariance,
                          std::optional<int64_t> held_reference = std::nullopt,
-                         MeasuredBlocks measured = {});
+                         MeasuredDirections measured = MeasuredDirections::all());
   /// The next frame had no measured motion (velocity model, lost, restarted): the
   /// differences of both blocks restart after it.
   void addGap();
@@ -94,7 +100,10 @@ class FrameErrorEstimator {
   /// One block (translation or rotation vector) of a measured motion.
   struct BlockMotion {
     Eigen::Vector3d m = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     double var = 0;  ///< per-axis mean variance
+    /// Directions with at most this variance were measured (infinite: all).
+    double max_variance = std::numeric_limits<double>::infinity();
     std::optional<int64_t> held_reference;
   };
   /// The second differences of one block: its last three motions without a gap and its

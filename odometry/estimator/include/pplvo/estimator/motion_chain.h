@@ -66,7 +66,7 @@ struct MotionChainOptions {
   /// (the depth filter's drop rule). The estimate and the keyframe rule do not use it.
   /// Estimated online from the roughness of the measured motions (FrameErrorEstimator) over
   /// the last `frame_error_window` of them, the translation and the rotation apart (a weak
-  /// estimate combined with the prediction measures the blocks it constrains); each block's
+  /// estimate combined with the prediction measures the directions it constrains); each block's
   /// sigma below is used until `frame_error_min_samples` of that block are in, and always
   /// when `frame_error_online` is false.
   bool frame_error_online = true;
@@ -227,9 +227,9 @@ class MotionChain {
   FrameErrorSource frameErrorSource() const;
 
  private:
-  /// The blocks of xi an estimate measured: all when accepted; of a weak one, those that
-  /// pass the estimator's acceptance on their own.
-  MeasuredBlocks blocksMeasuredBy(const PoseEstimate& est) const;
+  /// The directions of xi an estimate measured: all when accepted; of a weak one combined
+  /// with the prediction, those within the estimator's acceptance bounds.
+  MeasuredDirections directionsMeasuredBy(const PoseEstimate& est) const;
   void propagateWindow(int64_t seq, const Pose3& T_curr_prev, const Matrix6d& Q);
   MotionChainOutput makeOutput(int64_t seq) const;
 
