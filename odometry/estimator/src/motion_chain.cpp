@@ -41,7 +41,8 @@ MotionChain::MotionChain(MotionChainOptions options)
       frame_error_(options_.frame_error_window, options_.frame_error_min_samples) {}
 
 FrameErrorSource MotionChain::frameErrorSource() const {
-  // Each block online once it has its samples: a plain corridor measures only the rotation.
+  // Each block online once it has its own samples; one that nothing measured keeps the
+  // configured sigma.
   const bool online = options_.frame_error_online;
   return FrameErrorSource{online && frame_error_.translationReady(),
                           online && frame_error_.rotationReady()};
