@@ -65,21 +65,11 @@ void FrameErrorEstimator::addMeasuredMotion(const Pose3& T_prev_curr, const Matr
     return;
   }
   const Vector6d m = motionToVector(T_prev_curr);  // [t; rotation vector]
-  auto block = [&](const Eigen::Vector3d& motion, const Eigen::Matrix3d& cov,
-                   double max_variance) {
-    BlockMotion b;
-    b.m = motion;
-    b.cov = cov;
-    b.var = cov.trace() / 3.0;
-    b.max_variance = max_variance;
-    b.held_reference = held_reference;
-    return b;
-  };
-  const BlockMotion t = block(m.head<3>(), covariance.topLeftCorner<3, 3>(),
-                              measured.translation_max_variance);
+  const BlockMotion t{m.head<3>(), covariance.topLeftCorner<3, 3>(),
+                      measured.translation_max_variance, held_reference};
   // The rotation vector is twice q_xyz to first order: 4 times its variance.
-  const BlockMotion r = block(m.tail<3>(), 4.0 * covariance.bottomRightCorner<3, 3>(),
-                              4.0 * measured.rotation_max_variance);
+  const BlockMotion r{m.tail<3>(), 4.0 * covariance.bottomRightCorner<3, 3>(),
+                      4.0 * measured.rotation_max_variance, held_reference};
   if (translation_.add(t, window_samples_)) sigma_.t_m = translation_.sigma();
   if (rotation_.add(r, window_samples_)) sigma_.rot_rad = rotation_.sigma();
 }
@@ -90,7 +80,7 @@ void FrameErrorEstimator::addGap() {
 }
 
 bool FrameErrorEstimator::Block::add(const BlockMotion& motion, int window_samples) {
-  if (!(motion.cov.diagonal().minCoeff() <= motion.max_variance) &&
+  if (!std::isinf(motion.max_variance) &&
       !(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(motion.cov, Eigen::EigenvaluesOnly)
             .eigenvalues()(0) <= motion.max_variance)) {
     gap();  // nothing of this block was measured
@@ -104,7 +94,7 @@ bool FrameErrorEstimator::Block::add(const BlockMotion& motion, int window_sampl
   const BlockMotion& c = motions_[2];
   const Eigen::Vector3d d = c.m - 2.0 * b.m + a.m;
   // Per-axis variances of the three motions, over the directions all three measured.
-  double var_a = a.var, var_b = b.var, var_c = c.var;
+  double var_a = a.cov.trace() / 3.0, var_b = b.cov.trace() / 3.0, var_c = c.cov.trace() / 3.0;
   Sample s;
   if (std::isinf(a.max_variance) && std::isinf(b.max_variance) && std::isinf(c.max_variance)) {
     s.d_sq = d.squaredNorm();

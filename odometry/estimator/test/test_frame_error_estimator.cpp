@@ -123,7 +123,7 @@ TEST(FrameErrorEstimator, RecoversTheSharedErrorAndFollowsItWhenItDoubles) {
 }
 
 TEST(FrameErrorEstimator, EachBlockIsReadFromTheMotionsThatMeasuredIt) {
-  // A plain corridor: the weak estimates fix the rotation, the prediction (smooth) gives the
+  // Weak estimates that fixed only the rotation, the prediction (smooth) giving the whole
   // translation. The rotation's shared error is read from them; the translation is not ready
   // and reads none, where taking the predicted translation as measured would read ~0 as the
   // camera's error.

@@ -101,7 +101,6 @@ class FrameErrorEstimator {
   struct BlockMotion {
     Eigen::Vector3d m = Eigen::Vector3d::Zero();
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    double var = 0;  ///< per-axis mean variance
     /// Directions with at most this variance were measured (infinite: all).
     double max_variance = std::numeric_limits<double>::infinity();
     std::optional<int64_t> held_reference;
