@@ -29,14 +29,16 @@ int main(int argc, char** argv) {
         const nodes::EstimatorCounts& k = n.counts();
         return node::format(
             "[pplvo-estimator] done: %s; tracking %lld velocity %lld lost %lld reinit %lld; "
-            "keyframes %lld (fallbacks %lld); weak combined %lld, gated %lld; shared frame error "
-            "%.2f mm, %.3f deg (%s)\n%s",
-            msgs::countsText(c).c_str(), static_cast<long long>(k.tracking), static_cast<long long>(k.velocity_model),
-            static_cast<long long>(k.lost), static_cast<long long>(k.reinitialised),
-            static_cast<long long>(k.keyframes), static_cast<long long>(k.keyframe_fallbacks),
+            "keyframes %lld (fallbacks %lld, re-used %lld); weak combined %lld, gated %lld; "
+            "shared frame error %.2f mm, %.3f deg (%s)\n%s",
+            msgs::countsText(c).c_str(), static_cast<long long>(k.tracking),
+            static_cast<long long>(k.velocity_model), static_cast<long long>(k.lost),
+            static_cast<long long>(k.reinitialised), static_cast<long long>(k.keyframes),
+            static_cast<long long>(k.keyframe_fallbacks),
+            static_cast<long long>(k.keyframes_reused),
             static_cast<long long>(k.weak_estimates_combined),
-            static_cast<long long>(k.estimates_gated), 1e3 * k.frame_error.t_m, k.frame_error.rot_rad * 180.0 / M_PI,
-            k.frame_error_source.describe(),
+            static_cast<long long>(k.estimates_gated), 1e3 * k.frame_error.t_m,
+            k.frame_error.rot_rad * 180.0 / M_PI, k.frame_error_source.describe(),
             n.allTimings().table().c_str());
       });
 }

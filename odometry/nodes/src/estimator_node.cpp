@@ -127,6 +127,7 @@ void EstimatorNode::processWaiting() {
     counts_.keyframes = odometry_.keyframes().insertedCount();
     if (stats.new_keyframe) ++counts_.keyframe_reasons[static_cast<int>(stats.keyframe_reason)];
     if (stats.keyframe_fallback) ++counts_.keyframe_fallbacks;
+    if (stats.reused_keyframe) ++counts_.keyframes_reused;
     drops_without_reference_ = 0;
     publish(*step.pose, current, stats);
   }

@@ -1,6 +1,7 @@
 #include "pplvo/tracking/frame_tracker.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "pplvo/core/enum_names.h"
@@ -42,6 +43,9 @@ FrameTracker::FrameTracker(const TrackingOptions& options)
       tracker_(options.tracker),
       estimator_(options.tracker.estimator),
       structure_estimator_(structureOnly(options.tracker.estimator)),
+      keyframes_(options.reference == TrackingReference::kKeyframe
+                     ? options.keyframe.retired_keyframes
+                     : 0),
       mapper_(options.local_map, options.point_matching, options.tracker.estimator) {}
 
 void FrameTracker::forgetPending() {
@@ -60,6 +64,7 @@ estimator::MotionChainOutput FrameTracker::initialise(const FrameFeatures& first
   forgetPending();
   lifted_.setLastPosed(first.seq);
   resetKeyframes(first.seq, KeyframeReason::kStart);
+  keyframes_.forgetRetired();
   mapper_.reset();
   tracked_from_keyframe_.reset();
   last_posed_stamp_ = {first.seq, first.utime};
@@ -71,6 +76,7 @@ estimator::MotionChainOutput FrameTracker::restart(const FrameFeatures& current)
   forgetPending();
   lifted_.setLastPosed(current.seq);
   resetKeyframes(current.seq, KeyframeReason::kStart);
+  keyframes_.forgetRetired();
   mapper_.reset();  // its landmarks are not related to the frames after a restart
   tracked_from_keyframe_.reset();
   last_posed_stamp_ = {current.seq, current.utime};
@@ -178,6 +184,60 @@ std::optional<MapRelativePose> FrameTracker::structureMotion(const FrameFeatures
   return MapRelativePose{keyframe->seq(), est.T_curr_prev, est.covariance};
 }
 
+bool FrameTracker::reuseRetiredKeyframe(const FrameFeatures& current, TrackingStats& stats) {
+  const Keyframe* active = keyframes_.active();
+  if (active == nullptr || keyframes_.retired().empty()) return false;
+  // The nearest retired keyframe within the motion bounds of the keyframe rule (farther ones
+  // could not serve), nearness as the larger of the two fractions of those bounds.
+  const KeyframeOptions& rule = options_.keyframe;
+  const Pose3 T_w_c = tracker_.T_w_c();
+  const Keyframe* nearest = nullptr;
+  double nearest_fraction = 1.0;
+  for (const Keyframe& k : keyframes_.retired()) {
+    if (k.at_stamp != active->at_stamp || k.landmarks.camera != current.camera) continue;
+    const Pose3 T_c_k = T_w_c.inverse() * k.T_w_kf;
+    const double angle_deg = Eigen::AngleAxisd(T_c_k.linear()).angle() * 180.0 / M_PI;
+    const double fraction = std::max(T_c_k.translation().norm() / rule.max_translation_m,
+                                     angle_deg / rule.max_rotation_deg);
+    if (fraction < nearest_fraction) {
+      nearest = &k;
+      nearest_fraction = fraction;
+    }
+  }
+  if (nearest == nullptr || !nearest->baseline) return false;
+  const Pose3 T_c_k_predicted = T_w_c.inverse() * nearest->T_w_kf;
+  const FeatureMatches matches =
+      match(nearest->landmarks, current, T_c_k_predicted, options_.tracker.estimator);
+  estimator::PoseEstimate est;
+  {
+    ScopedStageTimer t(timings_, "pose");
+    est = estimator_.estimate(estimator::buildCorrespondences(nearest->landmarks, current, matches,
+                                                              options_.tracker.estimator),
+                              current.camera, T_c_k_predicted);
+  }
+  if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
+    return false;
+  }
+  // It must serve as well as the keyframe rule asks of the active one.
+  if (keyframeExhausted(rule, *nearest->baseline, est, est.T_curr_prev) != KeyframeReason::kNone) {
+    return false;
+  }
+  const int64_t seq = nearest->seq();
+  const Pose3 T_w_k = nearest->T_w_kf;
+  keyframes_.reactivate(seq);
+  pending_keyframe_.reset();
+  lifted_.dropObservations();  // they refine the keyframe retired here
+  if (rule.fuse_landmarks) {
+    lifted_.addObservation({current.seq, est.T_curr_prev.inverse(),
+                            invertedPoseCovariance(est.T_curr_prev, est.covariance),
+                            matches.points});
+  }
+  tracker_.correctPose(T_w_k * est.T_curr_prev.inverse());
+  measured_against_keyframe_ = {current.seq, seq};
+  stats.reused_keyframe = seq;
+  return true;
+}
+
 std::optional<int64_t> FrameTracker::fuseDueObservations() {
   // Landmark fusion one frame behind: the frames posed before the previous one refine the
   // keyframe now (their order of arrival does not matter, the result is the same).
@@ -232,7 +292,7 @@ bool FrameTracker::referenceCompensated() const {
   if (!last) return false;
   const bool keyframe_serves = usesKeyframes() && keyframes_.active() &&
                                !(pending_keyframe_ && pending_keyframe_->seq == *last);
-  return keyframe_serves ? keyframe_compensated_ : recentlyCompensated(*last);
+  return keyframe_serves ? keyframes_.active()->at_stamp : recentlyCompensated(*last);
 }
 
 TrackingStep FrameTracker::step(const FrameFeatures& current) {
@@ -290,6 +350,7 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
     if (current.camera != previous->camera) return restartOnOtherCamera();
     // The previous frame was chosen as keyframe: its 3D features (lifted on its fused depth)
     // are the keyframe's landmarks, its pose is the tracker's current one.
+    const bool at_stamp = recentlyCompensated(previous->seq);
     if (options_.reference == TrackingReference::kLocalMap) {
       ScopedStageTimer t(timings_, "local_map");
       std::optional<MapRelativePose> tracked;
@@ -303,11 +364,10 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
       // measured from its corrected pose (a jump in that motion would reach the velocity, the
       // rolling-shutter model and the shared-error estimate).
       tracker_.correctPose(inserted.T_w_kf);
-      keyframes_.insert(std::move(inserted.reference), inserted.T_w_kf);
+      keyframes_.insert(std::move(inserted.reference), inserted.T_w_kf, at_stamp);
     } else {
-      keyframes_.insert(*previous, tracker_.T_w_c());
+      keyframes_.insert(*previous, tracker_.T_w_c(), at_stamp);
     }
-    keyframe_compensated_ = recentlyCompensated(previous->seq);
     pending_keyframe_.reset();
     lifted_.dropObservations();  // they refine the keyframe replaced here
   }
@@ -325,6 +385,12 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
       measured_against_keyframe_.reset();
       if (out.pose->status == TrackingStatus::kTracking) {
         measured_against_keyframe_ = {current.seq, keyframe_seq};
+        if (pending_keyframe_ && pending_keyframe_->seq == current.seq &&
+            reuseRetiredKeyframe(current, s)) {
+          // Published with the pose measured against the earlier keyframe; the motion stays
+          // the one measured against the active keyframe (as a local map's correction).
+          out.pose->T_w_c = tracker_.T_w_c();
+        }
       }
       followFromKeyframe(current.seq, *last, *out.pose, &*through_keyframe);
       if (out.pose->status != TrackingStatus::kTracking) {

@@ -1,19 +1,46 @@
 #include "pplvo/tracking/keyframe_store.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 
 #include "pplvo/estimator/pose_parameterisation.h"
 
 namespace pplvo::tracking {
 
-void KeyframeStore::insert(FrameFeatures landmarks, const Pose3& T_w_kf) {
-  active_ = Keyframe{std::move(landmarks), T_w_kf, std::nullopt};
+void KeyframeStore::insert(FrameFeatures landmarks, const Pose3& T_w_kf, bool at_stamp) {
+  retireActive();
+  active_ = Keyframe{std::move(landmarks), T_w_kf, std::nullopt, at_stamp};
   ++inserted_;
+}
+
+void KeyframeStore::clear() {
+  retireActive();
+  active_.reset();
 }
 
 void KeyframeStore::reset() {
   active_.reset();
+  retired_.clear();
   inserted_ = 0;
+}
+
+void KeyframeStore::retireActive() {
+  // Without a baseline no frame was ever tracked against it: nothing says it can serve.
+  if (!active_ || !active_->baseline || max_retired_ <= 0) return;
+  retired_.push_back(std::move(*active_));
+  active_.reset();
+  while (static_cast<int>(retired_.size()) > max_retired_) retired_.pop_front();
+}
+
+bool KeyframeStore::reactivate(int64_t seq) {
+  const auto it = std::find_if(retired_.begin(), retired_.end(),
+                               [seq](const Keyframe& k) { return k.seq() == seq; });
+  if (it == retired_.end()) return false;
+  Keyframe chosen = std::move(*it);
+  retired_.erase(it);
+  retireActive();
+  active_ = std::move(chosen);
+  return true;
 }
 
 std::optional<int64_t> KeyframeStore::activeSeq() const {

@@ -146,4 +146,15 @@ inline long residentKiB() {
   return resident * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
+/// Two turns of a circle of 1.5 m radius looking outwards at the walls: the second turn
+/// passes every place of the first.
+inline std::vector<Pose3> twoTurns(int frames_per_turn) {
+  std::vector<Pose3> truth;
+  for (int k = 0; k < 2 * frames_per_turn; ++k) {
+    const double a = 2 * M_PI * k / frames_per_turn;
+    truth.push_back(poseOf({1.5 * std::sin(a), 0.1 * std::sin(3 * a), 1.5 * std::cos(a)}, a));
+  }
+  return truth;
+}
+
 }  // namespace pplvo::tracking::testing

@@ -20,6 +20,7 @@ using testing::LandmarkWorld;
 using testing::pointsOnly;
 using testing::poseOf;
 using testing::residentKiB;
+using testing::twoTurns;
 
 MapObservation observationAt(int64_t seq, const Eigen::Vector3d& p, double sigma = 0.01) {
   return {seq, p, sigma * sigma * Eigen::Matrix3d::Identity(), 0.5};
@@ -184,17 +185,6 @@ TEST(LocalMapper, LandmarksCarryTheirKeyframesUncertaintyIntoTheNewOne) {
   EXPECT_NEAR(covarianceOf(known, 8).trace(), 3e-6, 1e-12);
 }
 
-/// Two turns of a circle of 1.5 m radius looking outwards at the walls (500 frames a turn):
-/// the second turn passes every place of the first.
-std::vector<Pose3> twoTurns(int frames_per_turn = 500) {
-  std::vector<Pose3> truth;
-  for (int k = 0; k < 2 * frames_per_turn; ++k) {
-    const double a = 2 * M_PI * k / frames_per_turn;
-    truth.push_back(poseOf({1.5 * std::sin(a), 0.1 * std::sin(3 * a), 1.5 * std::cos(a)}, a));
-  }
-  return truth;
-}
-
 struct LoopRun {
   std::vector<Pose3> poses;
   double error_second_turn_m = 0;  ///< RMS position error over the second turn
@@ -228,8 +218,12 @@ LoopRun runLoop(const TrackingOptions& options, const std::vector<Pose3>& truth,
 }
 
 TEST(LocalMap, ReturnsReuseEarlierLandmarksAndDriftLessThanOneKeyframe) {
-  const std::vector<Pose3> truth = twoTurns();
-  const LoopRun keyframe = runLoop(pointsOnly(TrackingReference::kKeyframe), truth);
+  const std::vector<Pose3> truth = twoTurns(500);
+  // One chain of keyframes: without the retired keyframes the keyframe default re-uses on
+  // returns (test_keyframes.cpp has that comparison).
+  TrackingOptions one_chain = pointsOnly(TrackingReference::kKeyframe);
+  one_chain.keyframe.retired_keyframes = 0;
+  const LoopRun keyframe = runLoop(one_chain, truth);
   FrameTracker tracker(pointsOnly(TrackingReference::kLocalMap));
   const LoopRun local = runLoop(pointsOnly(TrackingReference::kLocalMap), truth, &tracker);
   std::printf("second turn RMS error: keyframe %.2f mm, local map %.2f mm\n",

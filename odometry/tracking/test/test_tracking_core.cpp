@@ -47,6 +47,57 @@ TEST(KeyframeStore, InsertReplacesTheActiveKeyframeAndCounts) {
   EXPECT_EQ(store.insertedCount(), 0);
 }
 
+TEST(KeyframeStore, RetiredKeyframesAreKeptBoundedAndReactivated) {
+  KeyframeStore store(2);
+  Pose3 T = Pose3::Identity();
+  // A keyframe no frame was tracked against (no baseline) is not kept.
+  store.insert(withPoints(1, {{0, 0, 2}}, 1e-4), T);
+  store.insert(withPoints(2, {{0, 0, 2}}, 1e-4), T);
+  EXPECT_TRUE(store.retired().empty());
+  for (int64_t seq = 3; seq <= 5; ++seq) {
+    store.setBaseline({100, 1e-6, 1e-6});  // keyframe seq - 1 served
+    T.translation().x() = 0.1 * static_cast<double>(seq);
+    store.insert(withPoints(seq, {{0, 0, 2}}, 1e-4), T, seq == 5);
+  }
+  // 2, 3 and 4 were retired; only the newest two are kept, oldest first.
+  ASSERT_EQ(store.retired().size(), 2u);
+  EXPECT_EQ(store.retired()[0].seq(), 3);
+  EXPECT_EQ(store.retired()[1].seq(), 4);
+  EXPECT_NEAR(store.retired()[0].T_w_kf.translation().x(), 0.3, 1e-12);
+  EXPECT_TRUE(store.retired()[0].baseline);
+  EXPECT_TRUE(store.active()->at_stamp);
+
+  // Reactivation swaps: the chosen one is active with its baseline and pose, the active one
+  // (it has a baseline) is retired in its place; the count of keyframes taken is unchanged.
+  store.setBaseline({80, 2e-6, 2e-6});
+  EXPECT_FALSE(store.reactivate(7));
+  ASSERT_TRUE(store.reactivate(3));
+  EXPECT_EQ(store.activeSeq(), 3);
+  ASSERT_TRUE(store.active()->baseline);
+  EXPECT_EQ(store.active()->baseline->rows, 100);
+  EXPECT_FALSE(store.active()->at_stamp);
+  ASSERT_EQ(store.retired().size(), 2u);
+  EXPECT_EQ(store.retired()[0].seq(), 4);
+  EXPECT_EQ(store.retired()[1].seq(), 5);
+  EXPECT_EQ(store.retired()[1].baseline->rows, 80);
+  EXPECT_EQ(store.insertedCount(), 5);
+
+  // clear() retires as insert() does; forgetRetired() and reset() drop them.
+  store.clear();
+  EXPECT_EQ(store.active(), nullptr);
+  EXPECT_EQ(store.retired().back().seq(), 3);
+  store.forgetRetired();
+  EXPECT_TRUE(store.retired().empty());
+  EXPECT_EQ(store.insertedCount(), 5);
+
+  // With none to keep (the default), nothing is retired.
+  KeyframeStore none;
+  none.insert(withPoints(1, {{0, 0, 2}}, 1e-4), T);
+  none.setBaseline({100, 1e-6, 1e-6});
+  none.insert(withPoints(2, {{0, 0, 2}}, 1e-4), T);
+  EXPECT_TRUE(none.retired().empty());
+}
+
 TEST(KeyframeStore, FusionIsInformationWeightedAndGated) {
   KeyframeStore store;
   // Landmarks at z = 2 m (variance 4e-4 m^2 per axis); the observing frame sits 0.1 m to the

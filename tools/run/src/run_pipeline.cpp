@@ -104,6 +104,7 @@ std::string RunResult::text() const {
     std::snprintf(buf, sizeof buf, "keyframes: %lld (fallbacks to the previous frame %lld)\n",
                   static_cast<long long>(keyframes), static_cast<long long>(keyframe_fallbacks));
     out << buf << "  chosen for: " << keyframe_reasons << "\n";
+    if (keyframes_reused > 0) out << "  earlier keyframes re-used: " << keyframes_reused << "\n";
   }
   if (poses > 1) {
     std::snprintf(buf, sizeof buf, "shared frame error: %.2f mm, %.3f deg per axis (%s)\n",
@@ -144,7 +145,8 @@ std::string RunResult::yaml() const {
       << "status: {first: " << first << ", tracking: " << tracking
       << ", velocity_model: " << velocity_model << ", lost: " << lost
       << ", reinitialised: " << reinitialised << "}\n"
-      << "keyframes: {taken: " << keyframes << ", fallbacks: " << keyframe_fallbacks << "}\n"
+      << "keyframes: {taken: " << keyframes << ", fallbacks: " << keyframe_fallbacks
+      << ", reused: " << keyframes_reused << "}\n"
       << "frame_error: {sigma_t_m: " << frame_error_sigma_t_m
       << ", sigma_rot_deg: " << frame_error_sigma_rot_deg
       << ", estimated: " << (frame_error_source.online() ? "true" : "false")
@@ -275,6 +277,7 @@ RunResult runPipeline(const RunOptions& options) {
         {nodes::EstimatorNode::kName, estimator.counters(), estimator.allTimings()});
     result.keyframes = estimator.counts().keyframes;
     result.keyframe_fallbacks = estimator.counts().keyframe_fallbacks;
+    result.keyframes_reused = estimator.counts().keyframes_reused;
     result.frame_error_sigma_t_m = estimator.counts().frame_error.t_m;
     result.frame_error_sigma_rot_deg = estimator.counts().frame_error.rot_rad * 180.0 / M_PI;
     result.frame_error_source = estimator.counts().frame_error_source;

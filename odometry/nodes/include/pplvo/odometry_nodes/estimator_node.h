@@ -69,6 +69,8 @@ struct EstimatorCounts : TrackingStatusCounts {
   /// Keyframe tracking (odometry.reference: keyframe): keyframes chosen, and frames whose
   /// keyframe estimate failed so that the previous frame served.
   int64_t keyframes = 0, keyframe_fallbacks = 0;
+  /// Earlier keyframes made active again instead of a new one (keyframe.retired_keyframes).
+  int64_t keyframes_reused = 0;
   /// Keyframes chosen, by tracking::KeyframeReason.
   std::array<int64_t, tracking::kKeyframeReasons> keyframe_reasons{};
   /// The per-frame shared error of the last published pose, and which of its blocks were

@@ -98,6 +98,9 @@ struct TrackingStats {
   std::optional<int64_t> reference_seq;
   bool keyframe_fallback = false;  ///< the keyframe estimate failed; the previous frame served
   bool new_keyframe = false;       ///< this frame becomes the next frame's keyframe
+  /// An earlier keyframe became active again instead of a new one (keyframe.retired_keyframes):
+  /// its sequence number; this frame's world pose is the one measured against it.
+  std::optional<int64_t> reused_keyframe;
   KeyframeReason keyframe_reason = KeyframeReason::kNone;  ///< why, if new_keyframe
 };
 
@@ -197,6 +200,10 @@ class FrameTracker {
   /// The pose of `lifted` (the next keyframe) relative to the active keyframe from lines and
   /// planes alone, for the local map's bundle adjustment; nullopt when they do not give one.
   std::optional<MapRelativePose> structureMotion(const FrameFeatures& lifted);
+  /// When `current` (just posed, tracking) exhausted the active keyframe: the nearest retired
+  /// keyframe that still serves it becomes active instead of a new keyframe, and the world
+  /// pose becomes the one measured against it. False (nothing changed) when none serves.
+  bool reuseRetiredKeyframe(const FrameFeatures& current, TrackingStats& stats);
   /// Fuses the observations whose 3D stage is due; the frame it waits for otherwise.
   std::optional<int64_t> fuseDueObservations();
   /// No active keyframe; with keyframes, `next` becomes one once its 3D stage is in.
@@ -237,10 +244,9 @@ class FrameTracker {
   /// Time between consecutive frames (s), from their stamps; 0 until two frames were posed.
   double frame_interval_s_ = 0;
   std::optional<std::pair<int64_t, int64_t>> last_posed_stamp_;  ///< (seq, utime)
-  /// The recent frames whose 3D stage was moved to its stamp, and whether the active
-  /// keyframe's was: a frame is compensated only against a compensated reference.
+  /// The recent frames whose 3D stage was moved to its stamp (a keyframe says so itself,
+  /// Keyframe::at_stamp): a frame is compensated only against a compensated reference.
   std::deque<int64_t> compensated_lifted_;
-  bool keyframe_compensated_ = false;
 };
 
 }  // namespace pplvo::tracking

@@ -32,6 +32,13 @@ struct KeyframeOptions {
   /// Gate on the squared Mahalanobis distance between the keyframe point and the moved
   /// observation (3 dof; 7.81 = 95 %).
   double fusion_gate_chi2 = 7.81;
+  /// Keyframes kept after they were replaced (reference: keyframe), oldest dropped first.
+  /// When the active keyframe is exhausted, the nearest of them that still serves the frame
+  /// (the rules above, against its own first frame) becomes active again instead of a new
+  /// keyframe: a camera that returns is tracked against what it measured there before, and
+  /// the error of the keyframes taken since does not stay in its pose. 0: none kept.
+  /// About 0.5 MB each at VGA (the plane labels are most of it).
+  int retired_keyframes = 128;
 };
 
 /// Schema of KeyframeOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
@@ -55,6 +62,11 @@ void visit(V& v, KeyframeOptions& o) {
   v.field("fusion_gate_chi2", o.fusion_gate_chi2,
           "gate on the squared Mahalanobis distance of an observation (3 dof; 7.81 = 95 %)",
           config::positive());
+  v.field("retired_keyframes", o.retired_keyframes,
+          "keyframes kept after they were replaced (reference: keyframe); when the active one "
+          "is exhausted, the nearest of them that still serves the frame becomes active again "
+          "instead of a new keyframe (a return to an earlier place); 0: none",
+          config::between(0, 4096));
 }
 
 /// Why a frame was chosen as the next keyframe.

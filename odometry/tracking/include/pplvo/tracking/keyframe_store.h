@@ -11,6 +11,7 @@
 ///
 /// Thread safety: none. One owner (the FrameTracker) uses it from one thread.
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -43,17 +44,34 @@ struct Keyframe {
   Pose3 T_w_kf = Pose3::Identity();
   /// Unset until a frame was tracked against the keyframe and kept tracking.
   std::optional<KeyframeBaseline> baseline;
+  /// Whether its 3D features were moved to their stamp (rolling shutter): a frame is tracked
+  /// against it at its own stamp only then.
+  bool at_stamp = false;
   int64_t seq() const { return landmarks.seq; }
 };
 
 class KeyframeStore {
  public:
-  /// Makes `landmarks` (a frame's 3D stage), at world pose `T_w_kf`, the active keyframe.
-  void insert(FrameFeatures landmarks, const Pose3& T_w_kf);
-  /// No active keyframe (tracking restarts, or the keyframe failed).
-  void clear() { active_.reset(); }
-  /// Forgets everything, the count of keyframes included.
+  /// Keeps up to `max_retired` keyframes after they were replaced (0: none), oldest dropped
+  /// first: a camera that returns can be tracked against them again.
+  explicit KeyframeStore(int max_retired = 0) : max_retired_(max_retired) {}
+
+  /// Makes `landmarks` (a frame's 3D stage), at world pose `T_w_kf`, the active keyframe; the
+  /// one it replaces is retired if a frame was tracked against it (it has a baseline).
+  void insert(FrameFeatures landmarks, const Pose3& T_w_kf, bool at_stamp = false);
+  /// No active keyframe (the keyframe failed); it is retired as insert() does.
+  void clear();
+  /// Forgets everything, the retired keyframes and the count of keyframes included.
   void reset();
+  /// Forgets the retired keyframes (tracking restarts: the world poses of what came before
+  /// are not related to what comes next).
+  void forgetRetired() { retired_.clear(); }
+
+  /// Keyframes replaced earlier, oldest first; their world poses never change.
+  const std::deque<Keyframe>& retired() const { return retired_; }
+  /// Makes the retired keyframe `seq` active again, the active one retired in its place.
+  /// False (nothing changed) if there is no such retired keyframe.
+  bool reactivate(int64_t seq);
 
   const Keyframe* active() const { return active_ ? &*active_ : nullptr; }
   /// The active keyframe's sequence number, if there is one.
@@ -72,7 +90,11 @@ class KeyframeStore {
   int fuse(const KeyframeObservation& observation, const FrameFeatures& observed, double gate_chi2);
 
  private:
+  void retireActive();
+
   std::optional<Keyframe> active_;
+  std::deque<Keyframe> retired_;
+  int max_retired_ = 0;
   int64_t inserted_ = 0;
 };
 

@@ -69,6 +69,7 @@ struct RunResult : TrackingStatusCounts {
   int64_t frames_published = 0, frames_skipped = 0;
   int64_t poses = 0;
   int64_t keyframes = 0, keyframe_fallbacks = 0;  ///< the estimator's (reference: keyframe)
+  int64_t keyframes_reused = 0;  ///< earlier keyframes made active again (retired_keyframes)
   /// The per-frame shared error at the last pose (std per axis) and which of its blocks were
   /// estimated online; zeros when nothing was posed.
   double frame_error_sigma_t_m = 0.0, frame_error_sigma_rot_deg = 0.0;
