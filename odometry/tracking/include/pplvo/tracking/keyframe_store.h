@@ -1,13 +1,14 @@
 #pragma once
 /// The keyframe and its landmarks: the data that frames are tracked against, apart from the
 /// rules that decide when a keyframe is taken (keyframe_rule.h) and how a frame is tracked
-/// (frame_tracker.h). docs/estimator.md, "Keyframes" and "Keyframe landmarks".
+/// (frame_tracker.h). docs/estimator.md, "Keyframes", "Returns to an earlier place" and
+/// "Keyframe landmarks".
 ///
 /// The store holds the active keyframe: its 3D features (points, lines and planes lifted on
 /// its fused depth, each with its covariance), its world pose, and what the first frame
 /// tracked against it achieved. Landmark fusion refines its points with the observations of
-/// later frames. It is the home a windowed local map grows into (several keyframes, queries by
-/// covisibility).
+/// later frames. The keyframes it replaced are kept, bounded, unchanged, so that the tracker
+/// can make one active again when the camera returns ("Returns to an earlier place").
 ///
 /// Thread safety: none. One owner (the FrameTracker) uses it from one thread.
 #include <cstdint>
