@@ -28,6 +28,11 @@ estimator::PoseEstimatorOptions structureOnly(estimator::PoseEstimatorOptions o)
   return o;
 }
 
+/// An estimate a pose can be built on: accepted, a valid rigid motion, a finite covariance.
+bool usable(const estimator::PoseEstimate& est) {
+  return est.accepted() && isValidPose(est.T_curr_prev, 1e-6) && est.covariance.allFinite();
+}
+
 }  // namespace
 
 bool parseTrackingReference(const std::string& text, TrackingReference* out) {
@@ -178,9 +183,7 @@ std::optional<MapRelativePose> FrameTracker::structureMotion(const FrameFeatures
       estimator::buildCorrespondences(keyframe->landmarks, lifted, matches,
                                       structure_estimator_.options()),
       lifted.camera, T_new_kf_predicted);
-  if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
-    return std::nullopt;
-  }
+  if (!usable(est)) return std::nullopt;
   return MapRelativePose{keyframe->seq(), est.T_curr_prev, est.covariance};
 }
 
@@ -205,21 +208,12 @@ bool FrameTracker::reuseRetiredKeyframe(const FrameFeatures& current, TrackingSt
     }
   }
   if (nearest == nullptr || !nearest->baseline) return false;
-  const Pose3 T_c_k_predicted = T_w_c.inverse() * nearest->T_w_kf;
-  const FeatureMatches matches =
-      match(nearest->landmarks, current, T_c_k_predicted, options_.tracker.estimator);
-  estimator::PoseEstimate est;
-  {
-    ScopedStageTimer t(timings_, "pose");
-    est = estimator_.estimate(estimator::buildCorrespondences(nearest->landmarks, current, matches,
-                                                              options_.tracker.estimator),
-                              current.camera, T_c_k_predicted);
-  }
-  if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
-    return false;
-  }
+  FeatureMatches matches;
+  const estimator::PoseEstimate est =
+      estimateAgainst(nearest->landmarks, current, T_w_c.inverse() * nearest->T_w_kf, matches);
   // It must serve as well as the keyframe rule asks of the active one.
-  if (keyframeExhausted(rule, *nearest->baseline, est, est.T_curr_prev) != KeyframeReason::kNone) {
+  if (!usable(est) ||
+      keyframeExhausted(rule, *nearest->baseline, est, est.T_curr_prev) != KeyframeReason::kNone) {
     return false;
   }
   const int64_t seq = nearest->seq();
@@ -227,11 +221,7 @@ bool FrameTracker::reuseRetiredKeyframe(const FrameFeatures& current, TrackingSt
   keyframes_.reactivate(seq);
   pending_keyframe_.reset();
   lifted_.dropObservations();  // they refine the keyframe retired here
-  if (rule.fuse_landmarks) {
-    lifted_.addObservation({current.seq, est.T_curr_prev.inverse(),
-                            invertedPoseCovariance(est.T_curr_prev, est.covariance),
-                            matches.points});
-  }
+  observeKeyframe(current.seq, est, matches);
   tracker_.correctPose(T_w_k * est.T_curr_prev.inverse());
   measured_against_keyframe_ = {current.seq, seq};
   stats.reused_keyframe = seq;
@@ -510,6 +500,26 @@ void FrameTracker::followFromKeyframe(int64_t seq, int64_t previous_seq,
   tracked_from_keyframe_ = {seq, chained};
 }
 
+estimator::PoseEstimate FrameTracker::estimateAgainst(const FrameFeatures& landmarks,
+                                                      const FrameFeatures& current,
+                                                      const Pose3& T_curr_kf_predicted,
+                                                      FeatureMatches& matches) {
+  matches = match(landmarks, current, T_curr_kf_predicted, options_.tracker.estimator);
+  ScopedStageTimer t(timings_, "pose");
+  return estimator_.estimate(
+      estimator::buildCorrespondences(landmarks, current, matches, options_.tracker.estimator),
+      current.camera, T_curr_kf_predicted);
+}
+
+void FrameTracker::observeKeyframe(int64_t seq, const estimator::PoseEstimate& against_keyframe,
+                                   const FeatureMatches& matches) {
+  if (!options_.keyframe.fuse_landmarks) return;
+  const Pose3& T_curr_kf = against_keyframe.T_curr_prev;
+  lifted_.addObservation({seq, T_curr_kf.inverse(),
+                          invertedPoseCovariance(T_curr_kf, against_keyframe.covariance),
+                          matches.points});
+}
+
 std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(
     const FrameFeatures& current, TrackingStats& stats) {
   const Keyframe& keyframe = *keyframes_.active();
@@ -517,26 +527,15 @@ std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(
   // The tracker's pose is the previous frame's: T_prev_kf chains the prediction.
   const Pose3 T_prev_kf = tracker_.T_w_c().inverse() * keyframe.T_w_kf;
   const Pose3 T_curr_kf_predicted = tracker_.predictedMotion() * T_prev_kf;
-  const FeatureMatches matches =
-      match(keyframe.landmarks, current, T_curr_kf_predicted, options_.tracker.estimator);
+  FeatureMatches matches;
+  estimator::PoseEstimate est =
+      estimateAgainst(keyframe.landmarks, current, T_curr_kf_predicted, matches);
   countMatches(matches, stats);
   stats.reference_seq = keyframe.seq();
-  estimator::PoseEstimate est;
-  {
-    ScopedStageTimer t(timings_, "pose");
-    est = estimator_.estimate(estimator::buildCorrespondences(keyframe.landmarks, current, matches,
-                                                              options_.tracker.estimator),
-                              current.camera, T_curr_kf_predicted);
-  }
-  if (!est.accepted() || !isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) {
-    return std::nullopt;
-  }
+  if (!usable(est)) return std::nullopt;
   const Pose3 T_curr_kf = est.T_curr_prev;
   keyframe_estimate_ = {current.seq, MapRelativePose{keyframe.seq(), T_curr_kf, est.covariance}};
-  if (options_.keyframe.fuse_landmarks) {
-    lifted_.addObservation({current.seq, T_curr_kf.inverse(),
-                            invertedPoseCovariance(T_curr_kf, est.covariance), matches.points});
-  }
+  observeKeyframe(current.seq, est, matches);
   const KeyframeReason exhausted = keyframeExhausted(
       options_.keyframe, keyframe.baseline.value_or(KeyframeBaseline{}), est, T_curr_kf);
   if (exhausted != KeyframeReason::kNone) pending_keyframe_ = {current.seq, exhausted};

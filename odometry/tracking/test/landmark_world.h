@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -155,6 +156,47 @@ inline std::vector<Pose3> twoTurns(int frames_per_turn) {
     truth.push_back(poseOf({1.5 * std::sin(a), 0.1 * std::sin(3 * a), 1.5 * std::cos(a)}, a));
   }
   return truth;
+}
+
+/// A run over two turns (twoTurns): errors of the second half, keyframes of each half.
+struct TurnsRun {
+  std::vector<Pose3> poses;
+  double error_second_turn_m = 0;  ///< RMS position error over the second half
+  int not_tracking = 0;
+  int keyframes_first_turn = 0, keyframes_second_turn = 0;
+  int reused_from_first_turn = 0;  ///< second-half frames that made a first-half keyframe active
+};
+
+/// Tracks `truth` (fabricated landmarks, world seed 11, every second point) with `options`,
+/// or with `*tracker` when given (to inspect it afterwards).
+inline TurnsRun runTurns(const TrackingOptions& options, const std::vector<Pose3>& truth,
+                         FrameTracker* tracker = nullptr) {
+  LandmarkWorld world(11);
+  FrameTracker own(options);
+  FrameTracker& odometry = tracker ? *tracker : own;
+  FrameFeatures reference;
+  TurnsRun r;
+  const int half = static_cast<int>(truth.size()) / 2;
+  double sum2 = 0;
+  int n = 0;
+  for (int k = 0; k < static_cast<int>(truth.size()); ++k) {
+    auto [f2, f3] = world.observe(k, truth[k], 2);
+    TrackingStats s;
+    const estimator::MotionChainOutput out =
+        k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2, &s);
+    reference = std::move(f3);
+    if (k > 0 && out.status != TrackingStatus::kTracking) ++r.not_tracking;
+    if (s.new_keyframe || k == 0) ++(k < half ? r.keyframes_first_turn : r.keyframes_second_turn);
+    if (k >= half && s.reused_keyframe && *s.reused_keyframe < half) ++r.reused_from_first_turn;
+    r.poses.push_back(out.T_w_c);
+    if (k >= half) {
+      const Pose3 expected = truth[0].inverse() * truth[k];
+      sum2 += (expected.translation() - out.T_w_c.translation()).squaredNorm();
+      ++n;
+    }
+  }
+  r.error_second_turn_m = std::sqrt(sum2 / std::max(1, n));
+  return r;
 }
 
 }  // namespace pplvo::tracking::testing

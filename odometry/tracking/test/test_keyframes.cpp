@@ -20,6 +20,8 @@ using testing::LandmarkWorld;
 using testing::poseOf;
 using testing::pointsOnly;
 using testing::residentKiB;
+using testing::runTurns;
+using testing::TurnsRun;
 using testing::twoTurns;
 
 
@@ -156,40 +158,6 @@ TEST(Keyframes, DriftStaysBoundedWhereFrameToFrameAccumulates) {
   EXPECT_LE(kf.keyframes, 5);
   EXPECT_LT(kf.max_error_m, 0.5 * f2f.max_error_m);
   EXPECT_LT(kf.max_error_deg, 0.5 * f2f.max_error_deg);
-}
-
-struct TurnsRun {
-  double error_second_turn_m = 0;  ///< RMS position error over the second turn
-  int not_tracking = 0;
-  int keyframes_first_turn = 0, keyframes_second_turn = 0;
-  int reused_from_first_turn = 0;  ///< second-turn frames that made a first-turn keyframe active
-  std::vector<Pose3> poses;
-};
-
-TurnsRun runTurns(const TrackingOptions& options, const std::vector<Pose3>& truth) {
-  LandmarkWorld world(11);
-  FrameTracker odometry(options);
-  FrameFeatures reference;
-  TurnsRun r;
-  const int half = static_cast<int>(truth.size()) / 2;
-  double sum2 = 0;
-  for (int k = 0; k < static_cast<int>(truth.size()); ++k) {
-    auto [f2, f3] = world.observe(k, truth[k], 2);
-    TrackingStats s;
-    const estimator::MotionChainOutput out =
-        k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2, &s);
-    reference = std::move(f3);
-    if (k > 0 && out.status != TrackingStatus::kTracking) ++r.not_tracking;
-    if (s.new_keyframe || k == 0) ++(k < half ? r.keyframes_first_turn : r.keyframes_second_turn);
-    if (k >= half && s.reused_keyframe && *s.reused_keyframe < half) ++r.reused_from_first_turn;
-    r.poses.push_back(out.T_w_c);
-    if (k >= half) {
-      const Pose3 expected = truth[0].inverse() * truth[k];
-      sum2 += (expected.translation() - out.T_w_c.translation()).squaredNorm();
-    }
-  }
-  r.error_second_turn_m = std::sqrt(sum2 / std::max(1, half));
-  return r;
 }
 
 TEST(Keyframes, ReturnsAreTrackedAgainstTheEarlierKeyframes) {

@@ -20,6 +20,8 @@ using testing::LandmarkWorld;
 using testing::pointsOnly;
 using testing::poseOf;
 using testing::residentKiB;
+using testing::runTurns;
+using testing::TurnsRun;
 using testing::twoTurns;
 
 MapObservation observationAt(int64_t seq, const Eigen::Vector3d& p, double sigma = 0.01) {
@@ -185,47 +187,15 @@ TEST(LocalMapper, LandmarksCarryTheirKeyframesUncertaintyIntoTheNewOne) {
   EXPECT_NEAR(covarianceOf(known, 8).trace(), 3e-6, 1e-12);
 }
 
-struct LoopRun {
-  std::vector<Pose3> poses;
-  double error_second_turn_m = 0;  ///< RMS position error over the second turn
-  int not_tracking = 0;
-};
-
-LoopRun runLoop(const TrackingOptions& options, const std::vector<Pose3>& truth,
-                FrameTracker* tracker_out = nullptr) {
-  LandmarkWorld world(11);
-  FrameTracker own(options);
-  FrameTracker& odometry = tracker_out ? *tracker_out : own;
-  FrameFeatures reference;
-  LoopRun r;
-  double sum2 = 0;
-  int n = 0;
-  for (int k = 0; k < static_cast<int>(truth.size()); ++k) {
-    auto [f2, f3] = world.observe(k, truth[k], 2);
-    const estimator::MotionChainOutput out =
-        k == 0 ? odometry.initialise(f2) : odometry.track(reference, f2);
-    reference = std::move(f3);
-    if (k > 0 && out.status != TrackingStatus::kTracking) ++r.not_tracking;
-    r.poses.push_back(out.T_w_c);
-    if (k >= static_cast<int>(truth.size()) / 2) {
-      const Pose3 expected = truth[0].inverse() * truth[k];
-      sum2 += (expected.translation() - out.T_w_c.translation()).squaredNorm();
-      ++n;
-    }
-  }
-  r.error_second_turn_m = std::sqrt(sum2 / std::max(1, n));
-  return r;
-}
-
 TEST(LocalMap, ReturnsReuseEarlierLandmarksAndDriftLessThanOneKeyframe) {
   const std::vector<Pose3> truth = twoTurns(500);
   // One chain of keyframes: without the retired keyframes the keyframe default re-uses on
   // returns (test_keyframes.cpp has that comparison).
   TrackingOptions one_chain = pointsOnly(TrackingReference::kKeyframe);
   one_chain.keyframe.retired_keyframes = 0;
-  const LoopRun keyframe = runLoop(one_chain, truth);
+  const TurnsRun keyframe = runTurns(one_chain, truth);
   FrameTracker tracker(pointsOnly(TrackingReference::kLocalMap));
-  const LoopRun local = runLoop(pointsOnly(TrackingReference::kLocalMap), truth, &tracker);
+  const TurnsRun local = runTurns(pointsOnly(TrackingReference::kLocalMap), truth, &tracker);
   std::printf("second turn RMS error: keyframe %.2f mm, local map %.2f mm\n",
               1e3 * keyframe.error_second_turn_m, 1e3 * local.error_second_turn_m);
   EXPECT_EQ(keyframe.not_tracking, 0);
@@ -245,8 +215,8 @@ TEST(LocalMap, ReturnsReuseEarlierLandmarksAndDriftLessThanOneKeyframe) {
 TEST(LocalMap, TrackingIsDeterministic) {
   std::vector<Pose3> truth = twoTurns(200);
   truth.resize(250);
-  const LoopRun a = runLoop(pointsOnly(TrackingReference::kLocalMap), truth);
-  const LoopRun b = runLoop(pointsOnly(TrackingReference::kLocalMap), truth);
+  const TurnsRun a = runTurns(pointsOnly(TrackingReference::kLocalMap), truth);
+  const TurnsRun b = runTurns(pointsOnly(TrackingReference::kLocalMap), truth);
   ASSERT_EQ(a.poses.size(), b.poses.size());
   for (size_t k = 0; k < a.poses.size(); ++k) {
     EXPECT_EQ(a.poses[k].matrix(), b.poses[k].matrix()) << k;  // bit for bit

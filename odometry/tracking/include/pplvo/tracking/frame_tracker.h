@@ -190,6 +190,16 @@ class FrameTracker {
   void followFromKeyframe(int64_t seq, int64_t previous_seq,
                           const estimator::MotionChainOutput& pose,
                           const estimator::PoseEstimate* through_keyframe);
+  /// Matches `current` against a keyframe's `landmarks` (gates around T_curr_kf_predicted)
+  /// into `matches` and estimates T_curr_kf from them.
+  estimator::PoseEstimate estimateAgainst(const FrameFeatures& landmarks,
+                                          const FrameFeatures& current,
+                                          const Pose3& T_curr_kf_predicted,
+                                          FeatureMatches& matches);
+  /// Frame `seq`, estimated against the active keyframe, as an observation of its landmarks,
+  /// fused once the frame's 3D stage is in (keyframe.fuse_landmarks).
+  void observeKeyframe(int64_t seq, const estimator::PoseEstimate& against_keyframe,
+                       const FeatureMatches& matches);
   /// The estimate of T_curr_prev through the active keyframe, or nullopt when rejected.
   std::optional<estimator::PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
                                                               TrackingStats& stats);
