@@ -193,12 +193,12 @@ bool FrameTracker::reuseRetiredKeyframe(const FrameFeatures& current, TrackingSt
   // The nearest retired keyframe within the motion bounds of the keyframe rule (farther ones
   // could not serve), nearness as the larger of the two fractions of those bounds.
   const KeyframeOptions& rule = options_.keyframe;
-  const Pose3 T_w_c = tracker_.T_w_c();
+  const Pose3 T_c_w = tracker_.T_w_c().inverse();
   const Keyframe* nearest = nullptr;
   double nearest_fraction = 1.0;
   for (const Keyframe& k : keyframes_.retired()) {
     if (k.at_stamp != active->at_stamp || k.landmarks.camera != current.camera) continue;
-    const Pose3 T_c_k = T_w_c.inverse() * k.T_w_kf;
+    const Pose3 T_c_k = T_c_w * k.T_w_kf;
     const double angle_deg = Eigen::AngleAxisd(T_c_k.linear()).angle() * 180.0 / M_PI;
     const double fraction = std::max(T_c_k.translation().norm() / rule.max_translation_m,
                                      angle_deg / rule.max_rotation_deg);
@@ -210,7 +210,7 @@ bool FrameTracker::reuseRetiredKeyframe(const FrameFeatures& current, TrackingSt
   if (nearest == nullptr || !nearest->baseline) return false;
   FeatureMatches matches;
   const estimator::PoseEstimate est =
-      estimateAgainst(nearest->landmarks, current, T_w_c.inverse() * nearest->T_w_kf, matches);
+      estimateAgainst(nearest->landmarks, current, T_c_w * nearest->T_w_kf, matches);
   // It must serve as well as the keyframe rule asks of the active one.
   if (!usable(est) ||
       keyframeExhausted(rule, *nearest->baseline, est, est.T_curr_prev) != KeyframeReason::kNone) {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <utility>
 #include <vector>
@@ -167,13 +168,15 @@ struct TurnsRun {
   int reused_from_first_turn = 0;  ///< second-half frames that made a first-half keyframe active
 };
 
-/// Tracks `truth` (fabricated landmarks, world seed 11, every second point) with `options`,
-/// or with `*tracker` when given (to inspect it afterwards).
+/// Tracks `truth` (fabricated landmarks, world seed 11, every second point) with a tracker
+/// made from `options`, or with `*tracker` when given (to inspect it afterwards; `options`
+/// unused then).
 inline TurnsRun runTurns(const TrackingOptions& options, const std::vector<Pose3>& truth,
                          FrameTracker* tracker = nullptr) {
   LandmarkWorld world(11);
-  FrameTracker own(options);
-  FrameTracker& odometry = tracker ? *tracker : own;
+  std::optional<FrameTracker> own;
+  if (tracker == nullptr) own.emplace(options);
+  FrameTracker& odometry = tracker ? *tracker : *own;
   FrameFeatures reference;
   TurnsRun r;
   const int half = static_cast<int>(truth.size()) / 2;
