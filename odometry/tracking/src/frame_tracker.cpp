@@ -243,21 +243,22 @@ std::optional<int64_t> FrameTracker::fuseDueObservations() {
   return std::nullopt;
 }
 
-std::optional<Eigen::Vector3d> FrameTracker::smoothedAngularVelocity(int64_t seq) const {
-  // The mean over the frames posed before `seq`, at most kAngularVelocityFrames: the estimate
-  // of one frame feeds the compensation of the next, and a single frame's error would be fed
-  // back at full gain (an oscillation that grows); the mean damps it, and a hand-held camera's
-  // angular velocity changes little over a few frames.
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+std::optional<CameraVelocity> FrameTracker::smoothedVelocity(int64_t seq) const {
+  // The mean over the frames posed before `seq`, at most kVelocityFrames: the estimate of one
+  // frame feeds the compensation of the next, and a single frame's error would be fed back at
+  // full gain (an oscillation that grows); the mean damps it, and a hand-held camera's
+  // velocity changes little over a few frames.
+  CameraVelocity sum;
   int n = 0;
-  for (auto it = angular_velocity_.rbegin(); it != angular_velocity_.rend(); ++it) {
+  for (auto it = velocity_.rbegin(); it != velocity_.rend(); ++it) {
     if (it->first >= seq) continue;
-    if (n == kAngularVelocityFrames) break;
-    sum += it->second;
+    if (n == kVelocityFrames) break;
+    sum.angular += it->second.angular;
+    sum.linear += it->second.linear;
     ++n;
   }
   if (n == 0) return std::nullopt;
-  return Eigen::Vector3d(sum / n);
+  return CameraVelocity{sum.angular / n, sum.linear / n};
 }
 
 bool FrameTracker::recentlyCompensated(int64_t seq) const {
@@ -268,8 +269,8 @@ bool FrameTracker::recentlyCompensated(int64_t seq) const {
 bool FrameTracker::addLifted(FrameFeatures lifted) {
   if (!lifted_.wants(lifted.seq)) return false;  // not compensated for nothing
   if (lifted.camera.readout_s > 0) {
-    if (const std::optional<Eigen::Vector3d> w = smoothedAngularVelocity(lifted.seq)) {
-      compensateRollingShutter(lifted, *w);
+    if (const std::optional<CameraVelocity> velocity = smoothedVelocity(lifted.seq)) {
+      compensateRollingShutter(lifted, *velocity);
       compensated_lifted_.push_back(lifted.seq);
       while (compensated_lifted_.size() > 64) compensated_lifted_.pop_front();
     }
@@ -287,8 +288,8 @@ bool FrameTracker::referenceCompensated() const {
 
 TrackingStep FrameTracker::step(const FrameFeatures& current) {
   if (!(current.camera.readout_s > 0)) return stepAtStamp(current);
-  const std::optional<Eigen::Vector3d> w = smoothedAngularVelocity(current.seq);
-  if (!w) return stepAtStamp(current);  // no velocity yet (first frames): as read
+  const std::optional<CameraVelocity> velocity = smoothedVelocity(current.seq);
+  if (!velocity) return stepAtStamp(current);  // no velocity yet (first frames): as read
   if (!referenceCompensated()) {
     // The reference was lifted before any velocity was known: a frame is matched against it
     // as read (both sheared alike), and becomes the keyframe, lifted with the velocity, that
@@ -302,8 +303,17 @@ TrackingStep FrameTracker::step(const FrameFeatures& current) {
     return out;
   }
   FrameFeatures at_stamp = current;
-  compensateRollingShutter(at_stamp, *w);
-  return stepAtStamp(at_stamp);
+  compensateRollingShutter(at_stamp, *velocity);
+  // Features without depth were only turned: their correspondences take the translation, at
+  // the depths of what they match (the pipeline's 2D stage has no depth at all).
+  const bool has_depth = std::any_of(current.points.begin(), current.points.end(),
+                                     [](const PointFeature& p) { return p.has_3d; }) ||
+                         std::any_of(current.lines.begin(), current.lines.end(),
+                                     [](const LineFeature& l) { return l.has_3d; });
+  if (!has_depth) readout_translation_ = ReadoutTranslation{current.seq, velocity->linear};
+  TrackingStep out = stepAtStamp(at_stamp);
+  readout_translation_.reset();
+  return out;
 }
 
 TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
@@ -429,16 +439,16 @@ void FrameTracker::finishStep(const FrameFeatures& current, TrackingStats& stats
   }
   lifted_.setLastPosed(current.seq);
   lifted_.prune();
-  // The frame interval and this frame's angular velocity, for the rolling-shutter model.
+  // The frame interval and this frame's velocity, for the rolling-shutter model.
   if (last_posed_stamp_ && current.seq > last_posed_stamp_->first &&
       current.utime > last_posed_stamp_->second) {
     frame_interval_s_ = 1e-6 * static_cast<double>(current.utime - last_posed_stamp_->second) /
                         static_cast<double>(current.seq - last_posed_stamp_->first);
   }
   last_posed_stamp_ = {current.seq, current.utime};
-  angular_velocity_.emplace_back(current.seq,
-                                 angularVelocity(tracker_.predictedMotion(), frame_interval_s_));
-  while (angular_velocity_.size() > 64) angular_velocity_.pop_front();
+  velocity_.emplace_back(current.seq,
+                         cameraVelocity(tracker_.predictedMotion(), frame_interval_s_));
+  while (velocity_.size() > 64) velocity_.pop_front();
 }
 
 estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures& reference,
@@ -450,9 +460,9 @@ estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures
   countMatches(matches, stats);
   stats.reference_seq = reference.seq;
   ScopedStageTimer t(timings_, "pose");
-  const estimator::PoseEstimate est = estimator_.estimate(
-      estimator::buildCorrespondences(reference, current, matches, options_.tracker.estimator),
-      current.camera, T_curr_prev_predicted);
+  const estimator::PoseEstimate est =
+      estimator_.estimate(correspondences(reference, current, matches, T_curr_prev_predicted),
+                          current.camera, T_curr_prev_predicted);
   return tracker_.update(current.seq, est);
 }
 
@@ -506,9 +516,21 @@ estimator::PoseEstimate FrameTracker::estimateAgainst(const FrameFeatures& landm
                                                       FeatureMatches& matches) {
   matches = match(landmarks, current, T_curr_kf_predicted, options_.tracker.estimator);
   ScopedStageTimer t(timings_, "pose");
-  return estimator_.estimate(
-      estimator::buildCorrespondences(landmarks, current, matches, options_.tracker.estimator),
-      current.camera, T_curr_kf_predicted);
+  return estimator_.estimate(correspondences(landmarks, current, matches, T_curr_kf_predicted),
+                             current.camera, T_curr_kf_predicted);
+}
+
+estimator::Correspondences FrameTracker::correspondences(const FrameFeatures& reference,
+                                                         const FrameFeatures& current,
+                                                         const FeatureMatches& matches,
+                                                         const Pose3& T_curr_ref_predicted) const {
+  estimator::Correspondences c =
+      estimator::buildCorrespondences(reference, current, matches, options_.tracker.estimator);
+  if (readout_translation_ && readout_translation_->seq == current.seq) {
+    compensateReadoutTranslation(c, current.camera, T_curr_ref_predicted,
+                                 readout_translation_->linear_velocity);
+  }
+  return c;
 }
 
 void FrameTracker::observeKeyframe(int64_t seq, const estimator::PoseEstimate& against_keyframe,

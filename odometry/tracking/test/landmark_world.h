@@ -22,17 +22,23 @@ namespace pplvo::tracking::testing {
 using fixtures::kinectVgaCamera;
 
 /// Where a rolling shutter that reads its rows over `readout_s` (middle row at the stamp) sees
-/// the point p_mid (camera frame at the stamp) while the camera turns at `w` (rad/s, camera
-/// frame): in the frame of the camera that read its row. The row is where the point projects
-/// at that row's instant (a fixed point; converges in a few steps).
+/// the point p_mid (camera frame at the stamp) while the camera moves at `velocity` (camera
+/// frame): in the frame of the camera that read its row, [exp(tau w), tau v] from the stamp's.
+/// The row is where the point projects at that row's instant (a fixed point; converges in a
+/// few steps).
 inline Eigen::Vector3d rollingShutterView(const PinholeCamera& camera, double readout_s,
-                                          const Eigen::Vector3d& w, const Eigen::Vector3d& p_mid) {
-  if (!(readout_s > 0) || !(w.norm() > 0)) return p_mid;
+                                          const CameraVelocity& velocity,
+                                          const Eigen::Vector3d& p_mid) {
+  const Eigen::Vector3d& w = velocity.angular;
+  if (!(readout_s > 0) || !(w.norm() > 0 || velocity.linear.norm() > 0)) return p_mid;
   Eigen::Vector3d p = p_mid;
   for (int i = 0; i < 20; ++i) {
     const double v = camera.project(p).y();
     const double tau = (v - 0.5 * (camera.height - 1)) * readout_s / (camera.height - 1);
-    p = Eigen::AngleAxisd(w.norm() * tau, w.normalized()).toRotationMatrix().transpose() * p_mid;
+    const Eigen::Matrix3d R =
+        w.norm() > 0 ? Eigen::AngleAxisd(w.norm() * tau, w.normalized()).toRotationMatrix()
+                     : Eigen::Matrix3d::Identity();
+    p = R.transpose() * (p_mid - tau * velocity.linear);
   }
   return p;
 }
@@ -74,7 +80,7 @@ class LandmarkWorld {
   /// lifted along that ray (the camera's own readout_s is left 0: the caller sets it).
   std::pair<FrameFeatures, FrameFeatures> observe(
       int64_t seq, const Pose3& T_w_c, int stride = 1, double readout_s = 0.0,
-      const Eigen::Vector3d& angular_velocity = Eigen::Vector3d::Zero()) {
+      const CameraVelocity& velocity = CameraVelocity{}) {
     const PinholeCamera camera = kinectVgaCamera();
     std::normal_distribution<double> n01(0.0, 1.0);
     std::vector<int> visible;
@@ -93,15 +99,16 @@ class LandmarkWorld {
     const std::vector<int>& kept = visible;
     f2.point_descriptors.create(static_cast<int>(kept.size()), 32, CV_8U);
     for (size_t k = 0; k < kept.size(); ++k) {
-      const Eigen::Vector3d p =
-          rollingShutterView(camera, readout_s, angular_velocity, T_c_w * points_[kept[k]]);
+      const Eigen::Vector3d p_stamp = T_c_w * points_[kept[k]];
+      const Eigen::Vector3d p = rollingShutterView(camera, readout_s, velocity, p_stamp);
       PointFeature f;
       f.px = camera.project(p) + 0.5 * Eigen::Vector2d(n01(rng_), n01(rng_));
       f2.points.push_back(f);
       descriptors_.row(kept[k]).copyTo(f2.point_descriptors.row(static_cast<int>(k)));
-      // The 3D stage: lifted along the observed pixel's ray with depth noise.
-      const double sigma_z = 1.425e-3 * p.z() * p.z();
-      const double z = p.z() + sigma_z * n01(rng_);
+      // The 3D stage: lifted along the observed pixel's ray with depth noise, the depth that of
+      // a depth image read at once at the stamp.
+      const double sigma_z = 1.425e-3 * p_stamp.z() * p_stamp.z();
+      const double z = p_stamp.z() + sigma_z * n01(rng_);
       f.has_3d = true;
       f.point.p = camera.backproject(f.px.x(), f.px.y(), z);
       const Eigen::Vector3d ray = f.point.p / z;

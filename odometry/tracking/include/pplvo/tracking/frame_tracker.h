@@ -171,15 +171,14 @@ class FrameTracker {
     KeyframeReason reason;
   };
 
-  /// The angular velocity a rolling-shutter frame `seq` is compensated with: the mean of the
-  /// last kAngularVelocityFrames posed before it.
-  /// nullopt before any frame was posed.
-  std::optional<Eigen::Vector3d> smoothedAngularVelocity(int64_t seq) const;
+  /// The velocity a rolling-shutter frame `seq` is compensated with: the mean of the last
+  /// kVelocityFrames posed before it. nullopt before any frame was posed.
+  std::optional<CameraVelocity> smoothedVelocity(int64_t seq) const;
   /// Whether the 3D stage of `seq` (a recent frame) was moved to its stamp.
   bool recentlyCompensated(int64_t seq) const;
   /// Whether the reference the next frame is tracked against was moved to its stamp.
   bool referenceCompensated() const;
-  static constexpr int kAngularVelocityFrames = 4;
+  static constexpr int kVelocityFrames = 4;
   /// step() on a frame at its stamp (rolling shutter compensated).
   TrackingStep stepAtStamp(const FrameFeatures& current);
   /// The matches of a reference and a current frame, gated around their positions predicted
@@ -192,6 +191,13 @@ class FrameTracker {
                           const estimator::PoseEstimate* through_keyframe);
   /// Matches `current` against a keyframe's `landmarks` (gates around T_curr_kf_predicted)
   /// into `matches` and estimates T_curr_kf from them.
+  /// The correspondences of `current` with `reference` (buildCorrespondences), its 2D
+  /// observations moved by the readout's translation when it is the frame of
+  /// readout_translation_, at the depths the predicted pose T_curr_ref gives.
+  estimator::Correspondences correspondences(const FrameFeatures& reference,
+                                             const FrameFeatures& current,
+                                             const FeatureMatches& matches,
+                                             const Pose3& T_curr_ref_predicted) const;
   estimator::PoseEstimate estimateAgainst(const FrameFeatures& landmarks,
                                           const FrameFeatures& current,
                                           const Pose3& T_curr_kf_predicted,
@@ -248,9 +254,16 @@ class FrameTracker {
   /// previous frame's 3D stage (the fallback): not estimated twice.
   std::optional<int64_t> keyframe_rejected_seq_;
   StageTimings timings_;
-  /// Angular velocity (rad/s, camera frame) of the recently posed frames, for the rolling-shutter
+  /// Velocity (camera frame) of the recently posed frames, for the rolling-shutter
   /// compensation of their 3D stages (oldest first).
-  std::deque<std::pair<int64_t, Eigen::Vector3d>> angular_velocity_;
+  std::deque<std::pair<int64_t, CameraVelocity>> velocity_;
+  /// The frame being tracked, when its 2D stage (no depth) was turned to its stamp, and the
+  /// linear velocity its correspondences are moved by (compensateReadoutTranslation).
+  struct ReadoutTranslation {
+    int64_t seq = -1;
+    Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
+  };
+  std::optional<ReadoutTranslation> readout_translation_;
   /// Time between consecutive frames (s), from their stamps; 0 until two frames were posed.
   double frame_interval_s_ = 0;
   std::optional<std::pair<int64_t, int64_t>> last_posed_stamp_;  ///< (seq, utime)
