@@ -128,7 +128,7 @@ class FrameTracker {
   /// kept) when no later frame can use it: not the frame posed last, nor one whose landmark
   /// fusion is due.
   /// A rolling-shutter frame (camera.readout_s > 0) is first moved to its stamp with the
-  /// angular velocity it was posed with (rolling_shutter.h).
+  /// velocity of the frames posed before it (rolling_shutter.h).
   bool addLifted(FrameFeatures lifted);
   /// Whether addLifted() would keep the 3D stage of frame `seq` (checked before decoding).
   bool wantsLifted(int64_t seq) const { return lifted_.wants(seq); }
