@@ -131,7 +131,7 @@ void compensateReadoutTranslation(estimator::Correspondences& correspondences,
     // The observed line's points nearest to the matched segment's predicted ends.
     Eigen::Vector2d ends[2];
     bool in_front = true;
-    for (int k = 0; k < 2 && in_front; ++k) {
+    for (int k = 0; k < 2; ++k) {
       const Eigen::Vector3d X = T_curr_ref * (k == 0 ? m.L_prev.p1 : m.L_prev.p2);
       in_front = X.z() > 1e-9;
       if (!in_front) break;

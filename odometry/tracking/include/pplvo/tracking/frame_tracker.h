@@ -189,8 +189,6 @@ class FrameTracker {
   void followFromKeyframe(int64_t seq, int64_t previous_seq,
                           const estimator::MotionChainOutput& pose,
                           const estimator::PoseEstimate* through_keyframe);
-  /// Matches `current` against a keyframe's `landmarks` (gates around T_curr_kf_predicted)
-  /// into `matches` and estimates T_curr_kf from them.
   /// The correspondences of `current` with `reference` (buildCorrespondences), its 2D
   /// observations moved by the readout's translation when it is the frame of
   /// readout_translation_, at the depths the predicted pose T_curr_ref gives.
@@ -198,6 +196,8 @@ class FrameTracker {
                                              const FrameFeatures& current,
                                              const FeatureMatches& matches,
                                              const Pose3& T_curr_ref_predicted) const;
+  /// Matches `current` against a keyframe's `landmarks` (gates around T_curr_kf_predicted)
+  /// into `matches` and estimates T_curr_kf from them.
   estimator::PoseEstimate estimateAgainst(const FrameFeatures& landmarks,
                                           const FrameFeatures& current,
                                           const Pose3& T_curr_kf_predicted,
