@@ -97,6 +97,10 @@ MotionChainOutput MotionChain::track(int64_t seq, const Correspondences& corresp
                                      const PinholeCamera& camera) {
   if (!initialised_) return initialise(seq);
   const PoseEstimate est = estimator_.estimate(correspondences, camera, predictedMotion());
+  if (const std::optional<MotionPrior> prior = priorForWeakEstimate(est)) {
+    return update(seq, est, std::nullopt,
+                  estimator_.estimate(correspondences, camera, prior->T_curr_prev, prior));
+  }
   return update(seq, est);
 }
 
@@ -106,37 +110,119 @@ MotionChainOutput MotionChain::track(const FrameFeatures& prev, const FrameFeatu
                curr.camera);
 }
 
-std::optional<std::pair<Pose3, Matrix6d>> MotionChain::fuseWithPrediction(
-    const PoseEstimate& est) const {
+std::optional<MotionPrior> MotionChain::priorForWeakEstimate(const PoseEstimate& est) const {
   if (!options_.fuse_weak_estimates || status_ == TrackingStatus::kLost) return std::nullopt;
   if (est.status != EstimateStatus::kUncertain && est.status != EstimateStatus::kDegenerate) {
     return std::nullopt;
   }
   if (!isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) return std::nullopt;
-  // Information form over xi = [t; q_xyz] of T_curr_prev: the estimate where it has
-  // information, the prediction (with the velocity model's process noise) elsewhere.
-  const Matrix6d prior = velocityModelCovariance(options_);
-  const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
-  if (est_ldlt.info() != Eigen::Success) return std::nullopt;
-  const Matrix6d info_est = est_ldlt.solve(Matrix6d::Identity());
-  const Matrix6d info_prior = prior.inverse();
+  MotionPrior prior;
+  prior.covariance = velocityModelCovariance(options_);
   // The constrained subset: the directions in which the estimate knows more than the
   // prediction (eigenvalues above 1 of its information whitened by the prediction's). Fewer
   // than half of them: the features say too little, the frame is the velocity model's.
-  const Matrix6d prior_sqrt = prior.cwiseSqrt();  // diagonal
+  const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
+  if (est_ldlt.info() != Eigen::Success) return std::nullopt;
+  const Matrix6d info_est = est_ldlt.solve(Matrix6d::Identity());
+  const Matrix6d prior_sqrt = prior.covariance.cwiseSqrt();  // diagonal
   const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(prior_sqrt * info_est * prior_sqrt);
   if ((whitened.eigenvalues().array() > 1.0).count() < 3) return std::nullopt;
-  Matrix6d cov = (info_est + info_prior).inverse();
-  cov = 0.5 * (cov + cov.transpose());
   // Where the estimate knows little the prediction's mean decides: the constant velocity, or
   // what the velocity model would give this frame if it were rejected.
-  const Pose3 prediction = options_.decay_unconstrained_velocity && options_.predict_from_velocity
-                               ? decayedMotion(consecutive_rejections_ + 1)
-                               : predictedMotion();
-  const Vector6d xi =
-      cov * (info_est * poseToXi(est.T_curr_prev) + info_prior * poseToXi(prediction));
-  if (!xi.allFinite() || !cov.allFinite()) return std::nullopt;
-  return std::make_pair(xiToPose(xi), cov);
+  prior.T_curr_prev = options_.decay_unconstrained_velocity && options_.predict_from_velocity
+                          ? decayedMotion(consecutive_rejections_ + 1)
+                          : predictedMotion();
+  return prior;
+}
+
+std::optional<MotionChain::CombinedMotion> MotionChain::fuseWithPrediction(
+    const PoseEstimate& est, const PoseEstimate* solved_with_prior) const {
+  const std::optional<MotionPrior> prior = priorForWeakEstimate(est);
+  if (!prior) return std::nullopt;
+  const Matrix6d info_prior = prior->covariance.inverse();
+  const Vector6d xi_prior = poseToXi(prior->T_curr_prev);
+  CombinedMotion out;
+  Matrix6d info_features;
+  if (solved_with_prior != nullptr &&
+      (solved_with_prior->status == EstimateStatus::kOk ||
+       solved_with_prior->status == EstimateStatus::kUncertain ||
+       solved_with_prior->status == EstimateStatus::kDegenerate) &&
+      isValidPose(solved_with_prior->T_curr_prev, 1e-6) &&
+      solved_with_prior->covariance.allFinite()) {
+    out.T_curr_prev = solved_with_prior->T_curr_prev;
+    out.covariance = solved_with_prior->covariance;
+    info_features = out.covariance.inverse() - info_prior;
+    out.solved_with_prior = true;
+  } else {
+    out.agrees_with_prediction = agreesWithPrediction(est);
+    // Information form over xi = [t; q_xyz] of T_curr_prev: the estimate where it has
+    // information, the prediction (with the velocity model's process noise) elsewhere. Exact
+    // for a linear problem; callers that can solve the features with the prior do (above).
+    info_features = est.covariance.ldlt().solve(Matrix6d::Identity());
+    out.covariance = (info_features + info_prior).inverse();
+    out.covariance = 0.5 * (out.covariance + out.covariance.transpose());
+    const Vector6d xi =
+        out.covariance * (info_features * poseToXi(est.T_curr_prev) + info_prior * xi_prior);
+    if (!xi.allFinite()) return std::nullopt;
+    out.T_curr_prev = xiToPose(xi);
+  }
+  if (!out.covariance.allFinite() || !info_features.allFinite()) return std::nullopt;
+  // The velocity model carries on only what the features measured: the shift from the
+  // prediction along the directions where they know more than it (whitened eigenvalues above
+  // 1, the constrained subset above). Elsewhere their information is thousands of times below
+  // the prediction's and what moves the solution there is the model's slightest bias (the
+  // corridor's lines and planes pull ~0.03 mm a frame backwards); the constant velocity would
+  // integrate it into a walk the scene never showed.
+  const Matrix6d prior_sqrt = prior->covariance.cwiseSqrt();  // diagonal
+  const Matrix6d prior_sqrt_inv = prior_sqrt.inverse();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(prior_sqrt * info_features * prior_sqrt);
+  const Vector6d whitened_shift = prior_sqrt_inv * (poseToXi(out.T_curr_prev) - xi_prior);
+  Matrix6d measured = Matrix6d::Zero();  // projector onto the measured whitened directions
+  double measured_chi2 = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    const double lambda = whitened.eigenvalues()(k);
+    if (!(lambda > 1.0)) continue;
+    const auto v = whitened.eigenvectors().col(k);
+    measured += v * v.transpose();
+    // The solve moved the prediction by d along v (whitened units): the features' own reading
+    // is d (lambda + 1) / lambda from the prediction, with variance 1 / lambda + 1.
+    const double d = v.dot(whitened_shift);
+    measured_chi2 += d * d * (1.0 + 1.0 / lambda);
+  }
+  out.velocity_motion = xiToPose(xi_prior + prior_sqrt * measured * whitened_shift);
+  if (out.solved_with_prior) {
+    // The prediction gate, read from the solve with the prior along the measured directions:
+    // the features' solve alone wanders along the others (845 m along a door's edges), and
+    // its mean elsewhere with it.
+    // Both solves must agree with the prediction there: the features' own solve catches a
+    // jump the adaptive weights of the solve with the prior would absorb (a plane whose
+    // residual disagrees weighs less), the solve with the prior one the features' own solve
+    // hides in its excursion.
+    out.agrees_with_prediction = agreesAlongMeasuredDirections(est) &&
+                                 (!velocity_measured_ || !options_.predict_from_velocity ||
+                                  measured_chi2 <= options_.prediction_gate_chi2);
+  }
+  return out;
+}
+
+bool MotionChain::agreesAlongMeasuredDirections(const PoseEstimate& est) const {
+  if (!velocity_measured_ || !options_.predict_from_velocity) return true;
+  const Matrix6d prior = (1.0 + consecutive_rejections_) * velocityModelCovariance(options_);
+  const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
+  if (est_ldlt.info() != Eigen::Success) return false;
+  const Matrix6d prior_sqrt = prior.cwiseSqrt();  // diagonal
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(
+      prior_sqrt * est_ldlt.solve(Matrix6d::Identity()) * prior_sqrt);
+  const Vector6d whitened_innovation =
+      prior_sqrt.inverse() * (poseToXi(est.T_curr_prev) - poseToXi(predictedMotion()));
+  double chi2 = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    const double lambda = whitened.eigenvalues()(k);
+    if (!(lambda > 1.0)) continue;
+    const double along = whitened.eigenvectors().col(k).dot(whitened_innovation);
+    chi2 += along * along / (1.0 + 1.0 / lambda);  // the prediction's 1, the estimate's 1/lambda
+  }
+  return std::isfinite(chi2) && chi2 <= options_.prediction_gate_chi2;
 }
 
 bool MotionChain::agreesWithPrediction(const PoseEstimate& est) const {
@@ -156,16 +242,27 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
 
 MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
                                       std::optional<int64_t> held_reference) {
+  return update(seq, est, held_reference, nullptr);
+}
+
+MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
+                                      std::optional<int64_t> held_reference,
+                                      const PoseEstimate& solved_with_prior) {
+  return update(seq, est, held_reference, &solved_with_prior);
+}
+
+MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
+                                      std::optional<int64_t> held_reference,
+                                      const PoseEstimate* solved_with_prior) {
   if (!initialised_) return initialise(seq);
-  const bool plausible = agreesWithPrediction(est);
   const bool accepted =
       est.accepted() && isValidPose(est.T_curr_prev, 1e-6) && est.covariance.allFinite();
-  const bool good = accepted && plausible;
-  const std::optional<std::pair<Pose3, Matrix6d>> fused =
-      good || !plausible ? std::nullopt : fuseWithPrediction(est);
-  if (!plausible && (accepted || est.status == EstimateStatus::kUncertain ||
-                     est.status == EstimateStatus::kDegenerate)) {
+  const bool good = accepted && agreesWithPrediction(est);
+  std::optional<CombinedMotion> fused =
+      accepted ? std::nullopt : fuseWithPrediction(est, solved_with_prior);
+  if ((accepted && !good) || (fused && !fused->agrees_with_prediction)) {
     ++gated_estimates_;
+    fused.reset();
   }
   Pose3 T_curr_prev = Pose3::Identity();
   Matrix6d Q = Matrix6d::Zero();
@@ -173,9 +270,9 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
     status_ = (status_ == TrackingStatus::kLost) ? TrackingStatus::kReinitialised
                                                  : TrackingStatus::kTracking;
     consecutive_rejections_ = 0;
-    T_curr_prev = good ? est.T_curr_prev : fused->first;
-    Q = good ? est.covariance : fused->second;
-    velocity_ = motionToVector(T_curr_prev);
+    T_curr_prev = good ? est.T_curr_prev : fused->T_curr_prev;
+    Q = good ? est.covariance : fused->covariance;
+    velocity_ = motionToVector(fused ? fused->velocity_motion : T_curr_prev);
     velocity_measured_ = true;
     if (fused) ++fused_estimates_;
   } else {

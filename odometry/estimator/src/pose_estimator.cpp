@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "pplvo/core/enum_names.h"
 #include "pplvo/estimator/pose_parameterisation.h"
@@ -79,6 +80,26 @@ double tukeySqrtWeight(double u, double c) {
 
 // ---------------------------------------------------------------------------------------------
 
+/// A prior on the pose, as six whitened rows S (xi - mean), S^T S = covariance^-1.
+struct PriorTerm {
+  Vector6d mean = Vector6d::Zero();
+  Matrix6d S = Matrix6d::Identity();
+  Matrix6d information = Matrix6d::Identity();
+};
+
+std::optional<PriorTerm> makePriorTerm(const std::optional<MotionPrior>& prior) {
+  if (!prior || !isValidPose(prior->T_curr_prev, 1e-6) || !prior->covariance.allFinite()) {
+    return std::nullopt;
+  }
+  PriorTerm term;
+  if (!whitening<6>(0.5 * (prior->covariance + prior->covariance.transpose()), true, term.S)) {
+    return std::nullopt;
+  }
+  term.mean = poseToXi(prior->T_curr_prev);
+  term.information = term.S.transpose() * term.S;
+  return term;
+}
+
 class JointProblem {
  public:
   JointProblem(const PoseEstimatorOptions& o, const PinholeCamera& camera)
@@ -87,6 +108,8 @@ class JointProblem {
   std::vector<PointTerm> points;
   std::vector<LineTerm> lines;
   std::vector<PlaneTerm> planes;
+  /// Not a measurement: left out of the robust scales, the Tukey weights and the row count.
+  std::optional<PriorTerm> prior;
   /// Set by reweight: the planes' residual scale k (1: Sigma_r right) and their weight
   /// min(alpha, 1/k) in the cost and the information.
   double plane_scale = 1.0;
@@ -290,6 +313,10 @@ class JointProblem {
       H.noalias() += plane_weight * AtA;
       M.noalias() += plane_weight * plane_weight * plane_scale * AtA;
     }
+    if (prior) {  // weighted by its own covariance, so it enters M as it does H
+      H += prior->information;
+      M += prior->information;
+    }
     H = 0.5 * (H + H.transpose());
     M = 0.5 * (M + M.transpose());
   }
@@ -312,6 +339,25 @@ class JointCost : public ceres::CostFunction {
 
  private:
   const JointProblem& problem_;
+};
+
+class PriorCost : public ceres::SizedCostFunction<6, 6> {
+ public:
+  explicit PriorCost(const PriorTerm& prior) : prior_(prior) {}
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const Eigen::Map<const Vector6d> xi(parameters[0]);
+    Eigen::Map<Vector6d> r(residuals);
+    r = prior_.S * (xi - prior_.mean);
+    if (jacobians && jacobians[0]) {
+      Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> J(jacobians[0]);
+      J = prior_.S;
+    }
+    return true;
+  }
+
+ private:
+  const PriorTerm& prior_;
 };
 
 bool poseChangeSmall(const Vector6d& a, const Vector6d& b, const PoseEstimatorOptions& o) {
@@ -425,10 +471,13 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
     if (rw.rows < kMinRowsToSolve) break;
     const Vector6d xi_before = xi;
     JointCost cost(problem, rw.rows);
+    std::optional<PriorCost> prior_cost;
+    if (problem.prior) prior_cost.emplace(*problem.prior);
     ceres::Problem::Options popts;
     popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem cp(popts);
     cp.AddResidualBlock(&cost, nullptr, xi.data());
+    if (prior_cost) cp.AddResidualBlock(&*prior_cost, nullptr, xi.data());
     ceres::Solver::Options sopts;
     sopts.minimizer_type = ceres::TRUST_REGION;
     sopts.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -583,7 +632,8 @@ PoseEstimate PoseEstimator::estimate(const FrameFeatures& prev, const FrameFeatu
 }
 
 PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCamera& camera,
-                                     const Pose3& T_curr_prev_guess) const {
+                                     const Pose3& T_curr_prev_guess,
+                                     const std::optional<MotionPrior>& prior) const {
   const PoseEstimatorOptions& o = options_;
   PoseEstimate est;
   est.skipped = in.skipped;
@@ -598,6 +648,7 @@ PoseEstimate PoseEstimator::estimate(const Correspondences& in, const PinholeCam
 
   // Validation: bad correspondences are counted in est.skipped, never used.
   JointProblem problem(o, camera);
+  problem.prior = makePriorTerm(prior);
   if (o.use_points && camera_ok) addPointTerms(in.points, problem, est.skipped);
   if (o.use_lines && camera_ok) addLineTerms(in.lines, problem, est.skipped);
   if (o.use_planes && o.plane_scale_alpha > 0) addPlaneTerms(in.planes, problem, est.skipped);

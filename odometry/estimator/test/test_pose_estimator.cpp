@@ -451,6 +451,55 @@ TEST(PoseEstimator, DegeneratePlaneConfigurationsAreDetected) {
   }
 }
 
+TEST(PoseEstimator, APriorHoldsTheDirectionTheFeaturesDoNotSee) {
+  // A corridor: floor, ceiling and two walls, all along the optical axis, so nothing
+  // constrains the translation along it (u). Alone the estimate is weak there; with a prior (a
+  // prediction) the solve keeps the prior's mean along u and the planes' values elsewhere, and
+  // its covariance is the posterior's: the prior's along u, the planes' across it.
+  const PinholeCamera cam = testing::testCamera();
+  SceneGenerator gen(cam, SceneConfig{}, 61);
+  const Pose3 T_true = testing::typicalMotion();
+  auto plane = [](Eigen::Vector3d n, double d) { return Eigen::Vector4d(n.x(), n.y(), n.z(), d); };
+  const std::vector<Eigen::Vector4d> corridor = {plane({0, -1, 0}, 1.4), plane({0, 1, 0}, 1.1),
+                                                 plane({1, 0, 0}, 1.0), plane({-1, 0, 0}, 1.0)};
+  const Correspondences c = planesOnly(gen, corridor, T_true);
+  const PoseEstimator estimator;
+  const PoseEstimate alone = estimator.estimate(c, cam);
+  expectFinite(alone);
+  EXPECT_FALSE(alone.accepted());
+  const Eigen::Vector3d u = T_true.linear() * Eigen::Vector3d::UnitZ();  // the current frame's axis
+  EXPECT_GT(u.dot(alone.covariance.topLeftCorner<3, 3>() * u), 0.01);    // > (10 cm)^2
+
+  MotionPrior prior;
+  prior.T_curr_prev = T_true;
+  prior.T_curr_prev.translation() += Eigen::Vector3d(0.004, -0.003, 0.03);
+  prior.covariance = Matrix6d::Zero();
+  prior.covariance.diagonal() << 4e-4, 4e-4, 4e-4, 1e-4, 1e-4, 1e-4;
+  const PoseEstimate with = estimator.estimate(c, cam, Pose3::Identity(), prior);
+  expectFinite(with);
+  ASSERT_NE(with.status, EstimateStatus::kSolverFailure);
+  const Eigen::Vector3d dt = with.T_curr_prev.translation() - T_true.translation();
+  const Eigen::Vector3d prior_dt = prior.T_curr_prev.translation() - T_true.translation();
+  EXPECT_NEAR(u.dot(dt), u.dot(prior_dt), 1e-3);  // the prior's along the axis
+  EXPECT_LT((dt - u * u.dot(dt)).norm(), 5e-3);   // the planes' across it (not the prior's 5 mm)
+  EXPECT_LT(rotationErrorDeg(with.T_curr_prev, T_true), 0.3);
+  EXPECT_NEAR(std::sqrt(u.dot(with.covariance.topLeftCorner<3, 3>() * u)), 0.02, 1e-3);
+
+  // Where the features do constrain every direction the prior only adds its information:
+  // the covariance is (Sigma^-1 + P^-1)^-1 of the solve without it.
+  const Correspondences full = gen.generate(T_true);
+  const PoseEstimate free_solve = estimator.estimate(full, cam);
+  ASSERT_TRUE(free_solve.accepted());
+  MotionPrior loose;
+  loose.T_curr_prev = free_solve.T_curr_prev;
+  loose.covariance = 1e-6 * Matrix6d::Identity();  // 1 mm, 1 mrad: of the features' order
+  const PoseEstimate map = estimator.estimate(full, cam, Pose3::Identity(), loose);
+  const Matrix6d expected =
+      (free_solve.covariance.inverse() + loose.covariance.inverse()).inverse();
+  EXPECT_LT((map.covariance - expected).norm(), 0.05 * expected.norm());
+  EXPECT_LT(translationError(map.T_curr_prev, free_solve.T_curr_prev), 1e-4);
+}
+
 TEST(PoseEstimator, FewRowsAreSolvedButOnlyWeak) {
   // From 7 rows (one more than the six parameters) to min_residuals the pose is solved, but
   // with so little redundancy it is weak (kUncertain: combined with a prediction, never

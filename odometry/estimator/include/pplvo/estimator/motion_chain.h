@@ -205,6 +205,22 @@ class MotionChain {
   /// estimates, which the shared-error estimate reads differently (FrameErrorEstimator).
   MotionChainOutput update(int64_t seq, const PoseEstimate& estimate,
                            std::optional<int64_t> held_reference);
+  /// The same for a weak estimate that the caller solved once more with
+  /// priorForWeakEstimate(estimate) (`solved_with_prior`): when the frame is combined with the
+  /// prediction, that solve is the combination.
+  MotionChainOutput update(int64_t seq, const PoseEstimate& estimate,
+                           std::optional<int64_t> held_reference,
+                           const PoseEstimate& solved_with_prior);
+  /// The prior a weak estimate of this frame is combined with (fuse_weak_estimates): the
+  /// prediction (or the decayed motion, decay_unconstrained_velocity) with the velocity
+  /// model's process noise; nullopt when `estimate` would not be combined (accepted,
+  /// measuring fewer than three directions better than the prediction, lost). The combination
+  /// is best solved from the features themselves with this prior (PoseEstimator::estimate):
+  /// along the directions the features hardly see, a solve without it wanders metres off
+  /// (reprojection errors shrink as the camera backs away from the scene), and that mean,
+  /// however wide its covariance, biases the combination the same way frame after frame. The
+  /// prediction gate then reads both solves along the directions the features measured.
+  std::optional<MotionPrior> priorForWeakEstimate(const PoseEstimate& estimate) const;
   /// Weak estimates combined with the prediction so far (fuse_weak_estimates).
   int64_t fusedEstimates() const { return fused_estimates_; }
   /// Estimates (accepted or weak) refused by the prediction gate so far.
@@ -246,8 +262,28 @@ class MotionChain {
   bool velocity_measured_ = false;
   /// Whether `est` agrees with the prediction (prediction_gate_chi2).
   bool agreesWithPrediction(const PoseEstimate& est) const;
-  /// A weak estimate combined with the prediction (fuse_weak_estimates), or nullopt.
-  std::optional<std::pair<Pose3, Matrix6d>> fuseWithPrediction(const PoseEstimate& est) const;
+  /// The same along the directions `est` measured better than the prediction only (a weak
+  /// solve wanders along the others).
+  bool agreesAlongMeasuredDirections(const PoseEstimate& est) const;
+  /// A weak estimate combined with the prediction: the frame's motion and its covariance,
+  /// and the motion the velocity model carries on (the prediction moved along the measured
+  /// directions only).
+  struct CombinedMotion {
+    Pose3 T_curr_prev = Pose3::Identity();
+    Matrix6d covariance = Matrix6d::Zero();
+    Pose3 velocity_motion = Pose3::Identity();
+    bool solved_with_prior = false;  ///< else the information form of the two means
+    /// The prediction gate (prediction_gate_chi2): of both solves along the directions the
+    /// features measured, else of the estimate.
+    bool agrees_with_prediction = true;
+  };
+  /// A weak estimate combined with the prediction (fuse_weak_estimates), or nullopt: the
+  /// solve with the prior when given, else the information-form combination of the two means.
+  std::optional<CombinedMotion> fuseWithPrediction(const PoseEstimate& est,
+                                                   const PoseEstimate* solved_with_prior) const;
+  MotionChainOutput update(int64_t seq, const PoseEstimate& est,
+                           std::optional<int64_t> held_reference,
+                           const PoseEstimate* solved_with_prior);
   Pose3 last_T_curr_prev_ = Pose3::Identity();
   Matrix6d last_cov_ = Matrix6d::Zero();
   std::deque<WindowEntry> window_;

@@ -60,6 +60,13 @@ struct Correspondences {
   CorrespondenceStats skipped;  ///< filled by buildCorrespondences()
 };
 
+/// A Gaussian prior on T_curr_prev (e.g. the constant-velocity prediction with the velocity
+/// model's process noise): its mean and the covariance of xi = [t; q_xyz] about that mean.
+struct MotionPrior {
+  Pose3 T_curr_prev = Pose3::Identity();
+  Matrix6d covariance = Matrix6d::Identity();
+};
+
 /// Options of PoseEstimator. Defaults follow the paper where it gives a value.
 struct PoseEstimatorOptions {
   /// Feature families (for the paper's ablations: points, points+lines, points+planes, all).
@@ -258,8 +265,12 @@ class PoseEstimator {
   /// Estimates T_curr_prev starting from `T_curr_prev_guess` (e.g. the constant-velocity
   /// prediction). `camera` is the current frame's camera (signed focal lengths are fine).
   /// Never throws on bad data: invalid matches are skipped and counted, failure is a status.
+  /// With a `prior` the solve is the maximum a posteriori one: six more rows pull xi towards
+  /// the prior's mean, weighted by its covariance, and the covariance is the posterior's (a
+  /// prior that is not a valid pose with a positive definite covariance is ignored).
   PoseEstimate estimate(const Correspondences& correspondences, const PinholeCamera& camera,
-                        const Pose3& T_curr_prev_guess = Pose3::Identity()) const;
+                        const Pose3& T_curr_prev_guess = Pose3::Identity(),
+                        const std::optional<MotionPrior>& prior = std::nullopt) const;
 
   /// Convenience: buildCorrespondences() + estimate() with curr.camera.
   PoseEstimate estimate(const FrameFeatures& prev, const FrameFeatures& curr,
