@@ -37,11 +37,12 @@ struct MotionChainOptions {
   double velocity_model_sigma_q = 0.01;
   /// A weak estimate (EstimateStatus kUncertain or kDegenerate: some directions unconstrained,
   /// e.g. translation along a plain corridor) is not thrown away: it is combined with the
-  /// velocity model's prediction in information form (the prediction with the process noise
-  /// above), so the constrained directions come from the features and only the unconstrained
-  /// ones from the velocity model, with the covariance to match; only when the estimate knows
-  /// more than the prediction in at least half of the six directions. false: such an estimate
-  /// is rejected as a whole (the velocity model, then LOST).
+  /// velocity model's prediction (the prediction with the process noise above as a prior of
+  /// the features' solve; in information form for callers without the features), so the
+  /// constrained directions come from the features and only the unconstrained ones from the
+  /// velocity model, with the covariance to match; only when the estimate knows more than the
+  /// prediction in at least half of the six directions. false: such an estimate is rejected
+  /// as a whole (the velocity model, then LOST).
   bool fuse_weak_estimates = true;
   /// What a weak estimate's unconstrained directions take from the prediction. false: the
   /// constant-velocity motion (a vehicle's steady motion along a corridor keeps going). true:
@@ -93,7 +94,7 @@ void visit(V& v, MotionChainOptions& o) {
           config::atLeast(0));
   v.field("fuse_weak_estimates", o.fuse_weak_estimates,
           "combine an uncertain or degenerate estimate with the velocity model's prediction "
-          "(information form) instead of rejecting it");
+          "(solved once more with it as a prior) instead of rejecting it");
   v.field("decay_unconstrained_velocity", o.decay_unconstrained_velocity,
           "a weak estimate's unconstrained directions follow the decayed velocity model "
           "(hand-held) instead of the constant velocity (a vehicle)");
