@@ -10,6 +10,35 @@
 namespace pplvo::estimator {
 
 namespace {
+/// The directions of xi in which an estimate knows more than the prediction: eigenvectors
+/// with eigenvalue above 1 of the estimate's information whitened by the prediction's
+/// (diagonal) covariance. Elsewhere the prediction decides.
+class DirectionsBetterThanPrediction {
+ public:
+  DirectionsBetterThanPrediction(const Matrix6d& information, const Matrix6d& prediction_covariance)
+      : prediction_sqrt_(prediction_covariance.cwiseSqrt()),
+        whitened_(prediction_sqrt_ * information * prediction_sqrt_) {}
+
+  int count() const { return static_cast<int>((whitened_.eigenvalues().array() > 1.0).count()); }
+  /// An offset of xi in the prediction's standard deviations.
+  Vector6d whiten(const Vector6d& xi_offset) const {
+    return prediction_sqrt_.inverse() * xi_offset;
+  }
+  const Matrix6d& predictionSqrt() const { return prediction_sqrt_; }
+  /// Calls visit(lambda, v) for each direction v (whitened, unit) with its eigenvalue lambda.
+  template <typename Visit>
+  void forEach(Visit visit) const {
+    for (int k = 0; k < 6; ++k) {
+      const double lambda = whitened_.eigenvalues()(k);
+      if (lambda > 1.0) visit(lambda, whitened_.eigenvectors().col(k));
+    }
+  }
+
+ private:
+  Matrix6d prediction_sqrt_;  // diagonal
+  Eigen::SelfAdjointEigenSolver<Matrix6d> whitened_;
+};
+
 /// The process noise of a velocity-model step, over [t; q_xyz].
 Matrix6d velocityModelCovariance(const MotionChainOptions& o) {
   Matrix6d Q = Matrix6d::Zero();
@@ -119,14 +148,13 @@ std::optional<MotionPrior> MotionChain::priorForWeakEstimate(const PoseEstimate&
   MotionPrior prior;
   prior.covariance = velocityModelCovariance(options_);
   // The constrained subset: the directions in which the estimate knows more than the
-  // prediction (eigenvalues above 1 of its information whitened by the prediction's). Fewer
-  // than half of them: the features say too little, the frame is the velocity model's.
+  // prediction. Fewer than half of them: the features say too little, the frame is the
+  // velocity model's.
   const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
   if (est_ldlt.info() != Eigen::Success) return std::nullopt;
-  const Matrix6d info_est = est_ldlt.solve(Matrix6d::Identity());
-  const Matrix6d prior_sqrt = prior.covariance.cwiseSqrt();  // diagonal
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(prior_sqrt * info_est * prior_sqrt);
-  if ((whitened.eigenvalues().array() > 1.0).count() < 3) return std::nullopt;
+  const DirectionsBetterThanPrediction measured(est_ldlt.solve(Matrix6d::Identity()),
+                                                prior.covariance);
+  if (measured.count() < 3) return std::nullopt;
   // Where the estimate knows little the prediction's mean decides: the constant velocity, or
   // what the velocity model would give this frame if it were rejected.
   prior.T_curr_prev = options_.decay_unconstrained_velocity && options_.predict_from_velocity
@@ -173,31 +201,24 @@ std::optional<MotionChain::CombinedMotion> MotionChain::fuseWithPrediction(
   // the prediction's and what moves the solution there is the model's slightest bias (the
   // corridor's lines and planes pull ~0.03 mm a frame backwards); the constant velocity would
   // integrate it into a walk the scene never showed.
-  const Matrix6d prior_sqrt = prior->covariance.cwiseSqrt();  // diagonal
-  const Matrix6d prior_sqrt_inv = prior_sqrt.inverse();
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(prior_sqrt * info_features * prior_sqrt);
-  const Vector6d whitened_shift = prior_sqrt_inv * (poseToXi(out.T_curr_prev) - xi_prior);
-  Matrix6d measured = Matrix6d::Zero();  // projector onto the measured whitened directions
+  const DirectionsBetterThanPrediction measured(info_features, prior->covariance);
+  const Vector6d whitened_shift = measured.whiten(poseToXi(out.T_curr_prev) - xi_prior);
+  Matrix6d projector = Matrix6d::Zero();  // onto the measured whitened directions
   double measured_chi2 = 0.0;
-  for (int k = 0; k < 6; ++k) {
-    const double lambda = whitened.eigenvalues()(k);
-    if (!(lambda > 1.0)) continue;
-    const auto v = whitened.eigenvectors().col(k);
-    measured += v * v.transpose();
+  measured.forEach([&](double lambda, const auto& v) {
+    projector += v * v.transpose();
     // The solve moved the prediction by d along v (whitened units): the features' own reading
     // is d (lambda + 1) / lambda from the prediction, with variance 1 / lambda + 1.
     const double d = v.dot(whitened_shift);
     measured_chi2 += d * d * (1.0 + 1.0 / lambda);
-  }
-  out.velocity_motion = xiToPose(xi_prior + prior_sqrt * measured * whitened_shift);
+  });
+  out.velocity_motion = xiToPose(xi_prior + measured.predictionSqrt() * projector * whitened_shift);
   if (out.solved_with_prior) {
-    // The prediction gate, read from the solve with the prior along the measured directions:
-    // the features' solve alone wanders along the others (845 m along a door's edges), and
-    // its mean elsewhere with it.
-    // Both solves must agree with the prediction there: the features' own solve catches a
-    // jump the adaptive weights of the solve with the prior would absorb (a plane whose
-    // residual disagrees weighs less), the solve with the prior one the features' own solve
-    // hides in its excursion.
+    // The prediction gate, along the measured directions only (the features' solve alone
+    // wanders along the others, 845 m along a door's edges, and its mean elsewhere with it),
+    // of both solves: the features' own catches a jump the adaptive weights of the solve with
+    // the prior would absorb (a plane whose residual disagrees weighs less), the solve with
+    // the prior one the features' own hides in its excursion.
     out.agrees_with_prediction = agreesAlongMeasuredDirections(est) &&
                                  (!velocity_measured_ || !options_.predict_from_velocity ||
                                   measured_chi2 <= options_.prediction_gate_chi2);
@@ -210,18 +231,14 @@ bool MotionChain::agreesAlongMeasuredDirections(const PoseEstimate& est) const {
   const Matrix6d prior = (1.0 + consecutive_rejections_) * velocityModelCovariance(options_);
   const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
   if (est_ldlt.info() != Eigen::Success) return false;
-  const Matrix6d prior_sqrt = prior.cwiseSqrt();  // diagonal
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> whitened(
-      prior_sqrt * est_ldlt.solve(Matrix6d::Identity()) * prior_sqrt);
+  const DirectionsBetterThanPrediction measured(est_ldlt.solve(Matrix6d::Identity()), prior);
   const Vector6d whitened_innovation =
-      prior_sqrt.inverse() * (poseToXi(est.T_curr_prev) - poseToXi(predictedMotion()));
+      measured.whiten(poseToXi(est.T_curr_prev) - poseToXi(predictedMotion()));
   double chi2 = 0.0;
-  for (int k = 0; k < 6; ++k) {
-    const double lambda = whitened.eigenvalues()(k);
-    if (!(lambda > 1.0)) continue;
-    const double along = whitened.eigenvectors().col(k).dot(whitened_innovation);
+  measured.forEach([&](double lambda, const auto& v) {
+    const double along = v.dot(whitened_innovation);
     chi2 += along * along / (1.0 + 1.0 / lambda);  // the prediction's 1, the estimate's 1/lambda
-  }
+  });
   return std::isfinite(chi2) && chi2 <= options_.prediction_gate_chi2;
 }
 
