@@ -13,11 +13,11 @@
 # with a Kinect v1's effects (fr1 lens, 25 ms rolling shutter, 8 ms blur, colour/depth
 # offsets) and `clean` (global shutter, no lens, depth at the colour instant).
 # pplvo rows: points / points+lines / points+planes / lines+planes / all, against keyframes
-# (the default), all with the local map and all frame to frame (the paper). The clean variant
-# runs with the per-frame shared error at 0 (rendered images; docs/estimator.md), the hand-held
-# one with the default. Peers: OpenCV's RgbdOdometry, ICPOdometry and RgbdICPOdometry frame to
-# frame and RgbdICP against keyframes (pplvo-peer-odometry), fovis and ORB-SLAM2 --vo (median
-# of --orb-runs, default 3) from --peers (default ~/.cache/pplvo-peers; ../shared/peers/build.sh).
+# (the default), all with the local map and all frame to frame (the paper), every one with the
+# defaults (the per-frame shared error estimated online; docs/estimator.md). Peers: OpenCV's
+# RgbdOdometry, ICPOdometry and RgbdICPOdometry frame to frame and RgbdICP against keyframes
+# (pplvo-peer-odometry), fovis and ORB-SLAM2 --vo (median of --orb-runs, default 3) from --peers
+# (default ~/.cache/pplvo-peers; ../shared/peers/build.sh).
 # A peer that crashes, never initialises or poses fewer than half the frames is reported so.
 # Every row: frames posed and, for pplvo, frames tracked (not on the velocity model, not lost)
 # and the NEES of its relative-pose covariance (mean, share inside the 95 % bound).
@@ -41,7 +41,7 @@ while [ $# -gt 0 ]; do
     --variants) variants="$2"; shift 2 ;;
     --peers) peers_dir="$2"; shift 2 ;;
     --orb-runs) orb_runs="$2"; shift 2 ;;
-    -h|--help) sed -n 2,24p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,23p "$0"; exit 0 ;;
     *) echo "benchmark_scenes.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
