@@ -460,16 +460,10 @@ estimator::MotionChainOutput FrameTracker::trackFromPrevious(const FrameFeatures
   countMatches(matches, stats);
   stats.reference_seq = reference.seq;
   ScopedStageTimer t(timings_, "pose");
-  const estimator::Correspondences matched =
-      correspondences(reference, current, matches, T_curr_prev_predicted);
-  const estimator::PoseEstimate est =
-      estimator_.estimate(matched, current.camera, T_curr_prev_predicted);
-  if (const std::optional<estimator::MotionPrior> prior = tracker_.priorForWeakEstimate(est)) {
-    // A weak estimate: the chain combines it with the prediction, solved from the features.
-    return tracker_.update(current.seq, est, std::nullopt,
-                           estimator_.estimate(matched, current.camera, prior->T_curr_prev, prior));
-  }
-  return tracker_.update(current.seq, est);
+  // The chain solves from its prediction (and a weak estimate once more with it as a prior).
+  return tracker_.track(current.seq,
+                        correspondences(reference, current, matches, T_curr_prev_predicted),
+                        current.camera);
 }
 
 ReferenceRole FrameTracker::referenceRole(int64_t seq) const {
