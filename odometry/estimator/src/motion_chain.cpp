@@ -219,15 +219,15 @@ std::optional<MotionChain::CombinedMotion> MotionChain::fuseWithPrediction(
     // of both solves: the features' own catches a jump the adaptive weights of the solve with
     // the prior would absorb (a plane whose residual disagrees weighs less), the solve with
     // the prior one the features' own hides in its excursion.
-    out.agrees_with_prediction = agreesAlongMeasuredDirections(est) &&
-                                 (!velocity_measured_ || !options_.predict_from_velocity ||
-                                  measured_chi2 <= options_.prediction_gate_chi2);
+    out.agrees_with_prediction =
+        agreesAlongMeasuredDirections(est) &&
+        (!hasPredictionToGate() || measured_chi2 <= options_.prediction_gate_chi2);
   }
   return out;
 }
 
 bool MotionChain::agreesAlongMeasuredDirections(const PoseEstimate& est) const {
-  if (!velocity_measured_ || !options_.predict_from_velocity) return true;
+  if (!hasPredictionToGate()) return true;
   const Matrix6d prior = (1.0 + consecutive_rejections_) * velocityModelCovariance(options_);
   const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
   if (est_ldlt.info() != Eigen::Success) return false;
@@ -243,7 +243,7 @@ bool MotionChain::agreesAlongMeasuredDirections(const PoseEstimate& est) const {
 }
 
 bool MotionChain::agreesWithPrediction(const PoseEstimate& est) const {
-  if (!velocity_measured_ || !options_.predict_from_velocity) return true;
+  if (!hasPredictionToGate()) return true;
   if (!isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) return true;  // not used
   // Each frame since the last measured motion adds the velocity model's process noise.
   const Matrix6d prior = (1.0 + consecutive_rejections_) * velocityModelCovariance(options_);

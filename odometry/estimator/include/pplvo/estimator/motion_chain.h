@@ -261,6 +261,9 @@ class MotionChain {
   int64_t gated_estimates_ = 0;
   /// The velocity comes from a measured motion (not zero after a start or a loss).
   bool velocity_measured_ = false;
+  /// The prediction is a measured velocity's (predict_from_velocity, not after a start or a
+  /// loss): only such a prediction can refuse an estimate that disagrees with it.
+  bool hasPredictionToGate() const { return velocity_measured_ && options_.predict_from_velocity; }
   /// Whether `est` agrees with the prediction (prediction_gate_chi2).
   bool agreesWithPrediction(const PoseEstimate& est) const;
   /// The same along the directions `est` measured better than the prediction only (a weak
