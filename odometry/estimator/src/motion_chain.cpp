@@ -127,8 +127,9 @@ MotionChainOutput MotionChain::track(int64_t seq, const Correspondences& corresp
   if (!initialised_) return initialise(seq);
   const PoseEstimate est = estimator_.estimate(correspondences, camera, predictedMotion());
   if (const std::optional<MotionPrior> prior = priorForWeakEstimate(est)) {
-    return update(seq, est, std::nullopt,
-                  estimator_.estimate(correspondences, camera, prior->T_curr_prev, prior));
+    const PoseEstimate solved_with_prior =
+        estimator_.estimate(correspondences, camera, prior->T_curr_prev, prior);
+    return update(seq, est, std::nullopt, &solved_with_prior);
   }
   return update(seq, est);
 }
@@ -253,19 +254,9 @@ bool MotionChain::agreesWithPrediction(const PoseEstimate& est) const {
          innovation.dot(joint.solve(innovation)) <= options_.prediction_gate_chi2;
 }
 
-MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est) {
-  return update(seq, est, std::nullopt);
-}
-
 MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
                                       std::optional<int64_t> held_reference) {
   return update(seq, est, held_reference, nullptr);
-}
-
-MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
-                                      std::optional<int64_t> held_reference,
-                                      const PoseEstimate& solved_with_prior) {
-  return update(seq, est, held_reference, &solved_with_prior);
 }
 
 MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,

@@ -199,19 +199,12 @@ class MotionChain {
                           const FeatureMatches& matches);
 
   /// The state machine alone, given an estimate (used by track(); public for tests and for
-  /// callers that run the estimator themselves).
-  MotionChainOutput update(int64_t seq, const PoseEstimate& estimate);
-  /// The same for an estimate of this frame against `held_reference` (a keyframe) that the
-  /// previous frame's pose was measured against too: the motion is the difference of two
-  /// estimates, which the shared-error estimate reads differently (FrameErrorEstimator).
+  /// callers that run the estimator themselves). `held_reference`: the frame (a keyframe) this
+  /// estimate and the previous frame's were both measured against, if any: the motion is then
+  /// the difference of two estimates, which the shared-error estimate reads differently
+  /// (FrameErrorEstimator).
   MotionChainOutput update(int64_t seq, const PoseEstimate& estimate,
-                           std::optional<int64_t> held_reference);
-  /// The same for a weak estimate that the caller solved once more with
-  /// priorForWeakEstimate(estimate) (`solved_with_prior`): when the frame is combined with the
-  /// prediction, that solve is the combination.
-  MotionChainOutput update(int64_t seq, const PoseEstimate& estimate,
-                           std::optional<int64_t> held_reference,
-                           const PoseEstimate& solved_with_prior);
+                           std::optional<int64_t> held_reference = std::nullopt);
   /// The prior a weak estimate of this frame is combined with (fuse_weak_estimates): the
   /// prediction (or the decayed motion, decay_unconstrained_velocity) with the velocity
   /// model's process noise; nullopt when `estimate` would not be combined (accepted,
@@ -285,6 +278,9 @@ class MotionChain {
   /// solve with the prior when given, else the information-form combination of the two means.
   std::optional<CombinedMotion> fuseWithPrediction(const PoseEstimate& est,
                                                    const PoseEstimate* solved_with_prior) const;
+  /// update() with a weak estimate's second solve with priorForWeakEstimate(est)
+  /// (`solved_with_prior`, track()): when the frame is combined with the prediction, that solve
+  /// is the combination; null: the information form of the two means.
   MotionChainOutput update(int64_t seq, const PoseEstimate& est,
                            std::optional<int64_t> held_reference,
                            const PoseEstimate* solved_with_prior);
