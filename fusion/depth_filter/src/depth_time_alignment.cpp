@@ -45,8 +45,8 @@ bool DepthTimeAligner::hasPose(int64_t seq) const {
                      [seq](const KnownPose& p) { return p.seq == seq; });
 }
 
-std::optional<Pose3> DepthTimeAligner::colourFromDepth(int64_t seq, int64_t colour_utime,
-                                                       int64_t depth_utime) const {
+std::optional<AlignmentMotion> DepthTimeAligner::colourFromDepth(int64_t seq, int64_t colour_utime,
+                                                                 int64_t depth_utime) const {
   // The newest pair of consecutive tracked poses at least kPoseLag frames before this one.
   for (size_t i = poses_.size(); i-- > 1;) {
     const KnownPose& b = poses_[i];
@@ -60,33 +60,36 @@ std::optional<Pose3> DepthTimeAligner::colourFromDepth(int64_t seq, int64_t colo
     // T_w(t + s) = T_w(t) * exp(s * velocity), to first order: the depth camera seen from the
     // colour camera.
     const double s = (depth_utime - colour_utime) * 1e-6 / dt;
-    Pose3 T = Pose3::Identity();
-    T.linear() = Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix();
-    T.translation() = T_a_b.translation() * s;
-    return T;
+    AlignmentMotion m;
+    m.T_colour_depth.linear() = Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix();
+    m.T_colour_depth.translation() = T_a_b.translation() * s;
+    m.alignment = DepthTimeAlignment{s, b.seq};
+    return m;
   }
   return std::nullopt;
 }
 
-std::optional<Pose3> DepthTimeAligner::motion(int64_t seq, int64_t colour_utime,
-                                              int64_t depth_utime) {
+std::optional<AlignmentMotion> DepthTimeAligner::motion(int64_t seq, int64_t colour_utime,
+                                                        int64_t depth_utime) {
   if (!needed(colour_utime, depth_utime)) return std::nullopt;
   const double offset_s = (depth_utime - colour_utime) * 1e-6;
   stats_.last_offset_ms = offset_s * 1e3;
   if (std::abs(offset_s) > max_offset_s_) return std::nullopt;
-  const std::optional<Pose3> T = colourFromDepth(seq, colour_utime, depth_utime);
-  if (!T) {
+  std::optional<AlignmentMotion> m = colourFromDepth(seq, colour_utime, depth_utime);
+  if (!m) {
     ++stats_.frames_without_velocity;
     return std::nullopt;
   }
   ++stats_.frames_aligned;
-  return T;
+  return m;
 }
 
 cv::Mat DepthTimeAligner::apply(const PinholeCamera& camera, const cv::Mat& depth_m, int64_t seq,
-                                int64_t colour_utime, int64_t depth_utime) {
-  const std::optional<Pose3> T = motion(seq, colour_utime, depth_utime);
-  return T ? warpDepth(camera, depth_m, *T) : depth_m;
+                                int64_t colour_utime, int64_t depth_utime,
+                                DepthTimeAlignment* alignment) {
+  const std::optional<AlignmentMotion> m = motion(seq, colour_utime, depth_utime);
+  if (alignment) *alignment = m ? m->alignment : DepthTimeAlignment{};
+  return m ? warpDepth(camera, depth_m, m->T_colour_depth) : depth_m;
 }
 
 }  // namespace pplvo::depth_filter

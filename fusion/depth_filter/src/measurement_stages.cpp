@@ -18,17 +18,22 @@ DepthWithVariance MeasurementStages::apply(const RgbdFrame& frame, StageTimings&
   // Depth in the undistorted pinhole model and at the colour instant, as every later stage
   // reads it.
   cv::Mat depth_m = rectifier_.apply(frame.camera, frame.depth_m);
+  DepthTimeAlignment alignment;
   if (timeAligns(frame)) {
     ScopedStageTimer t(timings, "time_align");
-    depth_m = time_aligner_.apply(frame.camera, depth_m, frame.seq, frame.utime,
-                                  frame.depth_utime);
+    depth_m = time_aligner_.apply(frame.camera, depth_m, frame.seq, frame.utime, frame.depth_utime,
+                                  &alignment);
   }
+  DepthWithVariance out;
   if (options_.model == DepthModel::kSensor) {
     ScopedStageTimer t(timings, "sensor");
-    return applySensorModel(sensor_, depth_m);
+    out = applySensorModel(sensor_, depth_m);
+  } else {
+    ScopedStageTimer t(timings, "cgm");
+    out = cgm_.apply(depth_m);
   }
-  ScopedStageTimer t(timings, "cgm");
-  return cgm_.apply(depth_m);
+  out.time_alignment = alignment;
+  return out;
 }
 
 DepthWithVariance MeasurementStages::applyUnregistered(const RgbdFrame& frame,
@@ -38,18 +43,19 @@ DepthWithVariance MeasurementStages::applyUnregistered(const RgbdFrame& frame,
   DepthWithVariance registered;
   {
     ScopedStageTimer t(timings, "register");
-    Pose3 motion = Pose3::Identity();
+    std::optional<AlignmentMotion> motion;
     if (timeAligns(frame)) {
-      if (std::optional<Pose3> T = time_aligner_.motion(frame.seq, frame.utime, frame.depth_utime)) {
-        motion = *T;
-      }
+      motion = time_aligner_.motion(frame.seq, frame.utime, frame.depth_utime);
     }
     registered = registration_.apply(frame.camera, *frame.depth_camera, frame.depth_m, sensor_,
-                                     motion);
+                                     motion ? motion->T_colour_depth : Pose3::Identity());
+    if (motion) registered.time_alignment = motion->alignment;
   }
   if (options_.model == DepthModel::kSensor) return registered;
   ScopedStageTimer t(timings, "cgm");
-  return cgm_.apply(registered);
+  DepthWithVariance out = cgm_.apply(registered);
+  out.time_alignment = registered.time_alignment;
+  return out;
 }
 
 }  // namespace pplvo::depth_filter

@@ -79,6 +79,7 @@ void OgmFusion::fuseOnPose(int64_t seq, const FramePose& pose, const PinholeCame
   }
   addFrame(seq, camera, depth);
   fuse(seq, pose.T_w_c, result, window_limit);
+  result->depth.time_alignment = depth.time_alignment;  // the current frame's depth leads
 }
 
 void OgmFusion::reset() {

@@ -177,15 +177,22 @@ TEST(DepthTimeAligner, UsesTheVelocityOfPosesTwoFramesBackAndMovesDepthByIt) {
   aligner.observePose(2, utime(2), pose(2), true);  // too recent for frame 3 (lag 2)
   // Depth 10 ms before colour: the depth camera was 3 mm behind, so the scene is 3 mm nearer
   // at the colour instant.
-  const std::optional<Pose3> T = aligner.colourFromDepth(3, utime(3), utime(3) - 10000);
-  ASSERT_TRUE(T);
-  EXPECT_NEAR(T->translation().z(), -0.003, 1e-6);
-  out = aligner.apply(cam, depth, 3, utime(3), utime(3) - 10000);
+  const std::optional<AlignmentMotion> m = aligner.colourFromDepth(3, utime(3), utime(3) - 10000);
+  ASSERT_TRUE(m);
+  EXPECT_NEAR(m->T_colour_depth.translation().z(), -0.003, 1e-6);
+  // What it says it did: -10 ms of the 33.3 ms motion into frame 1 (the pair (0, 1)).
+  EXPECT_NEAR(m->alignment.scale, -0.3, 1e-3);
+  EXPECT_EQ(m->alignment.motion_seq, 1);
+  DepthTimeAlignment said;
+  out = aligner.apply(cam, depth, 3, utime(3), utime(3) - 10000, &said);
   EXPECT_NEAR(out.at<float>(24, 32), 1.997f, 1e-5f);
+  EXPECT_TRUE(said.moved());
+  EXPECT_EQ(said.motion_seq, 1);
   EXPECT_EQ(aligner.stats().frames_aligned, 1);
   EXPECT_NEAR(aligner.stats().last_offset_ms, -10.0, 1e-9);
-  // Same instant: nothing to do, no copy.
-  EXPECT_EQ(aligner.apply(cam, depth, 3, utime(3), utime(3)).data, depth.data);
+  // Same instant: nothing to do, no copy, and nothing moved.
+  EXPECT_EQ(aligner.apply(cam, depth, 3, utime(3), utime(3), &said).data, depth.data);
+  EXPECT_FALSE(said.moved());
   EXPECT_EQ(aligner.apply(cam, depth, 3, utime(3), 0).data, depth.data);
   // An offset beyond the bound is an association problem: left as is.
   EXPECT_EQ(aligner.apply(cam, depth, 3, utime(3), utime(3) - 200000).data, depth.data);

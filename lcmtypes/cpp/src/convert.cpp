@@ -444,6 +444,8 @@ pplvo_msgs::depth_map_t depthMapFields(const DepthWithVariance& d, const Pinhole
   m.stage = stage;
   m.camera = toMsg(camera);
   m.window_length = d.window_length;
+  m.time_alignment_scale = d.time_alignment.scale;
+  m.time_alignment_motion_seq = d.time_alignment.motion_seq;
   return m;
 }
 }  // namespace
@@ -495,9 +497,10 @@ void encodeRawDepthMap(const DepthWithVariance& d, const PinholeCamera& camera, 
   const int64_t plane_bytes = static_cast<int64_t>(d.depth_m.total()) * 4;
   if (plane_bytes > (int64_t{1} << 30)) throw MessageError("depth map too large for a message");
   // The message without its two payloads, encoded by lcm-gen: everything but the data bytes.
-  // Its tail is depth.size, variance {width, height, encoding, size} and reference: the
-  // payloads go after the first and second size fields (image_t: width, height, encoding,
-  // size, data[size]; the test compares the result with lcm-gen's encoding byte for byte).
+  // Its tail is depth.size, variance {width, height, encoding, size}, reference and the time
+  // alignment (a double and an int64): the payloads go after the first and second size fields
+  // (image_t: width, height, encoding, size, data[size]; the test compares the result with
+  // lcm-gen's encoding byte for byte).
   pplvo_msgs::depth_map_t shell = depthMapFields(d, camera, utime, seq, stamp, stage);
   shell.reference = reference;
   for (Img* img : {&shell.depth, &shell.variance}) {
@@ -512,7 +515,8 @@ void encodeRawDepthMap(const DepthWithVariance& d, const PinholeCamera& camera, 
   if (shell.encode(wire->data(), 0, shell_size) != shell_size) {
     throw MessageError("depth_map_t encoding failed");
   }
-  constexpr int kTail = 4 + 13 + 1;  // depth.size, variance header, reference
+  constexpr int kAfterPlanes = 1 + 8 + 8;       // reference, time_alignment_scale, _motion_seq
+  constexpr int kTail = 4 + 13 + kAfterPlanes;  // depth.size, variance header, the rest
   uint8_t tail[kTail];
   std::memcpy(tail, wire->data() + shell_size - kTail, kTail);
   uint8_t* out = wire->data() + shell_size - kTail;
@@ -521,13 +525,25 @@ void encodeRawDepthMap(const DepthWithVariance& d, const PinholeCamera& camera, 
   std::memcpy(out, tail + 4, 9);  // variance width, height, encoding
   out = putInt32(out + 9, static_cast<int32_t>(plane_bytes));
   out = putPlane(out, d.var_m2);
-  *out = tail[kTail - 1];
+  std::memcpy(out, tail + kTail - kAfterPlanes, kAfterPlanes);
+}
+
+DepthTimeAlignment depthTimeAlignmentFromMsg(double scale, int64_t motion_seq, int64_t seq) {
+  if (motion_seq < 0 || scale == 0.0) return DepthTimeAlignment{};  // a zeroed message too
+  if (!std::isfinite(scale)) throw MessageError("time alignment scale is not finite");
+  if (motion_seq >= seq) {
+    throw MessageError("time alignment motion " + std::to_string(motion_seq) +
+                       " is not earlier than frame " + std::to_string(seq));
+  }
+  return DepthTimeAlignment{scale, motion_seq};
 }
 
 namespace {
 DepthWithVariance decodeDepthMap(const pplvo_msgs::depth_map_t& m, bool view_raw) {
   DepthWithVariance d;
   d.window_length = m.window_length;
+  d.time_alignment =
+      depthTimeAlignmentFromMsg(m.time_alignment_scale, m.time_alignment_motion_seq, m.seq);
   d.depth_m = decodeImage(m.depth, view_raw);
   d.var_m2 = decodeImage(m.variance, view_raw);
   if (d.depth_m.type() != CV_32FC1 || d.var_m2.type() != CV_32FC1) {

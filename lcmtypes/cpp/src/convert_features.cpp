@@ -56,6 +56,8 @@ pplvo_msgs::features_t toMsg(const FrameFeatures& f, int8_t stage,
   m.stamp = f.stamp;
   m.stage = stage;
   m.camera = toMsg(f.camera);
+  m.depth_alignment_scale = f.depth_time_alignment.scale;
+  m.depth_alignment_motion_seq = f.depth_time_alignment.motion_seq;
 
   m.n_points = static_cast<int32_t>(f.points.size());
   m.points.resize(f.points.size());
@@ -130,6 +132,8 @@ FrameFeatures fromMsg(const pplvo_msgs::features_t& m) {
   f.seq = m.seq;
   f.stamp = m.stamp;
   f.camera = fromMsg(m.camera);
+  f.depth_time_alignment =
+      depthTimeAlignmentFromMsg(m.depth_alignment_scale, m.depth_alignment_motion_seq, m.seq);
 
   f.points.resize(m.points.size());
   for (size_t i = 0; i < m.points.size(); ++i) {

@@ -324,6 +324,27 @@ TEST(Convert, DepthMapViewSharesRawPayloadsAndDecodesCompressedOnes) {
   EXPECT_THROW(viewOfMsg(bad), MessageError);
 }
 
+TEST(Convert, DepthMapCarriesItsTimeAlignmentAndRejectsAForgedOne) {
+  DepthWithVariance d;
+  d.depth_m = cv::Mat(48, 64, CV_32FC1, cv::Scalar(2.0f));
+  d.var_m2 = cv::Mat(48, 64, CV_32FC1, cv::Scalar(1e-4f));
+  d.time_alignment = DepthTimeAlignment{-0.42, 7};
+  const auto m = roundTripBytes(toMsg(d, vga(), 5, 9, "9", pplvo_msgs::depth_map_t::STAGE_CGM));
+  const DepthWithVariance back = fromMsg(m);
+  EXPECT_EQ(back.time_alignment.scale, -0.42);
+  EXPECT_EQ(back.time_alignment.motion_seq, 7);
+  EXPECT_FALSE(fromMsg(toMsg(DepthWithVariance{d.depth_m, d.var_m2}, vga(), 5, 9, "9", 1))
+                   .time_alignment.moved());
+  auto forged = m;
+  forged.time_alignment_scale = std::nan("");
+  EXPECT_THROW(fromMsg(forged), MessageError);
+  forged = m;
+  forged.time_alignment_motion_seq = 9;  // the frame's own motion is not known yet
+  EXPECT_THROW(fromMsg(forged), MessageError);
+  forged.time_alignment_motion_seq = -3;  // any negative seq: not moved
+  EXPECT_FALSE(fromMsg(forged).time_alignment.moved());
+}
+
 TEST(Convert, RawDepthMapWireBytesAreLcmGensEncoding) {
   // encodeRawDepthMap writes the planes straight into the packet; the bytes must be those of
   // the message toMsg() builds, encoded by lcm-gen, for any stamp, size, ROI and field values.
@@ -333,11 +354,14 @@ TEST(Convert, RawDepthMapWireBytesAreLcmGensEncoding) {
     int8_t stage, reference;
     int window;
     bool roi;
+    DepthTimeAlignment alignment;
   };
   const std::vector<Case> cases = {
-      {48, 64, "1305031102.175304", pplvo_msgs::depth_map_t::STAGE_OGM, 2, 10, false},
-      {1, 1, "", pplvo_msgs::depth_map_t::STAGE_CGM, 0, 1, false},
-      {7, 13, std::string(300, 's'), pplvo_msgs::depth_map_t::STAGE_SENSOR, -1, 3, true}};
+      {48, 64, "1305031102.175304", pplvo_msgs::depth_map_t::STAGE_OGM, 2, 10, false,
+       DepthTimeAlignment{-0.45, 1}},
+      {1, 1, "", pplvo_msgs::depth_map_t::STAGE_CGM, 0, 1, false, DepthTimeAlignment{}},
+      {7, 13, std::string(300, 's'), pplvo_msgs::depth_map_t::STAGE_SENSOR, -1, 3, true,
+       DepthTimeAlignment{0.5, -7}}};
   std::vector<uint8_t> wire = {1, 2, 3};  // reused: any previous content is replaced
   for (const Case& c : cases) {
     DepthWithVariance d;
@@ -347,6 +371,7 @@ TEST(Convert, RawDepthMapWireBytesAreLcmGensEncoding) {
                       : depth(cv::Rect(0, 0, c.cols, c.rows)).clone();
     d.var_m2 = d.depth_m.mul(d.depth_m) * 1e-4;
     d.window_length = c.window;
+    d.time_alignment = c.alignment;
     if (c.roi) {
       ASSERT_FALSE(d.depth_m.isContinuous());  // rows are copied one by one
     }

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #include "pplvo/msgs/convert_features.h"
@@ -13,6 +14,7 @@ FrameFeatures makeFeatures(bool float_descriptors) {
   FrameFeatures f;
   f.utime = 123;
   f.seq = 4;
+  f.depth_time_alignment = DepthTimeAlignment{-0.47, 1};
   f.stamp = "4";
   f.camera.width = 32;
   f.camera.height = 24;
@@ -77,6 +79,8 @@ TEST_P(FeaturesRoundTrip, EverythingSurvives) {
   const FrameFeatures b = fromMsg(viaBytes(toMsg(f, pplvo_msgs::features_t::STAGE_3D)));
   EXPECT_EQ(b.seq, f.seq);
   EXPECT_EQ(b.camera, f.camera);
+  EXPECT_EQ(b.depth_time_alignment.scale, f.depth_time_alignment.scale);
+  EXPECT_EQ(b.depth_time_alignment.motion_seq, f.depth_time_alignment.motion_seq);
   ASSERT_EQ(b.points.size(), f.points.size());
   for (size_t i = 0; i < f.points.size(); ++i) {
     EXPECT_NEAR((b.points[i].px - f.points[i].px).norm(), 0.0, 1e-4);
@@ -139,6 +143,12 @@ TEST(FeaturesConvert, InconsistentMessagesThrow) {
   EXPECT_THROW(fromMsg(bad), MessageError);
   bad = m;
   bad.plane_labels = encodeImage(cv::Mat(5, 5, CV_8UC1, cv::Scalar(0)), pplvo_msgs::image_t::ENCODING_PNG);
+  EXPECT_THROW(fromMsg(bad), MessageError);
+  bad = m;
+  bad.depth_alignment_scale = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(fromMsg(bad), MessageError);
+  bad = m;
+  bad.depth_alignment_motion_seq = m.seq + 1;  // a motion after the frame
   EXPECT_THROW(fromMsg(bad), MessageError);
 }
 

@@ -225,6 +225,15 @@ TEST(DecodeMessage, NamesAnOlderLogVersion) {
             std::string::npos)
       << depth_error;
 
+  // depth_map_t before the time alignment was passed on (a double and an int64 fewer).
+  std::vector<uint8_t> before_alignment = withFingerprint(encode(depth()), 0x3d3b45f8e04d8252ULL);
+  before_alignment.resize(before_alignment.size() - 16);
+  const std::string alignment_error =
+      decodeMessage(before_alignment.data(), before_alignment.size(), &depth_out);
+  EXPECT_NE(alignment_error.find("older log version: depth_map_t without time_alignment"),
+            std::string::npos)
+      << alignment_error;
+
   // Every message holding a camera_info_t before its readout_s.
   const std::vector<uint8_t> old_camera = withFingerprint(encode(frame()), 0xf83ee6370c017a62ULL);
   const std::string camera_error = decodeMessage(old_camera.data(), old_camera.size(), &out);

@@ -180,6 +180,7 @@ std::optional<MotionChain::CombinedMotion> MotionChain::fuseWithPrediction(
       solved_with_prior->covariance.allFinite()) {
     out.T_curr_prev = solved_with_prior->T_curr_prev;
     out.covariance = solved_with_prior->covariance;
+    out.current_depth_sensitivity = solved_with_prior->current_depth_sensitivity;
     info_features = out.covariance.inverse() - info_prior;
     out.solved_with_prior = true;
   } else {
@@ -194,6 +195,7 @@ std::optional<MotionChain::CombinedMotion> MotionChain::fuseWithPrediction(
         out.covariance * (info_features * poseToXi(est.T_curr_prev) + info_prior * xi_prior);
     if (!xi.allFinite()) return std::nullopt;
     out.T_curr_prev = xiToPose(xi);
+    out.current_depth_sensitivity = out.covariance * info_features * est.current_depth_sensitivity;
   }
   if (!out.covariance.allFinite() || !info_features.allFinite()) return std::nullopt;
   // The velocity model carries on only what the features measured: the shift from the
@@ -274,12 +276,14 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
   }
   Pose3 T_curr_prev = Pose3::Identity();
   Matrix6d Q = Matrix6d::Zero();
+  Matrix6d sensitivity = Matrix6d::Zero();
   if (good || fused) {
     status_ = (status_ == TrackingStatus::kLost) ? TrackingStatus::kReinitialised
                                                  : TrackingStatus::kTracking;
     consecutive_rejections_ = 0;
     T_curr_prev = good ? est.T_curr_prev : fused->T_curr_prev;
     Q = good ? est.covariance : fused->covariance;
+    sensitivity = good ? est.current_depth_sensitivity : fused->current_depth_sensitivity;
     velocity_ = motionToVector(fused ? fused->velocity_motion : T_curr_prev);
     velocity_measured_ = true;
     if (fused) ++fused_estimates_;
@@ -320,6 +324,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
   }
   MotionChainOutput out = makeOutput(seq);
   out.estimate = est;
+  out.current_depth_sensitivity = sensitivity;
   return out;
 }
 

@@ -279,10 +279,12 @@ class JointProblem {
   /// weigh point_weight / line_weight in both, and count their variance scale in M: their
   /// residuals' actual covariance is that factor times the modelled Sigma_r (the robust
   /// scale squared; docs/estimator.md, "The published covariance: what it contains").
-  void information(const double* xi, Matrix6d& H, Matrix6d& M) const {
+  /// `H_planes` receives the planes' part of H.
+  void information(const double* xi, Matrix6d& H, Matrix6d& M, Matrix6d& H_planes) const {
     const PoseEval pose(xi);
     H.setZero();
     M.setZero();
+    H_planes.setZero();
     if (!pose.valid) return;
     Eigen::Vector2d r;
     Matrix26 J2;
@@ -311,6 +313,7 @@ class JointProblem {
       const Matrix36 A = T.S * J3;
       const Matrix6d AtA = A.transpose() * A;
       H.noalias() += plane_weight * AtA;
+      H_planes.noalias() += plane_weight * AtA;
       M.noalias() += plane_weight * plane_weight * plane_scale * AtA;
     }
     if (prior) {  // weighted by its own covariance, so it enters M as it does H
@@ -518,11 +521,11 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
 /// variances, the smallest relative eigenvalue of the Jacobi-scaled information).
 void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
                         const PoseEstimatorOptions& o, PoseEstimate& est) {
-  Matrix6d H, M;
+  Matrix6d H, M, H_planes;
   // The whitened point and line residuals spread by the robust scale s (>= 1, MAD): their
   // covariance is s^2 Sigma_r, not Sigma_r (on real images s ~ 1.5; 1 on synthetic ones).
   // (With family_robust_scales each family has its own s and weighs 1/s^2.)
-  problem.information(xi.data(), H, M);
+  problem.information(xi.data(), H, M, H_planes);
   Eigen::Matrix<double, 6, 1> dinv_sqrt;
   bool diag_ok = H.allFinite() && M.allFinite();
   for (int i = 0; i < 6; ++i) {
@@ -548,6 +551,11 @@ void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
     }
     const Matrix6d cov = (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
     if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
+    // The current frame's depth enters only through its planes (points and lines are
+    // reprojected into its image): a rigid error e of that depth moves them as a pose change
+    // would, and the solve by H^-1 H_planes e.
+    const Matrix6d sensitivity = Hinv * H_planes;
+    if (sensitivity.allFinite()) est.current_depth_sensitivity = sensitivity;
   }
   est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
   est.max_rotation_variance = maxRotationVariance(est.covariance);

@@ -657,3 +657,60 @@ TEST(PoseEstimator, BuildCorrespondencesFromFeatures) {
 
 }  // namespace
 }  // namespace pplvo::estimator
+
+namespace pplvo::estimator {
+namespace {
+
+// The current frame's depth moved rigidly by e (the depth filter's time alignment moves all of
+// it with one motion) reaches the estimate through its planes only: the solve moves by
+// current_depth_sensitivity e. Zero without planes, the identity when planes carry the pose
+// alone, small beside many points and lines, in between beside a few.
+TEST(PoseEstimator, CurrentDepthSensitivityIsHowARigidDepthErrorMovesTheSolve) {
+  const PinholeCamera cam = testing::testCamera();
+  const Pose3 T_true = testing::typicalMotion();
+  Vector6d e_xi;
+  e_xi << 0.004, -0.002, 0.003, 0.0006, -0.0004, 0.0005;  // 5 mm, 0.1 deg
+  const Pose3 E = xiToPose(e_xi);
+  struct Case {
+    const char* name;
+    int points, lines, planes;
+  };
+  for (const Case& k :
+       {Case{"planes only", 0, 0, 5}, Case{"many points, lines and planes", 60, 15, 5},
+        Case{"six points and planes", 6, 0, 5}, Case{"points only", 200, 0, 0}}) {
+    SCOPED_TRACE(k.name);
+    testing::SceneConfig cfg;
+    cfg.n_points = k.points;
+    cfg.n_lines = k.lines;
+    cfg.n_planes = k.planes;
+    testing::SceneGenerator gen(cam, cfg, 21);
+    Correspondences c = gen.generate(T_true);
+    const PoseEstimator estimator{PoseEstimatorOptions{}};
+    const PoseEstimate before = estimator.estimate(c, cam, Pose3::Identity());
+    ASSERT_TRUE(before.accepted());
+    for (PlaneMatch3D3D& m : c.planes) m.curr = m.curr.transformed(E);
+    const PoseEstimate after = estimator.estimate(c, cam, Pose3::Identity());
+    ASSERT_TRUE(after.accepted());
+    const Matrix6d& A = before.current_depth_sensitivity;
+    const Vector6d moved = poseToXi(after.T_curr_prev) - poseToXi(before.T_curr_prev);
+    const Vector6d predicted = A * e_xi;
+    std::printf("%-26s |A e| / |e| %.3f, moved %.3f, prediction off by %.3f of |e|\n", k.name,
+                predicted.norm() / e_xi.norm(), moved.norm() / e_xi.norm(),
+                (moved - predicted).norm() / e_xi.norm());
+    // First order: the motion's own rotation (2.3 deg) couples e's rotation into translation.
+    EXPECT_LT((moved - predicted).norm(), 0.1 * e_xi.norm());
+    if (k.planes == 0) {
+      EXPECT_EQ(A, Matrix6d::Zero());
+    } else if (k.points == 0 && k.lines == 0) {
+      EXPECT_LT((A - Matrix6d::Identity()).norm(), 1e-6);
+    } else if (k.points < 10) {  // a few points: the planes carry part of it
+      EXPECT_GT(predicted.norm(), 0.05 * e_xi.norm());
+      EXPECT_LT(predicted.norm(), 0.95 * e_xi.norm());
+    } else {  // with texture the points carry the pose, the planes' weight is small
+      EXPECT_LT(predicted.norm(), 0.05 * e_xi.norm());
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pplvo::estimator

@@ -55,6 +55,7 @@ FrameFeatures Frontend::extract2d(const RgbdFrame& frame, const DepthWithVarianc
   f.utime = frame.utime;
   f.stamp = frame.stamp;
   f.camera = frame.camera;
+  f.depth_time_alignment = cgm.time_alignment;
   if (frame.bgr.empty()) {
     s.warning = "frame without colour image: no points or lines";
     if (options_.families.planes && !cgm.depth_m.empty()) {

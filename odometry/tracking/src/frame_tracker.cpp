@@ -287,6 +287,41 @@ bool FrameTracker::referenceCompensated() const {
 }
 
 TrackingStep FrameTracker::step(const FrameFeatures& current) {
+  TrackingStep out = stepCompensatingReadout(current);
+  if (out.pose) addDepthAlignmentError(current, *out.pose);
+  return out;
+}
+
+void FrameTracker::addDepthAlignmentError(const FrameFeatures& current,
+                                          estimator::MotionChainOutput& pose) {
+  if (pose.status == TrackingStatus::kFirstFrame) published_motions_.clear();  // seqs restart
+  pose.depth_alignment_covariance.setZero();
+  const DepthTimeAlignment& alignment = current.depth_time_alignment;
+  const bool measured =
+      pose.status == TrackingStatus::kTracking || pose.status == TrackingStatus::kReinitialised;
+  if (options_.depth_alignment_error && measured && alignment.moved()) {
+    const auto motion =
+        std::find_if(published_motions_.begin(), published_motions_.end(),
+                     [&](const auto& m) { return m.first == alignment.motion_seq; });
+    if (motion != published_motions_.end()) {
+      // The depth was moved by scale x (that motion): its error is scale x that motion's, as
+      // a rigid transform of the current camera, to first order in the (small) motion.
+      const Matrix6d depth_error = alignment.scale * alignment.scale * motion->second;
+      const Matrix6d& A = pose.current_depth_sensitivity;
+      const Matrix6d in_curr_prev = A * depth_error * A.transpose();
+      const Matrix6d in_prev_curr = invertedPoseCovariance(pose.T_curr_prev, in_curr_prev);
+      if (in_prev_curr.allFinite()) {
+        pose.depth_alignment_covariance = 0.5 * (in_prev_curr + in_prev_curr.transpose());
+        pose.covariance_prev_curr += pose.depth_alignment_covariance;
+      }
+    }
+  }
+  published_motions_.emplace_back(pose.seq, pose.covariance_prev_curr);
+  constexpr size_t kKept = 16;  // the depth filter uses a motion two or three frames back
+  while (published_motions_.size() > kKept) published_motions_.pop_front();
+}
+
+TrackingStep FrameTracker::stepCompensatingReadout(const FrameFeatures& current) {
   if (!(current.camera.readout_s > 0)) return stepAtStamp(current);
   const std::optional<CameraVelocity> velocity = smoothedVelocity(current.seq);
   if (!velocity) return stepAtStamp(current);  // no velocity yet (first frames): as read

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/depth_time_alignment.h"
 #include "pplvo/core/primitives.h"
 
 namespace pplvo {
@@ -50,6 +51,8 @@ struct FrameFeatures {
   cv::Mat line_descriptors;   ///< one row per line (CV_8U binary LBD)
   std::vector<PlaneFeature> planes;
   cv::Mat plane_labels;       ///< CV_8UC1 per pixel: 0 = none, else PlaneFeature::label
+  /// How the depth the planes (and lifted points and lines) were measured on was moved.
+  DepthTimeAlignment depth_time_alignment;
 };
 
 /// Correspondences between a previous (reference) frame and the current one:

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/depth_time_alignment.h"
 #include "pplvo/core/geometry.h"
 
 namespace pplvo {
@@ -40,6 +41,9 @@ struct DepthWithVariance {
   cv::Mat depth_m;      ///< CV_32FC1, metres; 0 = missing
   cv::Mat var_m2;       ///< CV_32FC1, m^2; 0 where depth is missing
   int window_length = 1;
+  /// The current frame's depth moved to its colour instant (a fused map carries the current
+  /// frame's: its own depth comes first in the fusion).
+  DepthTimeAlignment time_alignment;
 };
 
 /// Converts integer depth units (e.g. TUM's 1/5000 m) to metres. Values of 0, or above

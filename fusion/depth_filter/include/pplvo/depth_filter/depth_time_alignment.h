@@ -22,6 +22,7 @@
 #include <opencv2/core.hpp>
 
 #include "pplvo/core/camera.h"
+#include "pplvo/core/depth_time_alignment.h"
 #include "pplvo/core/geometry.h"
 
 namespace pplvo::depth_filter {
@@ -34,6 +35,12 @@ struct DepthTimeAlignmentStats {
   int64_t frames_aligned = 0;       ///< depth moved to the colour instant
   int64_t frames_without_velocity = 0;  ///< an offset but no velocity yet: left as captured
   double last_offset_ms = 0;        ///< depth minus colour instant of the last frame
+};
+
+/// The motion a frame's depth is moved by, and what it was computed from.
+struct AlignmentMotion {
+  Pose3 T_colour_depth = Pose3::Identity();
+  DepthTimeAlignment alignment;  ///< the scale and the measured motion it scales
 };
 
 class DepthTimeAligner {
@@ -60,18 +67,19 @@ class DepthTimeAligner {
   void observePose(int64_t seq, int64_t colour_utime, const Pose3& T_w_c, bool tracked);
 
   /// T_colour_depth for frame `seq`, constant velocity; nullopt without a velocity.
-  std::optional<Pose3> colourFromDepth(int64_t seq, int64_t colour_utime,
-                                       int64_t depth_utime) const;
+  std::optional<AlignmentMotion> colourFromDepth(int64_t seq, int64_t colour_utime,
+                                                 int64_t depth_utime) const;
 
   /// The motion that moves frame `seq`'s depth to its colour instant (T_colour_depth, counted
   /// in the stats as apply() counts it); nullopt when there is nothing to correct (no offset,
   /// an offset beyond max_offset_s, or no velocity yet). DepthRegistration composes it with
   /// the rig's extrinsics, so unregistered depth is moved once.
-  std::optional<Pose3> motion(int64_t seq, int64_t colour_utime, int64_t depth_utime);
+  std::optional<AlignmentMotion> motion(int64_t seq, int64_t colour_utime, int64_t depth_utime);
 
-  /// `depth_m` of frame `seq` moved to the colour instant (itself when nothing to correct).
+  /// `depth_m` of frame `seq` moved to the colour instant (itself when nothing to correct);
+  /// `alignment`, when given, receives how (default: not moved).
   cv::Mat apply(const PinholeCamera& camera, const cv::Mat& depth_m, int64_t seq,
-                int64_t colour_utime, int64_t depth_utime);
+                int64_t colour_utime, int64_t depth_utime, DepthTimeAlignment* alignment = nullptr);
 
   /// True when the pose of frame `seq` was observed (and is still kept).
   bool hasPose(int64_t seq) const;

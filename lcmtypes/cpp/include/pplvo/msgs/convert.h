@@ -77,6 +77,10 @@ void encodeRawDepthMap(const DepthWithVariance& depth, const PinholeCamera& came
                        int64_t seq, const std::string& stamp, int8_t stage, int8_t reference,
                        std::vector<uint8_t>* wire);
 DepthWithVariance fromMsg(const pplvo_msgs::depth_map_t& msg);
+/// The time alignment fields of a depth map or features message of frame `seq`: not moved for
+/// a negative motion seq or a zero scale (a publisher that leaves them zero); MessageError for a
+/// non-finite scale or a motion not before the frame.
+DepthTimeAlignment depthTimeAlignmentFromMsg(double scale, int64_t motion_seq, int64_t seq);
 /// fromMsg() with decodeImageView(): raw maps point into `msg` (valid while it lives; for a
 /// handler that uses the map before it returns).
 DepthWithVariance viewOfMsg(const pplvo_msgs::depth_map_t& msg);

@@ -36,6 +36,11 @@ inline constexpr OlderMessageVersion kOlderMessageVersions[] = {
      "depth_map_t with a camera_info_t without readout_s (pplvo before 2026-12-04)"},
     {"features_t", static_cast<int64_t>(0xe4a528515d57c872ULL),
      "features_t with a camera_info_t without readout_s (pplvo before 2026-12-04)"},
+    // The depth's time alignment (scale, motion seq) passed on to the estimator, 2026-12-06.
+    {"depth_map_t", static_cast<int64_t>(0x3d3b45f8e04d8252ULL),
+     "depth_map_t without time_alignment_* (pplvo before 2026-12-06)"},
+    {"features_t", static_cast<int64_t>(0x87a1fa686d46a503ULL),
+     "features_t without depth_alignment_* (pplvo before 2026-12-06)"},
 };
 
 /// Why `size` bytes whose fingerprint is not MessageT's are not one: an older pplvo layout, or

@@ -164,6 +164,14 @@ struct MotionChainOutput {
   Matrix6d frame_error_covariance = Matrix6d::Zero();
   FrameErrorSigma frame_error;
   FrameErrorSource frame_error_source;
+  /// The part of covariance_prev_curr that is the error of the current frame's depth moved to
+  /// its colour instant, as its planes carry it into the motion (added by the tracker, which
+  /// knows the alignment; zero when the depth was not moved or the motion not measured).
+  Matrix6d depth_alignment_covariance = Matrix6d::Zero();
+  /// d xi(T_curr_prev) / d e of the motion applied for a rigid error e of the current frame's
+  /// depth (PoseEstimate::current_depth_sensitivity, of the combination with the prediction
+  /// for a weak estimate; zero on the velocity model).
+  Matrix6d current_depth_sensitivity = Matrix6d::Zero();
   double max_translation_variance_m2 = 0;  ///< of `covariance`
   int consecutive_rejections = 0;
   /// Oldest first; the last entry is the current frame (identity, zero covariance).
@@ -270,6 +278,9 @@ class MotionChain {
     Matrix6d covariance = Matrix6d::Zero();
     Pose3 velocity_motion = Pose3::Identity();
     bool solved_with_prior = false;  ///< else the information form of the two means
+    /// d xi / d e of the combination for a rigid error e of the current depth (the estimate's
+    /// current_depth_sensitivity, through the share the features have in the combination).
+    Matrix6d current_depth_sensitivity = Matrix6d::Zero();
     /// The prediction gate (prediction_gate_chi2): of both solves along the directions the
     /// features measured, else of the estimate.
     bool agrees_with_prediction = true;

@@ -229,6 +229,10 @@ struct PoseEstimate {
   double max_translation_variance_m2 = 0;
   double max_rotation_variance = 0;
   double min_relative_eigenvalue = 0;  ///< of the Jacobi-scaled J^T W J
+  /// d xi / d e for a rigid error e (xi units) of the current frame's depth: H^-1 H_planes, the
+  /// share of the solution its planes carry (zero without planes; identity when they carry it
+  /// all). The depth filter's time alignment is such an error (docs/estimator.md).
+  Matrix6d current_depth_sensitivity = Matrix6d::Zero();
 
   // Diagnostics.
   int n_points_in = 0, n_lines_in = 0, n_planes_in = 0;        ///< after validation

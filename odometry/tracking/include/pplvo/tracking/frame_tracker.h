@@ -59,6 +59,10 @@ struct TrackingOptions {
   /// Gate lines around the projection of their 3D segment under the predicted motion
   /// (reference lines without 3D keep their own 2D equation).
   bool predict_line_positions = true;
+  /// Add to the published motion's covariance the error of the current frame's depth moved to
+  /// its colour instant (the depth filter's time alignment; docs/estimator.md). The poses do
+  /// not depend on it.
+  bool depth_alignment_error = true;
 };
 
 /// Schema of TrackingOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
@@ -88,6 +92,10 @@ void visit(V& v, TrackingOptions& o) {
           "move the previous planes by the predicted motion before the plane gate");
   v.field("predict_line_positions", o.predict_line_positions,
           "gate lines around the projection of their 3D segment under the predicted motion");
+  v.field("depth_alignment_error", o.depth_alignment_error,
+          "add to the published motion covariance the error of the current frame's depth moved "
+          "to its colour instant (scale^2 times the covariance of the motion it was moved by, "
+          "through the share of the pose its planes carry); the poses do not depend on it");
 }
 
 /// What happened to one frame.
@@ -210,6 +218,12 @@ class FrameTracker {
   std::optional<estimator::PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
                                                               TrackingStats& stats);
   /// Tracks `current` against `reference`, the previous frame's 3D stage.
+  /// step() before the depth's alignment error is added to the published motion.
+  TrackingStep stepCompensatingReadout(const FrameFeatures& current);
+  /// Adds to `pose` (this frame's published motion) the error of the current frame's depth
+  /// moved to its colour instant: scale^2 times the published covariance of the motion it was
+  /// moved by, through the share of the solution the frame's planes carry.
+  void addDepthAlignmentError(const FrameFeatures& current, estimator::MotionChainOutput& pose);
   estimator::MotionChainOutput trackFromPrevious(const FrameFeatures& reference,
                                                  const FrameFeatures& current,
                                                  TrackingStats& stats);
@@ -239,6 +253,9 @@ class FrameTracker {
   /// its covariance, the keyframe's shared error in it (local map: a residual of the adjustment
   /// if the frame becomes a keyframe).
   std::optional<std::pair<int64_t, MapRelativePose>> tracked_from_keyframe_;
+  /// The last frames' published motions (seq, covariance of xi(T_prev_curr)): the depth
+  /// filter moves a frame's depth by one of them.
+  std::deque<std::pair<int64_t, Matrix6d>> published_motions_;
   /// The last posed frame and the keyframe its pose was measured against (through the
   /// keyframe, or from the keyframe's own frame): the next motion through that keyframe is the
   /// difference of two estimates against it (the shared-error estimate reads it so).
