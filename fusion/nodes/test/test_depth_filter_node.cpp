@@ -256,6 +256,13 @@ TEST(DepthFilterNode, FrameWaitsForThePoseItsTimeAlignmentNeeds) {
   pose(1);  // frame 3 can go; frame 4 needs the pose of frame 2
   ASSERT_EQ(c.cgm.size(), 4u);
   EXPECT_EQ(c.cgm.back().seq, 3);
+  // What the map says of its alignment: frame 2 had no motion yet (one pose), frame 3 was
+  // moved by the motion into frame 1 scaled by -15 ms over the frame interval.
+  EXPECT_EQ(c.cgm[2].time_alignment_motion_seq, -1);
+  EXPECT_EQ(c.cgm[3].time_alignment_motion_seq, 1);
+  const double interval_us =
+      static_cast<double>(frameMsg(scene, 1).utime - frameMsg(scene, 0).utime);
+  EXPECT_NEAR(c.cgm[3].time_alignment_scale, -15000.0 / interval_us, 1e-9);
   pose(2);
   ASSERT_EQ(c.cgm.size(), 5u);
   EXPECT_EQ(c.cgm.back().seq, 4);

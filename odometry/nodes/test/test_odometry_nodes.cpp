@@ -80,6 +80,9 @@ TEST(FrontendNode, PairsColourAndDepthInAnyOrderAndLiftsOnFusedDepth) {
     // Frame 0: depth first; frame 1: colour first, and its depth after the next colour.
     auto m0 = frameMsg(0), m1 = frameMsg(1), m2 = frameMsg(2);
     auto d0 = cgmMsg(0), d1 = cgmMsg(1);
+    // Frame 1's depth was moved to its colour instant: the features say by what.
+    d1.time_alignment_scale = -0.4;
+    d1.time_alignment_motion_seq = d1.seq - 1;
     lcm.publish(channels::kDepthCgm, &d0);
     lcm.publish(channels::kRgbd, &m0);
     lcm.publish(channels::kRgbd, &m1);
@@ -99,6 +102,9 @@ TEST(FrontendNode, PairsColourAndDepthInAnyOrderAndLiftsOnFusedDepth) {
     ASSERT_EQ(f2d.msgs.size(), 2u);
     EXPECT_EQ(f2d.msgs[0].seq, m0.seq);
     EXPECT_EQ(f2d.msgs[1].seq, m1.seq);
+    EXPECT_FALSE(msgs::fromMsg(f2d.msgs[0]).depth_time_alignment.moved());
+    EXPECT_EQ(f2d.msgs[1].depth_alignment_scale, -0.4);
+    EXPECT_EQ(f2d.msgs[1].depth_alignment_motion_seq, m1.seq - 1);
     for (const auto& m : f2d.msgs) {
       EXPECT_EQ(m.stage, pplvo_msgs::features_t::STAGE_2D);
       EXPECT_GT(m.n_points, 200);
