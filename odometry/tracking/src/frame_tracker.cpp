@@ -294,7 +294,11 @@ TrackingStep FrameTracker::step(const FrameFeatures& current) {
 
 void FrameTracker::addDepthAlignmentError(const FrameFeatures& current,
                                           estimator::MotionChainOutput& pose) {
-  if (pose.status == TrackingStatus::kFirstFrame) published_motions_.clear();  // seqs restart
+  // A new start, or a stream that restarted its seqs: the motions kept are not this stream's.
+  if (pose.status == TrackingStatus::kFirstFrame ||
+      (!published_motions_.empty() && pose.seq <= published_motions_.back().first)) {
+    published_motions_.clear();
+  }
   pose.depth_alignment_covariance.setZero();
   const DepthTimeAlignment& alignment = current.depth_time_alignment;
   const bool measured =
