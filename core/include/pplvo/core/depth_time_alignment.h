@@ -9,7 +9,7 @@ namespace pplvo {
 /// scale = (depth instant - colour instant) / that motion's interval. The motion's error
 /// moves every depth value of the frame alike: its covariance scaled by scale^2 is the error of
 /// the frame's depth as a rigid transform, which the estimator adds to what the frame's own
-/// depth measured (docs/estimator.md, "The depth's alignment error").
+/// depth measured (docs/estimator.md, "The published covariance", part 5).
 struct DepthTimeAlignment {
   double scale = 0.0;
   int64_t motion_seq = -1;  ///< -1: the depth was not moved

@@ -217,13 +217,13 @@ class FrameTracker {
   /// The estimate of T_curr_prev through the active keyframe, or nullopt when rejected.
   std::optional<estimator::PoseEstimate> estimateFromKeyframe(const FrameFeatures& current,
                                                               TrackingStats& stats);
-  /// Tracks `current` against `reference`, the previous frame's 3D stage.
   /// step() before the depth's alignment error is added to the published motion.
   TrackingStep stepCompensatingReadout(const FrameFeatures& current);
   /// Adds to `pose` (this frame's published motion) the error of the current frame's depth
   /// moved to its colour instant: scale^2 times the published covariance of the motion it was
   /// moved by, through the share of the solution the frame's planes carry.
   void addDepthAlignmentError(const FrameFeatures& current, estimator::MotionChainOutput& pose);
+  /// Tracks `current` against `reference`, the previous frame's 3D stage.
   estimator::MotionChainOutput trackFromPrevious(const FrameFeatures& reference,
                                                  const FrameFeatures& current,
                                                  TrackingStats& stats);
