@@ -18,9 +18,10 @@
 # --more-seeds adds eight more rendered with the same effects (room 31 and 41, fast room 42 and
 # 45, textureless 33 and 43, xyz room 52 and xyz textureless 53; another 50 min to render):
 # whether a difference holds over seeds (docs/estimator.md).
-# pplvo rows: keyframe (the default), the same with the rolling-shutter readout taken out of
-# the calibration (the global-shutter model), the local map (odometry.reference: local_map) and
-# frame to frame (the paper). Peers come from --peers (default ~/.cache/pplvo-peers, built by
+# pplvo rows: keyframe (the default), a single keyframe (none kept for returns: what the
+# default's re-use of earlier keyframes saves in drift), the same as the default with the
+# rolling-shutter readout taken out of the calibration (the global-shutter model), the local
+# map (odometry.reference: local_map) and frame to frame (the paper). Peers come from --peers (default ~/.cache/pplvo-peers, built by
 # ../shared/peers/build.sh); a peer that is not built is skipped with a note, one that crashes
 # or tracks fewer than half the frames is reported as such.
 # --only keeps the generated sequences named (rendered and run; e.g. two halves of the suite in
@@ -147,6 +148,8 @@ for i in "${!names[@]}"; do
     row "| $n | $label | $a | $t | $r | $p / $total | $nm / $ns | $drift |"
   }
   pplvo_row "pplvo keyframe (default)" "$d"
+  pplvo_row "pplvo single keyframe (none kept for returns)" "$d" \
+    --set odometry.keyframe.retired_keyframes=0
   if grep -q rolling_shutter_readout_ms "$d/calib_params.xml"; then
     pplvo_row "pplvo keyframe, global-shutter model" "$(global_shutter_copy "$d")"
   fi
