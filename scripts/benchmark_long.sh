@@ -21,9 +21,10 @@
 # pplvo rows: keyframe (the default), a single keyframe (none kept for returns: what the
 # default's re-use of earlier keyframes saves in drift), the same as the default with the
 # rolling-shutter readout taken out of the calibration (the global-shutter model), the local
-# map (odometry.reference: local_map) and frame to frame (the paper). Peers come from --peers (default ~/.cache/pplvo-peers, built by
-# ../shared/peers/build.sh); a peer that is not built is skipped with a note, one that crashes
-# or tracks fewer than half the frames is reported as such.
+# map (odometry.reference: local_map) and frame to frame (the paper). Peers come from --peers
+# (default ~/.cache/pplvo-peers, built by ../shared/peers/build.sh); a peer that is not built is
+# skipped with a note, one that crashes or tracks fewer than half the frames is reported as
+# such.
 # --only keeps the generated sequences named (rendered and run; e.g. two halves of the suite in
 # two processes with the same --out), the shared ones as --no-shared says.
 # Writes the table (ATE m, RPE m/s and deg/s, frames with a pose, mean NEES and the share inside
