@@ -77,10 +77,21 @@ effects=(--distortion fr1 --rolling-shutter-ms 25 --exposure-ms 8 --depth-offset
 names=(room_s21 room_fast_s22 textureless_s23 room_s24 xyz_s51)
 [ "$more_seeds" = 1 ] && names+=(room_s31 textureless_s33 room_s41 room_fast_s42 textureless_s43
                                  room_fast_s45 xyz_s52 xyz_s53)
-[ "$sensor_errors" = 1 ] && names+=(xyz_s51_depth_calib xyz_s51_depth_corr xyz_s51_frame_err
-                                    room_s21_depth_calib room_s21_depth_corr room_s21_frame_err
-                                    textureless_s23_depth_calib textureless_s23_depth_corr
-                                    textureless_s23_frame_err)
+# --sensor-errors: each of these again with each error (NAME_ERROR), same seed and effects.
+sensor_error_bases=("xyz_s51 --scene room --seed 51 --motion xyz" "room_s21 --scene room --seed 21"
+                    "textureless_s23 --scene textureless --seed 23")
+sensor_error_flags() {  # sensor_error_flags ERROR -> its pplvo-synth flags
+  case "$1" in
+    depth_calib) echo --depth-calibration-error kinect ;;
+    depth_corr) echo --depth-noise-correlation-px 2.6 ;;
+    frame_err) echo --frame-error-mm 1.3 --frame-error-deg 0.07 ;;
+  esac
+}
+if [ "$sensor_errors" = 1 ]; then
+  for base in "${sensor_error_bases[@]}"; do
+    for error in depth_calib depth_corr frame_err; do names+=("${base%% *}_$error"); done
+  done
+fi
 for n in $only; do
   [[ " ${names[*]} " == *" $n "* ]] || {
     echo "benchmark_long.sh: --only: no generated sequence $n (${names[*]})" >&2; exit 2; }
@@ -109,13 +120,12 @@ if [ "$more_seeds" = 1 ]; then
   generate xyz_s53 --scene textureless --seed 53 --motion xyz "${effects[@]}"
 fi
 if [ "$sensor_errors" = 1 ]; then
-  for base in "xyz_s51 --scene room --seed 51 --motion xyz" "room_s21 --scene room --seed 21" \
-              "textureless_s23 --scene textureless --seed 23"; do
+  for base in "${sensor_error_bases[@]}"; do
     read -r -a args <<< "$base"
-    generate "${args[0]}_depth_calib" "${args[@]:1}" "${effects[@]}" --depth-calibration-error kinect
-    generate "${args[0]}_depth_corr" "${args[@]:1}" "${effects[@]}" --depth-noise-correlation-px 2.6
-    generate "${args[0]}_frame_err" "${args[@]:1}" "${effects[@]}" --frame-error-mm 1.3 \
-      --frame-error-deg 0.07
+    for error in depth_calib depth_corr frame_err; do
+      read -r -a flags <<< "$(sensor_error_flags "$error")"
+      generate "${args[0]}_$error" "${args[@]:1}" "${effects[@]}" "${flags[@]}"
+    done
   done
 fi
 kept=()
