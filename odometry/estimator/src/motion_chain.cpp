@@ -107,10 +107,27 @@ MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
   last_cov_.setZero();
   window_.clear();
   frame_error_.addGap();  // a sensor property: what was learnt stays, the differences restart
+  if (frame_utime_) intervals_.add(*frame_utime_);  // the stream's period stays too
+  frame_utime_.reset();
+  last_motion_periods_ = 1;
   WindowEntry self;
   self.seq = seq;
   window_.push_back(self);
   return makeOutput(seq);
+}
+
+int MotionChain::periodsToFrame() const {
+  return frame_utime_ ? intervals_.periodsUntil(*frame_utime_) : 1;
+}
+
+Matrix6d MotionChain::processNoise() const {
+  int64_t intervals = periodsToFrame();
+  if (const std::optional<double> period = intervals_.period_s()) {
+    intervals *=
+        std::max<int64_t>(1, std::lround(*period / options_.velocity_model_frame_interval_s));
+  }
+  const double n = static_cast<double>(intervals);
+  return (n * n * n) * velocityModelCovariance(options_);
 }
 
 Pose3 MotionChain::predictedMotion() const {
@@ -119,7 +136,10 @@ Pose3 MotionChain::predictedMotion() const {
 }
 
 Pose3 MotionChain::decayedMotion(int rejected_frames) const {
-  return vectorToMotion(std::pow(options_.velocity_decay, rejected_frames) * velocity_);
+  const double d = options_.velocity_decay;
+  double periods = 1.0;  // 1 + d + ... + d^(n-1) for n periods
+  for (int k = 1, n = periodsToFrame(); k < n; ++k) periods += std::pow(d, k);
+  return vectorToMotion((std::pow(d, rejected_frames) * periods) * velocity_);
 }
 
 MotionChainOutput MotionChain::track(int64_t seq, const Correspondences& correspondences,
@@ -147,7 +167,7 @@ std::optional<MotionPrior> MotionChain::priorForWeakEstimate(const PoseEstimate&
   }
   if (!isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) return std::nullopt;
   MotionPrior prior;
-  prior.covariance = velocityModelCovariance(options_);
+  prior.covariance = processNoise();
   // The constrained subset: the directions in which the estimate knows more than the
   // prediction. Fewer than half of them: the features say too little, the frame is the
   // velocity model's.
@@ -231,7 +251,7 @@ std::optional<MotionChain::CombinedMotion> MotionChain::fuseWithPrediction(
 
 bool MotionChain::agreesAlongMeasuredDirections(const PoseEstimate& est) const {
   if (!hasPredictionToGate()) return true;
-  const Matrix6d prior = (1.0 + consecutive_rejections_) * velocityModelCovariance(options_);
+  const Matrix6d prior = (1.0 + consecutive_rejections_) * processNoise();
   const Eigen::LDLT<Matrix6d> est_ldlt(est.covariance);
   if (est_ldlt.info() != Eigen::Success) return false;
   const DirectionsBetterThanPrediction measured(est_ldlt.solve(Matrix6d::Identity()), prior);
@@ -249,7 +269,7 @@ bool MotionChain::agreesWithPrediction(const PoseEstimate& est) const {
   if (!hasPredictionToGate()) return true;
   if (!isValidPose(est.T_curr_prev, 1e-6) || !est.covariance.allFinite()) return true;  // not used
   // Each frame since the last measured motion adds the velocity model's process noise.
-  const Matrix6d prior = (1.0 + consecutive_rejections_) * velocityModelCovariance(options_);
+  const Matrix6d prior = (1.0 + consecutive_rejections_) * processNoise();
   const Vector6d innovation = poseToXi(est.T_curr_prev) - poseToXi(predictedMotion());
   const Eigen::LDLT<Matrix6d> joint(est.covariance + prior);
   return joint.info() == Eigen::Success &&
@@ -265,6 +285,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
                                       std::optional<int64_t> held_reference,
                                       const PoseEstimate* solved_with_prior) {
   if (!initialised_) return initialise(seq);
+  const int periods = periodsToFrame();
   const bool accepted =
       est.accepted() && isValidPose(est.T_curr_prev, 1e-6) && est.covariance.allFinite();
   const bool good = accepted && agreesWithPrediction(est);
@@ -285,6 +306,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
     Q = good ? est.covariance : fused->covariance;
     sensitivity = good ? est.current_depth_sensitivity : fused->current_depth_sensitivity;
     velocity_ = motionToVector(fused ? fused->velocity_motion : T_curr_prev);
+    if (periods > 1) velocity_ /= periods;  // per period: the next frame may come after one
     velocity_measured_ = true;
     if (fused) ++fused_estimates_;
   } else {
@@ -292,7 +314,7 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
     if (consecutive_rejections_ <= options_.max_velocity_model_frames) {
       status_ = TrackingStatus::kVelocityModel;
       T_curr_prev = decayedMotion(consecutive_rejections_);
-      Q = velocityModelCovariance(options_);
+      Q = processNoise();
     } else {
       status_ = TrackingStatus::kLost;
       velocity_.setZero();
@@ -301,13 +323,18 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
       Q = kLargeVariance * Matrix6d::Identity();
     }
   }
+  if (frame_utime_) intervals_.add(*frame_utime_);
+  frame_utime_.reset();
+  last_motion_periods_ = periods;
   // T_w_curr = T_w_prev * T_prev_curr.
   T_w_c_ = T_w_c_ * T_curr_prev.inverse();
   T_w_c_.linear() = Eigen::Quaterniond(T_w_c_.linear()).normalized().toRotationMatrix();
   last_T_curr_prev_ = T_curr_prev;
   last_cov_ = Q;
   // Only measured motions show the shared error; a predicted one would smooth it. A weak
-  // estimate combined with the prediction shows it in the directions it measured.
+  // estimate combined with the prediction shows it in the directions it measured. (A motion
+  // over dropped frames is read too, its step against one-period neighbours with it:
+  // docs/estimator.md, "Time between frames".)
   if (good || fused) {
     frame_error_.addMeasuredMotion(T_curr_prev.inverse(), invertedPoseCovariance(T_curr_prev, Q),
                                    held_reference, directionsMeasuredBy(est));

@@ -470,6 +470,76 @@ TEST(MotionChain, ConfidentEstimateFarFromThePredictionIsRefused) {
       TrackingStatus::kTracking);
 }
 
+TEST(MotionChain, PredictionCoversTheFramesDroppedSinceTheLast) {
+  // 30 Hz stamps, 20 mm a frame; then a frame two periods later (one dropped on the way).
+  MotionChainOptions o;
+  MotionChain chain(o);
+  const int64_t period_us = 33333;
+  const Pose3 M = makePose({0.02, 0.0, 0.0}, Eigen::Quaterniond::Identity());
+  int64_t t = 1000000;
+  for (int seq = 0; seq < 5; ++seq, t += period_us) {
+    chain.setFrameTime(t);
+    chain.update(seq, goodEstimate(seq == 0 ? Pose3::Identity() : M));
+  }
+  t += period_us;  // the frame at t - period_us was dropped
+  chain.setFrameTime(t);
+  EXPECT_EQ(chain.periodsToFrame(), 2);
+  // Constant velocity, the dropped period decayed once as a frame without a measurement.
+  EXPECT_NEAR(chain.predictedMotion().translation().x(), (1.0 + o.velocity_decay) * 0.02, 1e-12);
+  const Pose3 M2 = makePose({0.04, 0.0, 0.0}, Eigen::Quaterniond::Identity());
+  EXPECT_EQ(chain.update(5, goodEstimate(M2)).status, TrackingStatus::kTracking);
+  EXPECT_EQ(chain.lastMotionPeriods(), 2);
+  // The velocity is per period: the next frame, one period on, is predicted 20 mm, not 40.
+  chain.setFrameTime(t + period_us);
+  EXPECT_EQ(chain.periodsToFrame(), 1);
+  EXPECT_NEAR(chain.predictedMotion().translation().x(), 0.02, 1e-12);
+  // Without stamps every frame is one period, as before.
+  MotionChain stampless(o);
+  for (int seq = 0; seq < 5; ++seq)
+    stampless.update(seq, goodEstimate(seq == 0 ? Pose3::Identity() : M));
+  EXPECT_EQ(stampless.periodsToFrame(), 1);
+  EXPECT_NEAR(stampless.predictedMotion().translation().x(), 0.02, 1e-12);
+}
+
+TEST(MotionChain, ProcessNoiseCoversTheTimeSinceTheLastFrame) {
+  // A hand reverses a 60 mm-a-frame motion. At 30 Hz that is a 120 mm change within one
+  // nominal frame, beyond the velocity model's 20 mm process noise: refused as a wrong
+  // solution. At 10 Hz (a dataset played at every third frame) the same change spans three
+  // nominal frames, noise 20 mm * 3^1.5: used.
+  const Pose3 forward = makePose({0.06, 0.0, 0.0}, Eigen::Quaterniond::Identity());
+  const Pose3 back = makePose({-0.06, 0.0, 0.0}, Eigen::Quaterniond::Identity());
+  MotionChainOptions o;
+  auto reversalAt = [&](int64_t period_us) {
+    MotionChain chain(o);
+    int64_t t = 1000000;
+    for (int seq = 0; seq < 4; ++seq, t += period_us) {
+      chain.setFrameTime(t);
+      chain.update(seq, goodEstimate(seq == 0 ? Pose3::Identity() : forward));
+    }
+    chain.setFrameTime(t);
+    return chain.update(4, goodEstimate(back));
+  };
+  MotionChainOutput at30 = reversalAt(33333);
+  EXPECT_EQ(at30.status, TrackingStatus::kVelocityModel);
+  EXPECT_NEAR(at30.covariance(0, 0), o.velocity_model_sigma_t_m * o.velocity_model_sigma_t_m,
+              1e-12);
+  MotionChainOutput at10 = reversalAt(100000);
+  EXPECT_EQ(at10.status, TrackingStatus::kTracking);
+  EXPECT_NEAR(at10.T_curr_prev.translation().x(), -0.06, 1e-12);
+  // A frame the velocity model carries at 10 Hz has the noise of three nominal frames.
+  MotionChain slow(o);
+  int64_t t = 1000000;
+  for (int seq = 0; seq < 4; ++seq, t += 100000) {
+    slow.setFrameTime(t);
+    slow.update(seq, goodEstimate(seq == 0 ? Pose3::Identity() : forward));
+  }
+  slow.setFrameTime(t);
+  const MotionChainOutput carried = slow.update(4, rejectedEstimate());
+  EXPECT_EQ(carried.status, TrackingStatus::kVelocityModel);
+  EXPECT_NEAR(carried.covariance(0, 0),
+              27.0 * o.velocity_model_sigma_t_m * o.velocity_model_sigma_t_m, 1e-12);
+}
+
 TEST(MotionChain, CorrectedPoseMovesTheWorldPoseAndNotTheMotion) {
   // A local map moves the current frame 5 cm (its adjustment): the next frame chains from the
   // corrected pose, its published motion is what was measured, and the prediction (velocity)

@@ -66,6 +66,7 @@ void FrameTracker::resetKeyframes(int64_t next, KeyframeReason reason) {
 }
 
 estimator::MotionChainOutput FrameTracker::initialise(const FrameFeatures& first) {
+  tracker_.setFrameTime(first.utime);
   forgetPending();
   lifted_.setLastPosed(first.seq);
   resetKeyframes(first.seq, KeyframeReason::kStart);
@@ -78,6 +79,7 @@ estimator::MotionChainOutput FrameTracker::initialise(const FrameFeatures& first
 
 estimator::MotionChainOutput FrameTracker::restart(const FrameFeatures& current) {
   const Pose3 T_w_c = tracker_.T_w_c();
+  tracker_.setFrameTime(current.utime);
   forgetPending();
   lifted_.setLastPosed(current.seq);
   resetKeyframes(current.seq, KeyframeReason::kStart);
@@ -356,6 +358,8 @@ TrackingStep FrameTracker::stepCompensatingReadout(const FrameFeatures& current)
 }
 
 TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
+  // The prediction covers the time since the last frame (dropped frames, a lower rate).
+  tracker_.setFrameTime(current.utime);
   TrackingStep out;
   TrackingStats& s = out.stats;
   const std::optional<int64_t> last = lifted_.lastPosed();
@@ -481,8 +485,12 @@ void FrameTracker::finishStep(const FrameFeatures& current, TrackingStats& stats
   // The frame interval and this frame's velocity, for the rolling-shutter model.
   if (last_posed_stamp_ && current.seq > last_posed_stamp_->first &&
       current.utime > last_posed_stamp_->second) {
+    // Per stream period, as the velocity model's motion is (frames lost on the way or left
+    // out by the source both count).
+    const int64_t periods =
+        std::max<int64_t>(current.seq - last_posed_stamp_->first, tracker_.lastMotionPeriods());
     frame_interval_s_ = 1e-6 * static_cast<double>(current.utime - last_posed_stamp_->second) /
-                        static_cast<double>(current.seq - last_posed_stamp_->first);
+                        static_cast<double>(periods);
   }
   last_posed_stamp_ = {current.seq, current.utime};
   velocity_.emplace_back(current.seq,

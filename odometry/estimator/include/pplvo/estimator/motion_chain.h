@@ -13,6 +13,7 @@
 #include "pplvo/core/frame_pose.h"
 #include "pplvo/core/geometry.h"
 #include "pplvo/estimator/frame_error_estimator.h"
+#include "pplvo/estimator/frame_intervals.h"
 #include "pplvo/estimator/pose_estimator.h"
 
 namespace pplvo::estimator {
@@ -35,6 +36,14 @@ struct MotionChainOptions {
   /// threshold drops frames linked to the current one through a guessed motion.
   double velocity_model_sigma_t_m = 0.02;
   double velocity_model_sigma_q = 0.01;
+  /// The frame interval the per-frame values above (and the prediction gate's noise) are
+  /// given for: a Kinect's 30 Hz. When the stamps (MotionChain::setFrameTime) show more time
+  /// since the last frame, n of these intervals (n = the stream's period in them, rounded, times
+  /// the whole periods since the last frame: a lower frame rate, a dataset played at every
+  /// third frame, dropped frames), the process noise is that of n intervals: sigma n^1.5, the
+  /// growth of a constant-velocity prediction's error under white acceleration. Rounding keeps
+  /// stamp jitter out.
+  double velocity_model_frame_interval_s = 1.0 / 30.0;
   /// A weak estimate (EstimateStatus kUncertain or kDegenerate: some directions unconstrained,
   /// e.g. translation along a plain corridor) is not thrown away: it is combined with the
   /// velocity model's prediction (the prediction with the process noise above as a prior of
@@ -113,6 +122,10 @@ void visit(V& v, MotionChainOptions& o) {
   v.field("velocity_model_sigma_q", o.velocity_model_sigma_q,
           "process noise std of q_xyz of a velocity-model step (~half-angle, rad)",
           config::atLeast(0));
+  v.field("velocity_model_frame_interval_s", o.velocity_model_frame_interval_s,
+          "frame interval the velocity model's sigmas are given for (s); n such intervals "
+          "since the last frame (stamps: lower rate, dropped frames) give sigma n^1.5",
+          config::positive());
   v.field("frame_error_online", o.frame_error_online,
           "estimate the per-frame shared error online from the roughness of the measured "
           "motions (their second differences); false: the fixed sigmas below");
@@ -192,10 +205,21 @@ class MotionChain {
   /// Starts (or restarts) tracking at frame `seq` with T_w_c = T_w_c0.
   MotionChainOutput initialise(int64_t seq, const Pose3& T_w_c0 = Pose3::Identity());
 
-  /// Prediction of T_curr_prev for the next frame (constant velocity).
+  /// The stamp (microseconds) of the frame that the next initialise(), track() or update()
+  /// is for. The prediction and the velocity model's process noise then cover the stream's
+  /// frame periods since the last frame (FrameIntervals); without stamps, one period each.
+  void setFrameTime(int64_t utime_us) { frame_utime_ = utime_us; }
+  /// Whole stream periods from the last frame to the one of setFrameTime() (1 if unknown).
+  int periodsToFrame() const;
+  /// Whole stream periods the last update() covered (1 without stamps).
+  int lastMotionPeriods() const { return last_motion_periods_; }
+
+  /// Prediction of T_curr_prev for the next frame (constant velocity, over periodsToFrame()).
   Pose3 predictedMotion() const;
   /// The velocity model's T_curr_prev after `rejected_frames` consecutive rejections:
-  /// velocity_decay^rejected_frames times the last good motion.
+  /// velocity_decay^rejected_frames times the last good motion per period; over several
+  /// periods (dropped frames) each period after the first decays once more (a motion not
+  /// measured fades, as over rejected frames; bounded however long the gap).
   Pose3 decayedMotion(int rejected_frames) const;
 
   /// Estimates the motion from the previous frame to `seq` and updates the state. The
@@ -299,6 +323,12 @@ class MotionChain {
   Matrix6d last_cov_ = Matrix6d::Zero();
   std::deque<WindowEntry> window_;
   FrameErrorEstimator frame_error_;
+  /// The velocity model's process noise for the coming frame: velocityModelCovariance times
+  /// n^3 for n nominal intervals (velocity_model_frame_interval_s).
+  Matrix6d processNoise() const;
+  FrameIntervals intervals_;
+  std::optional<int64_t> frame_utime_;  ///< of the frame the next update is for
+  int last_motion_periods_ = 1;
 };
 
 }  // namespace pplvo::estimator
