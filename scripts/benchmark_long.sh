@@ -141,16 +141,16 @@ if [ "$sensor_errors" = 1 ]; then
     done
   done
 fi
-derive() {  # derive NAME SOURCE MODE ARGS...: scripts/derive_sequence.py into the suite
-  local name=$1 source=$2; shift 2
-  [ -f "$suite/$name/groundtruth.txt" ] && return 0
-  rm -rf "${suite:?}/$name"
-  python3 "$here/scripts/derive_sequence.py" "$@" "$source" "$suite/$name" >&2
+derive() {  # derive DIR NAME SOURCE MODE ARGS...: scripts/derive_sequence.py into DIR/NAME
+  local dir=$1 name=$2 source=$3; shift 3
+  [ -f "$dir/$name/groundtruth.txt" ] && return 0
+  rm -rf "${dir:?}/$name"
+  python3 "$here/scripts/derive_sequence.py" "$@" "$source" "$dir/$name" >&2
 }
 if [ "$frames_left_out" = 1 ]; then
   for base in "${left_out_bases[@]}"; do
-    selected "${base}_every3" && derive "${base}_every3" "$suite/$base" every 3
-    selected "${base}_drop25" && derive "${base}_drop25" "$suite/$base" drop 0.25 7
+    selected "${base}_every3" && derive "$suite" "${base}_every3" "$suite/$base" every 3
+    selected "${base}_drop25" && derive "$suite" "${base}_drop25" "$suite/$base" drop 0.25 7
   done
 fi
 kept=()
@@ -169,21 +169,16 @@ if [ "$shared_too" = 1 ]; then
   done
   fr1="$shared/tum_fr1_xyz_short"
   if [ "$frames_left_out" = 1 ] && [ -f "$fr1/groundtruth.txt" ]; then
-    derived="$out/derived"
+    derived="$out/derived"  # outside the suite: real frames, the ground truth not exact
     mkdir -p "$derived"
-    while read -r name mode; do
-      read -r -a how <<< "$mode"
-      [ -f "$derived/$name/groundtruth.txt" ] || { rm -rf "${derived:?}/$name";
-        python3 "$here/scripts/derive_sequence.py" "${how[@]:0:${#how[@]}-1}" \
-          "$([ "${how[-1]}" = fr1 ] && echo "$fr1" || echo "$derived/${how[-1]}")" \
-          "$derived/$name" >&2; }
-      names+=("$name"); dirs+=("$derived/$name"); fpss+=(0)
-    done <<'LIST'
-tum_fr1_xyz_short_every2 every 2 fr1
-tum_fr1_xyz_short_every3 every 3 fr1
-tum_fr1_xyz_short_palindrome6 palindrome 6 fr1
-tum_fr1_xyz_short_palindrome6_every3 every 3 tum_fr1_xyz_short_palindrome6
-LIST
+    derive "$derived" tum_fr1_xyz_short_every2 "$fr1" every 2
+    derive "$derived" tum_fr1_xyz_short_every3 "$fr1" every 3
+    derive "$derived" tum_fr1_xyz_short_palindrome6 "$fr1" palindrome 6
+    derive "$derived" tum_fr1_xyz_short_palindrome6_every3 \
+      "$derived/tum_fr1_xyz_short_palindrome6" every 3
+    for name in every2 every3 palindrome6 palindrome6_every3; do
+      names+=("tum_fr1_xyz_short_$name"); dirs+=("$derived/tum_fr1_xyz_short_$name"); fpss+=(0)
+    done
   fi
 fi
 

@@ -57,9 +57,9 @@ def subset(src, dst, keep):
     name = frame_list_name(src)
     frames = read_list(os.path.join(src, name))
     rows = [fields for k, (_, fields) in enumerate(frames) if keep(k)]
-    others = ['rgb', 'depth', 'calib_params.xml', 'groundtruth.txt', 'depth.txt', 'rgb.txt',
+    others = ['rgb', 'depth', 'calib_params.xml', 'groundtruth.txt', 'depth.txt',
               'associations.txt']
-    link_folder(src, dst, [n for n in others if n not in (name, 'rgb.txt')])
+    link_folder(src, dst, [n for n in others if n != name])
     write_list(os.path.join(dst, name), '# derived by derive_sequence.py from %s\n' % src, rows)
     if name == 'associations.txt':  # depth_stamp depth_file rgb_stamp rgb_file
         write_list(os.path.join(dst, 'rgb.txt'), '# colour images\n', [r[2:4] for r in rows])
@@ -74,6 +74,7 @@ def palindrome(src, dst, legs):
     t0 = min(t for t, _ in rgb + depth)
     t1 = max(t for t, _ in rgb + depth)
     period = (max(t for t, _ in rgb) - min(t for t, _ in rgb)) / max(1, len(rgb) - 1)
+    link_folder(src, dst, ['calib_params.xml'])
     os.makedirs(os.path.join(dst, 'rgb'))
     os.makedirs(os.path.join(dst, 'depth'))
     out = {'rgb': [], 'depth': [], 'gt': []}
@@ -96,9 +97,6 @@ def palindrome(src, dst, legs):
                                ('depth', 'depth.txt', '# depth maps\n'),
                                ('gt', 'groundtruth.txt', '# ground truth trajectory\n')):
         write_list(os.path.join(dst, name), header, [f for _, f in sorted(out[kind])])
-    link_folder_file = os.path.join(os.path.abspath(src), 'calib_params.xml')
-    if os.path.exists(link_folder_file):
-        os.symlink(link_folder_file, os.path.join(dst, 'calib_params.xml'))
     return len(rgb), len(out['rgb'])
 
 
@@ -116,13 +114,8 @@ def main(argv):
             fraction, seed, src, dst = float(argv[2]), int(argv[3]), argv[4], argv[5]
             if not 0 <= fraction < 1:
                 raise ValueError('FRACTION must be in [0, 1)')
-            rng = random.Random(seed)
-            draws = {}
-            def keep(k):
-                if k not in draws:
-                    draws[k] = k == 0 or rng.random() >= fraction
-                return draws[k]
-            before, after = subset(src, dst, keep)
+            rng = random.Random(seed)  # subset() asks once per frame, in order
+            before, after = subset(src, dst, lambda k: k == 0 or rng.random() >= fraction)
         elif mode == 'palindrome':
             legs, src, dst = int(argv[2]), argv[3], argv[4]
             if legs < 1:
