@@ -67,22 +67,22 @@ Matrix6d frameErrorCovariance(const MotionChainOptions& o) {
 MotionChain::MotionChain(MotionChainOptions options)
     : options_(std::move(options)),
       estimator_(options_.estimator),
-      frame_error_(options_.frame_error_window, options_.frame_error_min_samples) {}
+      frame_error_(options_.frame_error_window, options_.frame_error_min_samples),
+      published_frame_error_(options_.frame_error_window, options_.frame_error_min_samples) {}
 
-FrameErrorSource MotionChain::frameErrorSource() const {
+FrameErrorSource MotionChain::sourceOf(const FrameErrorEstimator& estimator) const {
   // Each block online once it has its own samples; one that nothing measured keeps the
   // configured sigma.
   const bool online = options_.frame_error_online;
-  return FrameErrorSource{online && frame_error_.translationReady(),
-                          online && frame_error_.rotationReady()};
+  return FrameErrorSource{online && estimator.translationReady(),
+                          online && estimator.rotationReady()};
 }
 
-FrameErrorSigma MotionChain::frameError() const {
-  const FrameErrorSource source = frameErrorSource();
-  return FrameErrorSigma{source.translation_online ? frame_error_.sigma().t_m
-                                                   : options_.frame_error_sigma_t_m,
-                         source.rotation_online
-                             ? frame_error_.sigma().rot_rad
+FrameErrorSigma MotionChain::sigmaOf(const FrameErrorEstimator& estimator) const {
+  const FrameErrorSource source = sourceOf(estimator);
+  return FrameErrorSigma{
+      source.translation_online ? estimator.sigma().t_m : options_.frame_error_sigma_t_m,
+      source.rotation_online ? estimator.sigma().rot_rad
                              : options_.frame_error_sigma_rot_deg * M_PI / 180.0};
 }
 
@@ -105,8 +105,10 @@ MotionChainOutput MotionChain::initialise(int64_t seq, const Pose3& T_w_c0) {
   consecutive_rejections_ = 0;
   last_T_curr_prev_ = Pose3::Identity();
   last_cov_.setZero();
+  last_published_cov_.setZero();
   window_.clear();
   frame_error_.addGap();  // a sensor property: what was learnt stays, the differences restart
+  published_frame_error_.addGap();
   if (frame_utime_) intervals_.add(*frame_utime_);  // the stream's period stays too
   frame_utime_.reset();
   last_motion_periods_ = 1;
@@ -331,15 +333,22 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
   T_w_c_.linear() = Eigen::Quaterniond(T_w_c_.linear()).normalized().toRotationMatrix();
   last_T_curr_prev_ = T_curr_prev;
   last_cov_ = Q;
+  last_published_cov_ =
+      good && options_.publish_measured_spread ? est.covariance_at_measured_spread.value_or(Q) : Q;
   // Only measured motions show the shared error; a predicted one would smooth it. A weak
   // estimate combined with the prediction shows it in the directions it measured. (A motion
   // over dropped frames is read too, its step against one-period neighbours with it:
   // docs/estimator.md, "Time between frames".)
   if (good || fused) {
+    const MeasuredDirections measured = directionsMeasuredBy(est);
     frame_error_.addMeasuredMotion(T_curr_prev.inverse(), invertedPoseCovariance(T_curr_prev, Q),
-                                   held_reference, directionsMeasuredBy(est));
+                                   held_reference, measured);
+    published_frame_error_.addMeasuredMotion(
+        T_curr_prev.inverse(), invertedPoseCovariance(T_curr_prev, last_published_cov_),
+        held_reference, measured);
   } else {
     frame_error_.addGap();
+    published_frame_error_.addGap();
   }
   if (status_ == TrackingStatus::kLost) {
     window_.clear();  // nothing links older frames to this one
@@ -409,9 +418,9 @@ MotionChainOutput MotionChain::makeOutput(int64_t seq) const {
   out.T_curr_prev = last_T_curr_prev_;
   out.covariance = last_cov_;
   out.T_prev_curr = last_T_curr_prev_.inverse();
-  out.covariance_prev_curr = invertedPoseCovariance(last_T_curr_prev_, last_cov_);
-  out.frame_error = frameError();
-  out.frame_error_source = frameErrorSource();
+  out.covariance_prev_curr = invertedPoseCovariance(last_T_curr_prev_, last_published_cov_);
+  out.frame_error = sigmaOf(published_frame_error_);
+  out.frame_error_source = sourceOf(published_frame_error_);
   if (status_ != TrackingStatus::kFirstFrame) {
     out.frame_error_covariance = frameErrorCovariance(out.frame_error);
     out.covariance_prev_curr += out.frame_error_covariance;

@@ -118,6 +118,9 @@ class JointProblem {
   /// the factor their residuals' covariance exceeds the modelled Sigma_r by (robust scale^2).
   double point_weight = 1.0, line_weight = 1.0;
   double point_var_scale = 1.0, line_var_scale = 1.0;
+  /// Set by reweight: the same factors as measured, below 1 too (the planes' k and the point
+  /// and line spreads unclamped), for the covariance at the measured spread.
+  double plane_spread = 1.0, point_spread_var = 1.0, line_spread_var = 1.0;
 
   struct ReweightResult {
     int rows = 0;  // rows with non-zero weight
@@ -171,12 +174,15 @@ class JointProblem {
       out.rows += 3;
       ++out.n_planes;
     }
-    plane_scale = 1.0;
+    plane_scale = plane_spread = 1.0;
     if (o_.plane_weight_from_residuals && !plane_chi2.empty()) {
       auto mid = plane_chi2.begin() + plane_chi2.size() / 2;
       std::nth_element(plane_chi2.begin(), mid, plane_chi2.end());
       constexpr double kChi2Dof3Median = 2.366;
-      if (std::isfinite(*mid)) plane_scale = std::max(1.0, *mid / kChi2Dof3Median);
+      if (std::isfinite(*mid)) {
+        plane_spread = *mid / kChi2Dof3Median;
+        plane_scale = std::max(1.0, plane_spread);
+      }
     }
     plane_weight = o_.plane_weight_from_residuals ? std::min(o_.plane_scale_alpha, 1.0 / plane_scale)
                                                   : o_.plane_scale_alpha;
@@ -185,21 +191,32 @@ class JointProblem {
                                       [](const PointTerm& T) { return T.active; }));
     abs_p.assign(abs_w.begin(), abs_w.begin() + n_point_values);
     abs_l.assign(abs_w.begin() + n_point_values, abs_w.end());
-    auto mad = [](std::vector<double>& v) {
+    auto spread = [](std::vector<double>& v) {
       auto mid = v.begin() + v.size() / 2;
       std::nth_element(v.begin(), mid, v.end());
-      return std::max(1.0, 1.4826 * *mid);
+      return 1.4826 * *mid;
     };
-    if (o_.tukey_mad_scale && !abs_w.empty()) out.scale = mad(abs_w);
+    double pooled_spread = 1.0;
+    if (o_.tukey_mad_scale && !abs_w.empty()) {
+      pooled_spread = spread(abs_w);
+      out.scale = std::max(1.0, pooled_spread);
+    }
     out.point_scale = out.line_scale = out.scale;
+    double point_spread = pooled_spread, line_spread = pooled_spread;
     point_weight = line_weight = 1.0;
     if (o_.tukey_mad_scale && o_.family_robust_scales) {
       // Each family's own spread: a family whose residuals exceed their model by s_f more than
       // the other's weighs (s_min / s_f)^2; too few values to tell fall back to the pooled
       // scale.
       constexpr size_t kMinValues = 20;
-      if (abs_p.size() >= kMinValues) out.point_scale = mad(abs_p);
-      if (abs_l.size() >= kMinValues) out.line_scale = mad(abs_l);
+      if (abs_p.size() >= kMinValues) {
+        point_spread = spread(abs_p);
+        out.point_scale = std::max(1.0, point_spread);
+      }
+      if (abs_l.size() >= kMinValues) {
+        line_spread = spread(abs_l);
+        out.line_scale = std::max(1.0, line_spread);
+      }
       // Relative to the more precise family, which keeps weight 1: far from the solution the
       // scales measure the misfit of every family, and weighing all of them down would hand
       // the pose to the planes.
@@ -209,6 +226,8 @@ class JointProblem {
     }
     point_var_scale = o_.tukey_mad_scale ? out.point_scale * out.point_scale : 1.0;
     line_var_scale = o_.tukey_mad_scale ? out.line_scale * out.line_scale : 1.0;
+    point_spread_var = o_.tukey_mad_scale ? point_spread * point_spread : 1.0;
+    line_spread_var = o_.tukey_mad_scale ? line_spread * line_spread : 1.0;
     for (size_t i = 0; i < points.size(); ++i) {
       PointTerm& T = points[i];
       if (!T.active) continue;
@@ -279,12 +298,15 @@ class JointProblem {
   /// weigh point_weight / line_weight in both, and count their variance scale in M: their
   /// residuals' actual covariance is that factor times the modelled Sigma_r (the robust
   /// scale squared; docs/estimator.md, "The published covariance: what it contains").
-  /// `H_planes` receives the planes' part of H.
-  void information(const double* xi, Matrix6d& H, Matrix6d& M, Matrix6d& H_planes) const {
+  /// `H_planes` receives the planes' part of H, `M_spread` M with each family's variance
+  /// factor as measured, below 1 too.
+  void information(const double* xi, Matrix6d& H, Matrix6d& M, Matrix6d& H_planes,
+                   Matrix6d& M_spread) const {
     const PoseEval pose(xi);
     H.setZero();
     M.setZero();
     H_planes.setZero();
+    M_spread.setZero();
     if (!pose.valid) return;
     Eigen::Vector2d r;
     Matrix26 J2;
@@ -296,6 +318,7 @@ class JointProblem {
       H += point_weight * AtA;
       const double c = point_weight * point_weight * point_var_scale;
       M += c * AtA;
+      M_spread += point_weight * point_weight * point_spread_var * AtA;
     }
     for (const LineTerm& T : lines) {
       if (!T.active || T.sqrt_tukey <= 0) continue;
@@ -304,6 +327,7 @@ class JointProblem {
       const Matrix6d AtA = A.transpose() * A;
       H += line_weight * AtA;
       M += line_weight * line_weight * line_var_scale * AtA;
+      M_spread += line_weight * line_weight * line_spread_var * AtA;
     }
     Eigen::Vector3d r3;
     Matrix36 J3;
@@ -315,13 +339,16 @@ class JointProblem {
       H.noalias() += plane_weight * AtA;
       H_planes.noalias() += plane_weight * AtA;
       M.noalias() += plane_weight * plane_weight * plane_scale * AtA;
+      M_spread.noalias() += plane_weight * plane_weight * plane_spread * AtA;
     }
     if (prior) {  // weighted by its own covariance, so it enters M as it does H
       H += prior->information;
       M += prior->information;
+      M_spread += prior->information;
     }
     H = 0.5 * (H + H.transpose());
     M = 0.5 * (M + M.transpose());
+    M_spread = 0.5 * (M_spread + M_spread.transpose());
   }
 
  private:
@@ -521,11 +548,11 @@ IrlsResult solveIrls(JointProblem& problem, const PoseEstimatorOptions& o, Vecto
 /// variances, the smallest relative eigenvalue of the Jacobi-scaled information).
 void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
                         const PoseEstimatorOptions& o, PoseEstimate& est) {
-  Matrix6d H, M, H_planes;
+  Matrix6d H, M, H_planes, M_spread;
   // The whitened point and line residuals spread by the robust scale s (>= 1, MAD): their
   // covariance is s^2 Sigma_r, not Sigma_r (on real images s ~ 1.5; 1 on synthetic ones).
   // (With family_robust_scales each family has its own s and weighs 1/s^2.)
-  problem.information(xi.data(), H, M, H_planes);
+  problem.information(xi.data(), H, M, H_planes, M_spread);
   Eigen::Matrix<double, 6, 1> dinv_sqrt;
   bool diag_ok = H.allFinite() && M.allFinite();
   for (int i = 0; i < 6; ++i) {
@@ -551,6 +578,11 @@ void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
     }
     const Matrix6d cov = (o.covariance_sandwich ? Matrix6d(Hinv * M * Hinv) : Hinv) + null_part;
     if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
+    const Matrix6d cov_spread =
+        (o.covariance_sandwich ? Matrix6d(Hinv * M_spread * Hinv) : Hinv) + null_part;
+    if (cov.allFinite() && cov_spread.allFinite()) {
+      est.covariance_at_measured_spread = 0.5 * (cov_spread + cov_spread.transpose());
+    }
     // The current frame's depth enters only through its planes (points and lines are
     // reprojected into its image): a rigid error e of that depth moves them as a pose change
     // would, and the solve by H^-1 H_planes e.

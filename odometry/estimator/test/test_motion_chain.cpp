@@ -53,6 +53,40 @@ void expectPoseNear(const Pose3& a, const Pose3& b, double tol = 1e-9) {
   EXPECT_LT((a.matrix() - b.matrix()).norm(), tol) << a.matrix() << "\n" << b.matrix();
 }
 
+// An accepted estimate whose residuals spread less than modelled publishes its covariance at
+// the measured spread, and the shared error is read against what is published; the poses and
+// the decisions' shared error are those of the model's covariance, with the option or without.
+TEST(MotionChain, PublishesTheCovarianceAtTheMeasuredSpread) {
+  const Pose3 M = testing::typicalMotion();
+  MotionChainOptions on, off;
+  off.publish_measured_spread = false;
+  MotionChain with(on), without(off);
+  for (int k = 0; k < 40; ++k) {
+    // A sway with a shared error the model's covariance already covers: read as none
+    // against it, as some against the quarter that is published.
+    const double s = (k % 2 == 0 ? 1.0 : -1.0) * 0.6e-3;
+    Pose3 T = M;
+    T.translation() += Eigen::Vector3d(s, -s, s);
+    PoseEstimate e = goodEstimate(T);
+    e.covariance_at_measured_spread = 0.25 * e.covariance;
+    const MotionChainOutput a = with.update(k, e);
+    const MotionChainOutput b = without.update(k, e);
+    EXPECT_TRUE(a.T_w_c.matrix() == b.T_w_c.matrix());  // bit for bit
+    EXPECT_EQ(a.status, b.status);
+    if (k == 0) continue;
+    const Matrix6d published = a.covariance_prev_curr - a.frame_error_covariance;
+    EXPECT_LT((published - invertedPoseCovariance(T, 0.25 * e.covariance)).norm(),
+              1e-12 * e.covariance.norm());
+    EXPECT_LT((b.covariance_prev_curr - b.frame_error_covariance -
+               invertedPoseCovariance(T, e.covariance))
+                  .norm(),
+              1e-12 * e.covariance.norm());
+  }
+  EXPECT_EQ(with.frameError().t_m, without.frameError().t_m);  // the decisions' reading
+  EXPECT_GT(with.publishedFrameError().t_m, without.publishedFrameError().t_m);
+  EXPECT_EQ(without.publishedFrameError().t_m, without.frameError().t_m);
+}
+
 TEST(MotionChain, StateMachineAndDecayingVelocity) {
   MotionChainOptions opts;
   opts.velocity_decay = 0.5;

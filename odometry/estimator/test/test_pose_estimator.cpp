@@ -157,6 +157,62 @@ TEST(PoseEstimator, RobustScaleKeepsCovarianceConsistentUnderModelledPixelNoise)
   EXPECT_GT(nees_unscaled, 9.0);
 }
 
+// Where every family's residuals spread less than modelled (exact rendered images against a
+// real camera's noise model), the covariance keeps the model as its floor for the decisions,
+// and covariance_at_measured_spread follows the measured spread: consistent again. With the
+// noise at the model the two agree.
+TEST(PoseEstimator, CovarianceAtMeasuredSpreadFollowsNoiseBelowTheModel) {
+  SceneConfig cfg;
+  cfg.n_points = 100;
+  cfg.n_lines = 20;
+  cfg.n_planes = 4;
+  const PinholeCamera cam = testing::testCamera();
+  const Pose3 T_true = testing::typicalMotion();
+  const Vector6d xi_true = poseToXi(T_true);
+  const PoseEstimator estimator{PoseEstimatorOptions{}};
+  for (const double model_over_noise : {1.0, 2.0}) {
+    SceneGenerator gen(cam, cfg, 21);
+    const int trials = 300;
+    double nees = 0, nees_spread = 0, point_scale = 0;
+    for (int i = 0; i < trials; ++i) {
+      Correspondences c = gen.generate(T_true);
+      const double var = model_over_noise * model_over_noise;  // the model's std, times this
+      for (PointMatch3D2D& m : c.points) {
+        m.sigma_px *= model_over_noise;
+        m.P_prev.cov *= var;
+      }
+      for (LineMatch3D2D& m : c.lines) {
+        m.sigma_px *= model_over_noise;
+        m.L_prev.cov1 *= var;
+        m.L_prev.cov2 *= var;
+      }
+      for (PlaneMatch3D3D& m : c.planes) {
+        m.prev.cov *= var;
+        m.curr.cov *= var;
+      }
+      const PoseEstimate e = estimator.estimate(c, cam, Pose3::Identity());
+      ASSERT_TRUE(e.accepted());
+      ASSERT_TRUE(e.covariance_at_measured_spread.has_value());
+      const Vector6d err = poseToXi(e.T_curr_prev) - xi_true;
+      nees += err.dot(e.covariance.ldlt().solve(err));
+      nees_spread += err.dot(e.covariance_at_measured_spread->ldlt().solve(err));
+      point_scale += e.point_scale;
+    }
+    nees /= trials;
+    nees_spread /= trials;
+    std::printf("model %.0fx the noise: mean NEES %.2f, at the measured spread %.2f\n",
+                model_over_noise, nees, nees_spread);
+    EXPECT_GT(nees_spread, 4.5);
+    EXPECT_LT(nees_spread, 8.0);
+    if (model_over_noise > 1) {
+      EXPECT_DOUBLE_EQ(point_scale / trials, 1.0);  // the floor: decisions see the model
+      EXPECT_LT(nees, 2.5);                         // pessimistic by about 4 in variance
+    } else {
+      EXPECT_NEAR(nees_spread / nees, 1.0, 0.15);
+    }
+  }
+}
+
 // The paper's default alpha = 0.02 with the sandwich covariance stays consistent.
 TEST(PoseEstimator, ConsistentWithPaperAlpha) {
   PoseEstimatorOptions opts;  // alpha = 0.02

@@ -616,6 +616,10 @@ std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(
   est.T_curr_prev = T_curr_kf * T_kf_prev;
   est.covariance =
       propagateCompositionCovariance(T_kf_prev, Matrix6d::Zero(), T_curr_kf, est.covariance);
+  if (est.covariance_at_measured_spread) {
+    est.covariance_at_measured_spread = propagateCompositionCovariance(
+        T_kf_prev, Matrix6d::Zero(), T_curr_kf, *est.covariance_at_measured_spread);
+  }
   est.max_translation_variance_m2 = maxTranslationVariance(est.covariance);
   est.max_rotation_variance = maxRotationVariance(est.covariance);
   return est;

@@ -88,6 +88,11 @@ struct MotionChainOptions {
   /// --fit-frame-error` (scripts/fit_frame_error.sh), or 0 for exact rendered images.
   double frame_error_sigma_t_m = 0.003;
   double frame_error_sigma_rot_deg = 0.1;
+  /// Publish an accepted estimate's covariance at its residuals' measured spread where that is
+  /// below the model (PoseEstimate::covariance_at_measured_spread), and read the shared error
+  /// against it. Decisions (acceptance, gates, landmark fusion, the keyframe rule, the window)
+  /// keep the model as their floor, so trajectories do not change with it.
+  bool publish_measured_spread = true;
 };
 
 /// Schema of MotionChainOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
@@ -144,6 +149,9 @@ void visit(V& v, MotionChainOptions& o) {
           config::atLeast(0));
   v.field("frame_error_sigma_rot_deg", o.frame_error_sigma_rot_deg,
           "the same, rotation std per axis (deg)", config::atLeast(0));
+  v.field("publish_measured_spread", o.publish_measured_spread,
+          "publish an accepted estimate's covariance with its residuals' spread as measured "
+          "where it is below the model (exact images); decisions keep the model as floor");
 }
 
 /// 2 Q of a relative pose between two frames that each carry a per-frame shared error of
@@ -261,12 +269,16 @@ class MotionChain {
   bool initialised() const { return initialised_; }
   TrackingStatus status() const { return status_; }
   const Pose3& T_w_c() const { return T_w_c_; }
-  /// The per-frame shared error in use: per block (translation, rotation) the online
-  /// estimate when that block is ready, else the fixed sigma of the options.
-  FrameErrorSigma frameError() const;
+  /// The per-frame shared error the decisions use (read against the motions' covariance at
+  /// the model's floor): per block (translation, rotation) the online estimate when that
+  /// block is ready, else the fixed sigma of the options.
+  FrameErrorSigma frameError() const { return sigmaOf(frame_error_); }
   /// Which blocks of frameError() are the online estimate (on, and enough samples of that
   /// block in).
-  FrameErrorSource frameErrorSource() const;
+  FrameErrorSource frameErrorSource() const { return sourceOf(frame_error_); }
+  /// The same, read against the published covariances (publish_measured_spread): what
+  /// MotionChainOutput::frame_error publishes.
+  FrameErrorSigma publishedFrameError() const { return sigmaOf(published_frame_error_); }
 
  private:
   /// The directions of xi an estimate measured: all when accepted; of a weak one combined
@@ -321,8 +333,16 @@ class MotionChain {
                            const PoseEstimate* solved_with_prior);
   Pose3 last_T_curr_prev_ = Pose3::Identity();
   Matrix6d last_cov_ = Matrix6d::Zero();
+  /// The published covariance of the same motion: last_cov_, or an accepted estimate's
+  /// covariance at its measured spread (publish_measured_spread).
+  Matrix6d last_published_cov_ = Matrix6d::Zero();
   std::deque<WindowEntry> window_;
   FrameErrorEstimator frame_error_;
+  /// The shared error read against the published covariances (equal to frame_error_ when
+  /// they are the model's).
+  FrameErrorEstimator published_frame_error_;
+  FrameErrorSigma sigmaOf(const FrameErrorEstimator& estimator) const;
+  FrameErrorSource sourceOf(const FrameErrorEstimator& estimator) const;
   /// The velocity model's process noise for the coming frame: velocityModelCovariance times
   /// n^3 for n nominal intervals (velocity_model_frame_interval_s).
   Matrix6d processNoise() const;

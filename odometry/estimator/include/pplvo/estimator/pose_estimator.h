@@ -226,6 +226,11 @@ struct PoseEstimate {
   /// Sigma_xi (eq. 23) over xi = [t; q_xyz] of T_curr_prev; finite. When the information is
   /// singular, the unobservable directions get a large variance (kLargeVariance).
   Matrix6d covariance = Matrix6d::Identity();
+  /// The same with each family's residual spread as measured where it is below the model
+  /// (`covariance` keeps the model as its floor for every decision; this one is what the
+  /// residuals say of the estimate's error: docs/estimator.md, "The published covariance").
+  /// Unset: `covariance`.
+  std::optional<Matrix6d> covariance_at_measured_spread;
   double max_translation_variance_m2 = 0;
   double max_rotation_variance = 0;
   double min_relative_eigenvalue = 0;  ///< of the Jacobi-scaled J^T W J
