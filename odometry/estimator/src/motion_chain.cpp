@@ -202,6 +202,12 @@ std::optional<MotionChain::CombinedMotion> MotionChain::fuseWithPrediction(
       solved_with_prior->covariance.allFinite()) {
     out.T_curr_prev = solved_with_prior->T_curr_prev;
     out.covariance = solved_with_prior->covariance;
+    if (options_.publish_measured_spread && solved_with_prior->covariance_at_measured_spread &&
+        solved_with_prior->covariance_at_measured_spread->allFinite()) {
+      out.published_covariance = *solved_with_prior->covariance_at_measured_spread;
+    } else {
+      out.published_covariance = out.covariance;
+    }
     out.current_depth_sensitivity = solved_with_prior->current_depth_sensitivity;
     info_features = out.covariance.inverse() - info_prior;
     out.solved_with_prior = true;
@@ -213,6 +219,7 @@ std::optional<MotionChain::CombinedMotion> MotionChain::fuseWithPrediction(
     info_features = est.covariance.ldlt().solve(Matrix6d::Identity());
     out.covariance = (info_features + info_prior).inverse();
     out.covariance = 0.5 * (out.covariance + out.covariance.transpose());
+    out.published_covariance = out.covariance;
     const Vector6d xi =
         out.covariance * (info_features * poseToXi(est.T_curr_prev) + info_prior * xi_prior);
     if (!xi.allFinite()) return std::nullopt;
@@ -333,8 +340,12 @@ MotionChainOutput MotionChain::update(int64_t seq, const PoseEstimate& est,
   T_w_c_.linear() = Eigen::Quaterniond(T_w_c_.linear()).normalized().toRotationMatrix();
   last_T_curr_prev_ = T_curr_prev;
   last_cov_ = Q;
-  last_published_cov_ =
-      good && options_.publish_measured_spread ? est.covariance_at_measured_spread.value_or(Q) : Q;
+  last_published_cov_ = Q;
+  if (good && options_.publish_measured_spread) {
+    last_published_cov_ = est.covariance_at_measured_spread.value_or(Q);
+  } else if (fused) {
+    last_published_cov_ = fused->published_covariance;
+  }
   // Only measured motions show the shared error; a predicted one would smooth it. A weak
   // estimate combined with the prediction shows it in the directions it measured. (A motion
   // over dropped frames is read too, its step against one-period neighbours with it:

@@ -89,9 +89,10 @@ struct MotionChainOptions {
   double frame_error_sigma_t_m = 0.003;
   double frame_error_sigma_rot_deg = 0.1;
   /// Publish an accepted estimate's covariance at its residuals' measured spread where that is
-  /// below the model (PoseEstimate::covariance_at_measured_spread), and read the shared error
-  /// against it. Decisions (acceptance, gates, landmark fusion, the keyframe rule, the window)
-  /// keep the model as their floor, so trajectories do not change with it.
+  /// below the model (PoseEstimate::covariance_at_measured_spread; of a weak estimate, that of
+  /// its solve with the prediction as a prior), and read the shared error against it.
+  /// Decisions (acceptance, gates, landmark fusion, the keyframe rule, the window) keep the
+  /// model as their floor, so trajectories do not change with it.
   bool publish_measured_spread = true;
 };
 
@@ -150,7 +151,7 @@ void visit(V& v, MotionChainOptions& o) {
   v.field("frame_error_sigma_rot_deg", o.frame_error_sigma_rot_deg,
           "the same, rotation std per axis (deg)", config::atLeast(0));
   v.field("publish_measured_spread", o.publish_measured_spread,
-          "publish an accepted estimate's covariance with its residuals' spread as measured "
+          "publish an estimate's covariance with its residuals' spread as measured "
           "where it is below the model (exact images); decisions keep the model as floor");
 }
 
@@ -312,6 +313,9 @@ class MotionChain {
   struct CombinedMotion {
     Pose3 T_curr_prev = Pose3::Identity();
     Matrix6d covariance = Matrix6d::Zero();
+    /// What is published of it: the solve with the prior at its residuals' measured spread
+    /// (publish_measured_spread), else `covariance`.
+    Matrix6d published_covariance = Matrix6d::Zero();
     Pose3 velocity_motion = Pose3::Identity();
     bool solved_with_prior = false;  ///< else the information form of the two means
     /// d xi / d e of the combination for a rigid error e of the current depth (the estimate's
