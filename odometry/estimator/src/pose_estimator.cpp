@@ -580,8 +580,12 @@ void estimateCovariance(const JointProblem& problem, const Vector6d& xi,
     if (cov.allFinite()) est.covariance = 0.5 * (cov + cov.transpose());
     const Matrix6d cov_spread =
         (o.covariance_sandwich ? Matrix6d(Hinv * M_spread * Hinv) : Hinv) + null_part;
-    if (cov.allFinite() && cov_spread.allFinite()) {
-      est.covariance_at_measured_spread = 0.5 * (cov_spread + cov_spread.transpose());
+    // Published only when positive definite: residuals that all vanish (fabricated exact
+    // matches) measure no spread, and a zero covariance would claim an exact pose.
+    const Matrix6d cov_spread_sym = 0.5 * (cov_spread + cov_spread.transpose());
+    if (cov.allFinite() && cov_spread_sym.allFinite() &&
+        Eigen::LLT<Matrix6d>(cov_spread_sym).info() == Eigen::Success) {
+      est.covariance_at_measured_spread = cov_spread_sym;
     }
     // The current frame's depth enters only through its planes (points and lines are
     // reprojected into its image): a rigid error e of that depth moves them as a pose change
