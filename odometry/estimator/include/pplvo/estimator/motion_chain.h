@@ -277,9 +277,6 @@ class MotionChain {
   /// Which blocks of frameError() are the online estimate (on, and enough samples of that
   /// block in).
   FrameErrorSource frameErrorSource() const { return sourceOf(frame_error_); }
-  /// The same, read against the published covariances (publish_measured_spread): what
-  /// MotionChainOutput::frame_error publishes.
-  FrameErrorSigma publishedFrameError() const { return sigmaOf(published_frame_error_); }
 
  private:
   /// The directions of xi an estimate measured: all when accepted; of a weak one combined
@@ -337,8 +334,9 @@ class MotionChain {
                            const PoseEstimate* solved_with_prior);
   Pose3 last_T_curr_prev_ = Pose3::Identity();
   Matrix6d last_cov_ = Matrix6d::Zero();
-  /// The published covariance of the same motion: last_cov_, or an accepted estimate's
-  /// covariance at its measured spread (publish_measured_spread).
+  /// The published covariance of the same motion: last_cov_, or at the measured spread of
+  /// an accepted estimate or of a weak one's solve with the prior (publish_measured_spread);
+  /// the published shared error (MotionChainOutput::frame_error) is read against it.
   Matrix6d last_published_cov_ = Matrix6d::Zero();
   std::deque<WindowEntry> window_;
   FrameErrorEstimator frame_error_;
