@@ -32,7 +32,8 @@
 # that turns back on real frames).
 # pplvo rows: keyframe (the default), a single keyframe (none kept for returns: what the
 # default's re-use of earlier keyframes saves in drift), the same as the default with the
-# rolling-shutter readout taken out of the calibration (the global-shutter model), the local
+# rolling-shutter readout taken out of the calibration (read from the frames instead, and
+# neither: the global-shutter model), the local
 # map (odometry.reference: local_map) and frame to frame (the paper). Peers come from --peers
 # (default ~/.cache/pplvo-peers, built by ../shared/peers/build.sh); a peer that is not built is
 # skipped with a note, one that crashes or tracks fewer than half the frames is reported as
@@ -182,7 +183,8 @@ if [ "$shared_too" = 1 ]; then
   fi
 fi
 
-# The same frames with the readout taken out of the calibration: the global-shutter model.
+# The same frames with the readout taken out of the calibration: read from the frames, or (with
+# odometry.readout_from_frames off) the global-shutter model.
 global_shutter_copy() {  # global_shutter_copy DIR -> prints a folder without the readout
   local d=$1 g f
   g="$out/runs/$(basename "$1")_global_shutter"
@@ -222,7 +224,10 @@ for i in "${!names[@]}"; do
   pplvo_row "pplvo single keyframe (none kept for returns)" "$d" \
     --set odometry.keyframe.retired_keyframes=0
   if grep -q rolling_shutter_readout_ms "$d/calib_params.xml"; then
-    pplvo_row "pplvo keyframe, global-shutter model" "$(global_shutter_copy "$d")"
+    pplvo_row "pplvo keyframe, readout read from the frames (not in the calibration)" \
+      "$(global_shutter_copy "$d")"
+    pplvo_row "pplvo keyframe, global-shutter model" "$(global_shutter_copy "$d")" \
+      --set odometry.readout_from_frames=false
   fi
   pplvo_row "pplvo local map" "$d" --set odometry.reference=local_map
   pplvo_row "pplvo frame to frame (paper)" "$d" --set odometry.reference=frame

@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
         return node::format(
             "[pplvo-estimator] done: %s; tracking %lld velocity %lld lost %lld reinit %lld; "
             "keyframes %lld (fallbacks %lld, re-used %lld); weak combined %lld, gated %lld; "
-            "shared frame error %.2f mm, %.3f deg (%s)\n%s",
+            "shared frame error %.2f mm, %.3f deg (%s); colour readout read %.1f ms "
+            "(standard error %.1f ms, %lld readings, %s)\n%s",
             msgs::countsText(c).c_str(), static_cast<long long>(k.tracking),
             static_cast<long long>(k.velocity_model), static_cast<long long>(k.lost),
             static_cast<long long>(k.reinitialised), static_cast<long long>(k.keyframes),
@@ -39,6 +40,8 @@ int main(int argc, char** argv) {
             static_cast<long long>(k.weak_estimates_combined),
             static_cast<long long>(k.estimates_gated), 1e3 * k.frame_error.t_m,
             k.frame_error.rot_rad * 180.0 / M_PI, k.frame_error_source.describe(),
+            1e3 * k.readout_mean_s, 1e3 * k.readout_standard_error_s,
+            static_cast<long long>(k.readout_readings), k.readout_used ? "used" : "not used",
             n.allTimings().table().c_str());
       });
 }

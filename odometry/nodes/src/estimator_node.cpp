@@ -147,6 +147,11 @@ void EstimatorNode::publish(const estimator::MotionChainOutput& out, const Frame
   counts_.frame_error_source = out.frame_error_source;
   counts_.weak_estimates_combined = odometry_.tracker().fusedEstimates();
   counts_.estimates_gated = odometry_.tracker().gatedEstimates();
+  const tracking::ReadoutEstimator& readout = odometry_.readoutEstimator();
+  counts_.readout_mean_s = readout.mean_s();
+  counts_.readout_standard_error_s = readout.standardError_s();
+  counts_.readout_readings = readout.readings();
+  counts_.readout_used = readout.readout_s().has_value();
   {
     ScopedStageTimer t(timings_, "encode");
     const pplvo_msgs::pose_t m = msgs::toMsg(pose);

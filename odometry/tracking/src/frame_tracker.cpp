@@ -268,11 +268,62 @@ bool FrameTracker::recentlyCompensated(int64_t seq) const {
          compensated_lifted_.end();
 }
 
+std::optional<CameraVelocity> FrameTracker::centredVelocity(int64_t seq) const {
+  for (size_t i = 0; i + 1 < velocity_.size(); ++i) {
+    if (velocity_[i].first != seq) continue;
+    const CameraVelocity& in = velocity_[i].second;
+    const CameraVelocity& out = velocity_[i + 1].second;
+    return CameraVelocity{0.5 * (in.angular + out.angular), 0.5 * (in.linear + out.linear)};
+  }
+  return std::nullopt;
+}
+
+double FrameTracker::readoutOf(const PinholeCamera& camera) const {
+  if (camera.readout_s > 0) return camera.readout_s;
+  return readout_.readout_s().value_or(0.0);
+}
+
+bool FrameTracker::readsReadout(const PinholeCamera& camera) const {
+  // Against the keyframe only: the local map's reference mixes keyframes (and frame to frame
+  // has no unfused reference kept).
+  return options_.readout_from_frames && !(camera.readout_s > 0) &&
+         options_.reference == TrackingReference::kKeyframe;
+}
+
+void FrameTracker::readReadoutAgainst(const Keyframe& keyframe, const FrameFeatures& current,
+                                      const Pose3& T_curr_kf, const Pose3& T_prev_kf,
+                                      const FeatureMatches& matches) {
+  pending_reading_.reset();
+  if (current_as_read_ == nullptr || current_as_read_->seq != current.seq ||
+      !readsReadout(current.camera) || !keyframe_as_read_ ||
+      keyframe_as_read_->seq != keyframe.seq() ||
+      keyframe_as_read_->points.size() != keyframe.landmarks.points.size() || !last_posed_stamp_) {
+    return;
+  }
+  if (!keyframe_velocity_) keyframe_velocity_ = centredVelocity(keyframe.seq());
+  const double interval_s = 1e-6 * static_cast<double>(current.utime - last_posed_stamp_->second);
+  if (!keyframe_velocity_ || !(interval_s > 0)) return;
+  // The current frame's velocity as it moved: its motion from the previous frame (the
+  // smoothed one the compensation uses lags, and its lag would be read as readout).
+  const CameraVelocity current_velocity =
+      cameraVelocity(T_curr_kf * T_prev_kf.inverse(), interval_s);
+  if (const std::optional<ReadoutReading> reading =
+          readReadout(*keyframe_as_read_, *current_as_read_, matches.points, T_curr_kf,
+                      *keyframe_velocity_, current_velocity)) {
+    pending_reading_ = {current.seq, *reading};
+  }
+}
+
 bool FrameTracker::addLifted(FrameFeatures lifted) {
   if (!lifted_.wants(lifted.seq)) return false;  // not compensated for nothing
-  if (lifted.camera.readout_s > 0) {
+  if (readsReadout(lifted.camera)) {
+    // As read, for the readout's reading if it becomes the keyframe.
+    lifted_as_read_.push_back(lifted);
+    while (lifted_as_read_.size() > 3) lifted_as_read_.pop_front();
+  }
+  if (const double readout = readoutOf(lifted.camera); readout > 0) {
     if (const std::optional<CameraVelocity> velocity = smoothedVelocity(lifted.seq)) {
-      compensateRollingShutter(lifted, *velocity);
+      compensateRollingShutter(lifted, *velocity, readout);
       compensated_lifted_.push_back(lifted.seq);
       while (compensated_lifted_.size() > 64) compensated_lifted_.pop_front();
     }
@@ -289,7 +340,9 @@ bool FrameTracker::referenceCompensated() const {
 }
 
 TrackingStep FrameTracker::step(const FrameFeatures& current) {
+  current_as_read_ = &current;  // the readout's reading needs the frame before compensation
   TrackingStep out = stepCompensatingReadout(current);
+  current_as_read_ = nullptr;
   if (out.pose) addDepthAlignmentError(current, *out.pose);
   return out;
 }
@@ -328,7 +381,8 @@ void FrameTracker::addDepthAlignmentError(const FrameFeatures& current,
 }
 
 TrackingStep FrameTracker::stepCompensatingReadout(const FrameFeatures& current) {
-  if (!(current.camera.readout_s > 0)) return stepAtStamp(current);
+  const double readout = readoutOf(current.camera);
+  if (!(readout > 0)) return stepAtStamp(current);
   const std::optional<CameraVelocity> velocity = smoothedVelocity(current.seq);
   if (!velocity) return stepAtStamp(current);  // no velocity yet (first frames): as read
   if (!referenceCompensated()) {
@@ -344,14 +398,16 @@ TrackingStep FrameTracker::stepCompensatingReadout(const FrameFeatures& current)
     return out;
   }
   FrameFeatures at_stamp = current;
-  compensateRollingShutter(at_stamp, *velocity);
+  compensateRollingShutter(at_stamp, *velocity, readout);
   // Features without depth were only turned: their correspondences take the translation, at
   // the depths of what they match (the pipeline's 2D stage has no depth at all).
   const bool has_depth = std::any_of(current.points.begin(), current.points.end(),
                                      [](const PointFeature& p) { return p.has_3d; }) ||
                          std::any_of(current.lines.begin(), current.lines.end(),
                                      [](const LineFeature& l) { return l.has_3d; });
-  if (!has_depth) readout_translation_ = ReadoutTranslation{current.seq, velocity->linear};
+  if (!has_depth) {
+    readout_translation_ = ReadoutTranslation{current.seq, velocity->linear, readout};
+  }
   TrackingStep out = stepAtStamp(at_stamp);
   readout_translation_.reset();
   return out;
@@ -411,6 +467,11 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
     } else {
       keyframes_.insert(*previous, tracker_.T_w_c(), at_stamp);
     }
+    keyframe_as_read_.reset();
+    keyframe_velocity_.reset();
+    for (const FrameFeatures& as_read : lifted_as_read_) {
+      if (as_read.seq == previous->seq) keyframe_as_read_ = as_read;
+    }
     pending_keyframe_.reset();
     lifted_.dropObservations();  // they refine the keyframe replaced here
   }
@@ -427,6 +488,9 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
                                                      : std::nullopt);
       measured_against_keyframe_.reset();
       if (out.pose->status == TrackingStatus::kTracking) {
+        if (pending_reading_ && pending_reading_->first == current.seq) {
+          readout_.add(current.seq, keyframe_seq, pending_reading_->second);
+        }
         measured_against_keyframe_ = {current.seq, keyframe_seq};
         if (pending_keyframe_ && pending_keyframe_->seq == current.seq &&
             reuseRetiredKeyframe(current, s)) {
@@ -574,7 +638,9 @@ estimator::Correspondences FrameTracker::correspondences(const FrameFeatures& re
   estimator::Correspondences c =
       estimator::buildCorrespondences(reference, current, matches, options_.tracker.estimator);
   if (readout_translation_ && readout_translation_->seq == current.seq) {
-    compensateReadoutTranslation(c, current.camera, T_curr_ref_predicted,
+    PinholeCamera camera = current.camera;
+    camera.readout_s = readout_translation_->readout_s;
+    compensateReadoutTranslation(c, camera, T_curr_ref_predicted,
                                  readout_translation_->linear_velocity);
   }
   return c;
@@ -603,6 +669,7 @@ std::optional<estimator::PoseEstimate> FrameTracker::estimateFromKeyframe(
   stats.reference_seq = keyframe.seq();
   if (!usable(est)) return std::nullopt;
   const Pose3 T_curr_kf = est.T_curr_prev;
+  readReadoutAgainst(keyframe, current, T_curr_kf, T_prev_kf, matches);
   keyframe_estimate_ = {current.seq, MapRelativePose{keyframe.seq(), T_curr_kf, est.covariance}};
   observeKeyframe(current.seq, est, matches);
   const KeyframeReason exhausted = keyframeExhausted(

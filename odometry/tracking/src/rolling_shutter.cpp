@@ -64,7 +64,13 @@ double rowTime(const PinholeCamera& camera, double v) {
 }
 
 void compensateRollingShutter(FrameFeatures& frame, const CameraVelocity& velocity) {
-  const PinholeCamera& camera = frame.camera;
+  compensateRollingShutter(frame, velocity, frame.camera.readout_s);
+}
+
+void compensateRollingShutter(FrameFeatures& frame, const CameraVelocity& velocity,
+                              double readout_s) {
+  PinholeCamera camera = frame.camera;
+  camera.readout_s = readout_s;
   if (!(camera.readout_s > 0) || !(velocity.angular.norm() > 0 || velocity.linear.norm() > 0)) {
     return;
   }

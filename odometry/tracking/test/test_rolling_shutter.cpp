@@ -9,6 +9,7 @@
 #include "landmark_world.h"
 #include "pplvo/features/line_extractor.h"
 #include "pplvo/tracking/frame_tracker.h"
+#include "pplvo/tracking/readout_estimator.h"
 #include "pplvo/tracking/rolling_shutter.h"
 
 namespace pplvo::tracking {
@@ -176,13 +177,18 @@ TEST(RollingShutter, CorrespondencesOfA2DStageTakeTheTranslation) {
 
 /// Tracks `truth` (30 Hz) observed by a landmark world's rolling shutter (`sensor_readout_s`)
 /// while the camera moves at `velocity[k]` (its own frame), with `model_readout_s` in the
-/// calibration; returns each frame's pose error relative to the first frame.
+/// calibration and, when that is 0, the readout read from the frames if `read_readout`;
+/// returns each frame's pose error relative to the first frame, and the tracker's readout
+/// estimator in `*readout` if given.
 std::vector<Pose3> trackingErrors(const std::vector<Pose3>& truth,
                                   const std::vector<CameraVelocity>& velocity,
                                   double sensor_readout_s, double model_readout_s,
-                                  uint64_t world_seed) {
+                                  uint64_t world_seed, bool read_readout = false,
+                                  ReadoutEstimator* readout = nullptr) {
   testing::LandmarkWorld world(world_seed);
-  FrameTracker tracker(testing::pointsOnly(TrackingReference::kKeyframe));
+  TrackingOptions options = testing::pointsOnly(TrackingReference::kKeyframe);
+  options.readout_from_frames = read_readout;
+  FrameTracker tracker(options);
   FrameFeatures reference;
   std::vector<Pose3> errors;
   for (int k = 0; k < static_cast<int>(truth.size()); ++k) {
@@ -194,6 +200,7 @@ std::vector<Pose3> trackingErrors(const std::vector<Pose3>& truth,
     reference = std::move(f3);
     errors.push_back((truth[0].inverse() * truth[k]).inverse() * out.T_w_c);
   }
+  if (readout != nullptr) *readout = tracker.readoutEstimator();
   return errors;
 }
 
@@ -262,6 +269,66 @@ TEST(RollingShutter, TrackingAFastSideStepNeedsTheTranslation) {
               1e3 * global_m, 1e3 * rolling_m, 1e3 * base_m);
   EXPECT_LT(rolling_m, 0.5 * global_m);
   EXPECT_LT(rolling_m - base_m, 0.25 * (global_m - base_m));
+}
+
+/// Six seconds turning at 0.6 rad/s about the vertical axis with a slow sway (new keyframes as
+/// the view turns away: readings against several references).
+void longTurn(std::vector<Pose3>& truth, std::vector<CameraVelocity>& velocity) {
+  for (int k = 0; k < 180; ++k) {
+    const double t = k / 30.0;
+    truth.push_back(poseOf({0.1 * std::sin(t), 0.02 * std::sin(2 * t), 0}, 0.6 * t));
+    velocity.push_back(
+        velocityOf(truth.back(), {0.1 * std::cos(t), 0.04 * std::cos(2 * t), 0}, 0.6));
+  }
+}
+
+TEST(RollingShutter, TheReadoutReadFromTheFramesOnAFastTurn) {
+  // The readout in neither the calibration nor the model: read from the frames, it is found
+  // and used, and most of the global-shutter model's error goes.
+  std::vector<Pose3> truth;
+  std::vector<CameraVelocity> velocity;
+  longTurn(truth, velocity);
+  // The drift over the last two seconds, by when the readout is read and used.
+  auto lastDrift = [](const std::vector<Pose3>& errors) {
+    const size_t n = errors.size();
+    return (errors[n - 61].inverse() * errors[n - 1]).translation().norm();
+  };
+  const double global_m = lastDrift(trackingErrors(truth, velocity, kReadout, 0.0, 5));
+  const double rolling_m = lastDrift(trackingErrors(truth, velocity, kReadout, kReadout, 5));
+  ReadoutEstimator readout;
+  const double read_m =
+      lastDrift(trackingErrors(truth, velocity, kReadout, 0.0, 5, true, &readout));
+  std::printf(
+      "readout read from the frames: %.1f ms (standard error %.1f ms, %d readings, %d "
+      "references); drift over the last 2 s: global-shutter model %.1f mm, readout in "
+      "the calibration %.1f mm, read from the frames %.1f mm\n",
+      1e3 * readout.mean_s(), 1e3 * readout.standardError_s(), readout.readings(),
+      readout.references(), 1e3 * global_m, 1e3 * rolling_m, 1e3 * read_m);
+  ASSERT_TRUE(readout.readout_s().has_value());
+  EXPECT_NEAR(*readout.readout_s(), kReadout, 0.006);
+  // Measured 44.6 / 18.2 / 24.5 mm: nearer the calibrated readout's than the global model's.
+  EXPECT_LT(read_m - rolling_m, 0.5 * (global_m - rolling_m));
+}
+
+TEST(RollingShutter, AGlobalShutterReadsNoReadout) {
+  // The same turn read by a global shutter: the readings stay near zero and nothing is
+  // compensated (the poses are those of the global-shutter model, bit for bit).
+  std::vector<Pose3> truth;
+  std::vector<CameraVelocity> velocity;
+  longTurn(truth, velocity);
+  ReadoutEstimator readout;
+  const std::vector<Pose3> read = trackingErrors(truth, velocity, 0.0, 0.0, 5, true, &readout);
+  const std::vector<Pose3> as_read = trackingErrors(truth, velocity, 0.0, 0.0, 5, false);
+  std::printf(
+      "global shutter: readout read %.2f ms (standard error %.2f ms, %d readings, %d "
+      "references)\n",
+      1e3 * readout.mean_s(), 1e3 * readout.standardError_s(), readout.readings(),
+      readout.references());
+  EXPECT_GE(readout.references(), ReadoutEstimator::kMinReferences);
+  EXPECT_LT(std::abs(readout.mean_s()), 3 * readout.standardError_s());
+  EXPECT_FALSE(readout.readout_s().has_value());
+  ASSERT_EQ(read.size(), as_read.size());
+  for (size_t k = 0; k < read.size(); ++k) EXPECT_EQ(read[k].matrix(), as_read[k].matrix()) << k;
 }
 
 }  // namespace

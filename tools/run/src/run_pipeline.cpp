@@ -112,6 +112,15 @@ std::string RunResult::text() const {
                   frame_error_source.describe());
     out << buf;
   }
+  if (readout_readings > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "colour readout read from the frames: %.1f ms (standard error %.1f ms, %lld "
+                  "readings; %s)\n",
+                  1e3 * readout_mean_s, 1e3 * readout_standard_error_s,
+                  static_cast<long long>(readout_readings),
+                  readout_used ? "compensated" : "not clear of zero: frames as read");
+    out << buf;
+  }
   if (weak_estimates_combined > 0 || estimates_gated > 0) {
     std::snprintf(buf, sizeof buf,
                   "weak estimates combined with the prediction: %lld; estimates refused by the "
@@ -153,6 +162,9 @@ std::string RunResult::yaml() const {
       << ", translation_estimated: " << (frame_error_source.translation_online ? "true" : "false")
       << ", rotation_estimated: " << (frame_error_source.rotation_online ? "true" : "false")
       << "}\n"
+      << "readout_from_frames: {mean_s: " << readout_mean_s
+      << ", standard_error_s: " << readout_standard_error_s << ", readings: " << readout_readings
+      << ", used: " << (readout_used ? "true" : "false") << "}\n"
       << "weak_estimates_combined: " << weak_estimates_combined << "\n"
       << "estimates_gated: " << estimates_gated << "\n"
       << "elapsed_s: " << elapsed_s << "\n"
@@ -283,6 +295,10 @@ RunResult runPipeline(const RunOptions& options) {
     result.frame_error_source = estimator.counts().frame_error_source;
     result.weak_estimates_combined = estimator.counts().weak_estimates_combined;
     result.estimates_gated = estimator.counts().estimates_gated;
+    result.readout_mean_s = estimator.counts().readout_mean_s;
+    result.readout_standard_error_s = estimator.counts().readout_standard_error_s;
+    result.readout_readings = estimator.counts().readout_readings;
+    result.readout_used = estimator.counts().readout_used;
     for (int r = 1; r < tracking::kKeyframeReasons; ++r) {
       result.keyframe_reasons += (r > 1 ? ", " : "");
       result.keyframe_reasons += tracking::toString(static_cast<tracking::KeyframeReason>(r));

@@ -80,6 +80,11 @@ struct EstimatorCounts : TrackingStatusCounts {
   /// Weak estimates combined with the prediction, and estimates refused by the prediction
   /// gate (their frames are the velocity model's): estimator::MotionChain's counts.
   int64_t weak_estimates_combined = 0, estimates_gated = 0;
+  /// The colour readout read from the frames (tracking.readout_from_frames): the mean of the
+  /// readings, its standard error, how many, and whether frames are compensated with it.
+  double readout_mean_s = 0, readout_standard_error_s = 0;
+  int64_t readout_readings = 0;
+  bool readout_used = false;
 };
 
 class EstimatorNode {

@@ -27,6 +27,7 @@
 #include "pplvo/tracking/keyframe_store.h"
 #include "pplvo/tracking/lifted_stage_buffer.h"
 #include "pplvo/tracking/local_mapper.h"
+#include "pplvo/tracking/readout_estimator.h"
 #include "pplvo/tracking/rolling_shutter.h"
 
 namespace pplvo::tracking {
@@ -63,6 +64,10 @@ struct TrackingOptions {
   /// its colour instant (the depth filter's time alignment; docs/estimator.md). The poses do
   /// not depend on it.
   bool depth_alignment_error = true;
+  /// Read the colour camera's rolling-shutter readout from the frames when the calibration
+  /// gives none (readout_estimator.h; reference: keyframe), and compensate with it once it
+  /// stands clear of zero.
+  bool readout_from_frames = true;
 };
 
 /// Schema of TrackingOptions (pplvo/core/config_schema.h): names, docs and ranges, once.
@@ -96,6 +101,10 @@ void visit(V& v, TrackingOptions& o) {
           "add to the published motion covariance the error of the current frame's depth moved "
           "to its colour instant (scale^2 times the covariance of the motion it was moved by, "
           "through the share of the pose its planes carry); the poses do not depend on it");
+  v.field("readout_from_frames", o.readout_from_frames,
+          "read the colour camera's rolling-shutter readout from the frames when the "
+          "calibration gives none (reference: keyframe; docs/estimator.md), and compensate "
+          "with it once it stands five standard errors clear of zero");
 }
 
 /// What happened to one frame.
@@ -171,6 +180,8 @@ class FrameTracker {
   const estimator::MotionChain& tracker() const { return tracker_; }
   const TrackingOptions& options() const { return options_; }
   const StageTimings& timings() const { return timings_; }
+  /// The readout read from the frames (options().readout_from_frames).
+  const ReadoutEstimator& readoutEstimator() const { return readout_; }
 
  private:
   /// A frame chosen to become the next keyframe once its 3D stage is in.
@@ -187,6 +198,19 @@ class FrameTracker {
   /// Whether the reference the next frame is tracked against was moved to its stamp.
   bool referenceCompensated() const;
   static constexpr int kVelocityFrames = 4;
+  /// The velocity of frame `seq` as it moved: the mean of its motion in and the next frame's
+  /// (centred on it); nullopt until the next frame was posed.
+  std::optional<CameraVelocity> centredVelocity(int64_t seq) const;
+  /// The readout that frames of `camera` are compensated with: the calibration's, else the
+  /// one read from the frames, else 0 (as read).
+  double readoutOf(const PinholeCamera& camera) const;
+  /// Whether frames of `camera` are read for their readout.
+  bool readsReadout(const PinholeCamera& camera) const;
+  /// Reads the readout of `current` (tracked against `keyframe` at T_curr_kf, the previous
+  /// frame at T_prev_kf) from both frames as read, into pending_reading_.
+  void readReadoutAgainst(const Keyframe& keyframe, const FrameFeatures& current,
+                          const Pose3& T_curr_kf, const Pose3& T_prev_kf,
+                          const FeatureMatches& matches);
   /// step() on a frame at its stamp (rolling shutter compensated).
   TrackingStep stepAtStamp(const FrameFeatures& current);
   /// The matches of a reference and a current frame, gated around their positions predicted
@@ -279,6 +303,7 @@ class FrameTracker {
   struct ReadoutTranslation {
     int64_t seq = -1;
     Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
+    double readout_s = 0;
   };
   std::optional<ReadoutTranslation> readout_translation_;
   /// Time between consecutive frames (s), from their stamps; 0 until two frames were posed.
@@ -287,6 +312,16 @@ class FrameTracker {
   /// The recent frames whose 3D stage was moved to its stamp (a keyframe says so itself,
   /// Keyframe::at_stamp): a frame is compensated only against a compensated reference.
   std::deque<int64_t> compensated_lifted_;
+  /// The readout read from the frames, and what it is read from: the last 3D stages as they
+  /// arrived (one of them becomes the keyframe), the active keyframe's as read, its centred
+  /// velocity, the frame being stepped as read (set during step() only) and its reading, added
+  /// once the frame keeps tracking.
+  ReadoutEstimator readout_;
+  std::deque<FrameFeatures> lifted_as_read_;
+  std::optional<FrameFeatures> keyframe_as_read_;
+  std::optional<CameraVelocity> keyframe_velocity_;
+  const FrameFeatures* current_as_read_ = nullptr;
+  std::optional<std::pair<int64_t, ReadoutReading>> pending_reading_;
 };
 
 }  // namespace pplvo::tracking

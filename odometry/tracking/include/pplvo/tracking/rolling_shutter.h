@@ -46,6 +46,10 @@ Eigen::Vector3d linearVelocity(const Pose3& T_curr_prev, double interval_s);
 /// velocity: lifted ones (2D and 3D) by the rotation and the translation, the others (no depth)
 /// by the rotation only. No-op for a global shutter (readout_s == 0) or a camera at rest.
 void compensateRollingShutter(FrameFeatures& frame, const CameraVelocity& velocity);
+/// The same with the readout `readout_s` instead of the calibration's (one read from the
+/// frames, readout_estimator.h); frame.camera is left as it is.
+void compensateRollingShutter(FrameFeatures& frame, const CameraVelocity& velocity,
+                              double readout_s);
 
 /// Moves the current frame's 2D observations in `correspondences` by the camera's translation
 /// during the readout (`linear_velocity`, m/s), each at the depth of the 3D feature it matched

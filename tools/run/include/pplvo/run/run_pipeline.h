@@ -73,6 +73,10 @@ struct RunResult : TrackingStatusCounts {
   /// The per-frame shared error at the last pose (std per axis) and which of its blocks were
   /// estimated online; zeros when nothing was posed.
   double frame_error_sigma_t_m = 0.0, frame_error_sigma_rot_deg = 0.0;
+  /// The colour readout read from the frames (EstimatorCounts::readout_*).
+  double readout_mean_s = 0.0, readout_standard_error_s = 0.0;
+  int64_t readout_readings = 0;
+  bool readout_used = false;
   estimator::FrameErrorSource frame_error_source;
   /// Weak estimates combined with the prediction; estimates refused by the prediction gate.
   int64_t weak_estimates_combined = 0, estimates_gated = 0;
