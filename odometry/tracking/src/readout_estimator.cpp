@@ -4,23 +4,20 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pplvo/estimator/residuals.h"
+
 namespace pplvo::tracking {
 
 namespace {
 
+/// The pinhole projection's Jacobian at X (camera frame; z > 0), the estimator's.
 Eigen::Matrix<double, 2, 3> projectionJacobian(const PinholeCamera& camera,
                                                const Eigen::Vector3d& X) {
-  const double iz = 1.0 / X.z();
-  Eigen::Matrix<double, 2, 3> J;
-  J << camera.fx * iz, 0, -camera.fx * X.x() * iz * iz, 0, camera.fy * iz,
-      -camera.fy * X.y() * iz * iz;
+  const estimator::Projector projector{camera.fx, camera.fy, camera.cx, camera.cy, 0.0};
+  Eigen::Vector2d px;
+  estimator::Matrix23 J = estimator::Matrix23::Zero();
+  projector.project(X, px, J);
   return J;
-}
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return S;
 }
 
 /// Row fraction of image row v: -1/2 at the top, 1/2 at the bottom (the middle at the stamp).
