@@ -297,7 +297,8 @@ void FrameTracker::readReadoutAgainst(const Keyframe& keyframe, const FrameFeatu
   if (current_as_read_ == nullptr || current_as_read_->seq != current.seq ||
       !readsReadout(current.camera) || !keyframe_as_read_ ||
       keyframe_as_read_->seq != keyframe.seq() ||
-      keyframe_as_read_->points.size() != keyframe.landmarks.points.size() || !last_posed_stamp_) {
+      keyframe_as_read_->points.size() != keyframe.landmarks.points.size() ||
+      keyframe_as_read_->lines.size() != keyframe.landmarks.lines.size() || !last_posed_stamp_) {
     return;
   }
   if (!keyframe_velocity_) keyframe_velocity_ = centredVelocity(keyframe.seq());
@@ -308,7 +309,7 @@ void FrameTracker::readReadoutAgainst(const Keyframe& keyframe, const FrameFeatu
   const CameraVelocity current_velocity =
       cameraVelocity(T_curr_kf * T_prev_kf.inverse(), interval_s);
   if (const std::optional<ReadoutReading> reading =
-          readReadout(*keyframe_as_read_, *current_as_read_, matches.points, T_curr_kf,
+          readReadout(*keyframe_as_read_, *current_as_read_, matches, T_curr_kf,
                       *keyframe_velocity_, current_velocity)) {
     pending_reading_ = {current.seq, *reading};
   }

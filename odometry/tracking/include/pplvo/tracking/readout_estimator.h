@@ -10,7 +10,10 @@
 /// give point residuals e = r g + J xi + noise, g = rho p_dot - (the reference's displacement
 /// seen from the frame): a least-squares fit of r with the 6 pose parameters (so that nothing the
 /// pose can absorb is read as readout) is one frame's reading. A camera at rest reads nothing
-/// (g = 0, no information); a global shutter reads 0 within its error.
+/// (g = 0, no information); a global shutter reads 0 within its error. A line end's distance
+/// to the observed line reads it the same way along the line's normal; points and lines are
+/// each fitted with pose parameters of their own (their poses can disagree by more than their
+/// noise, and one pose for both would read that disagreement as readout).
 #include <Eigen/Core>
 #include <cstdint>
 #include <deque>
@@ -29,16 +32,18 @@ struct ReadoutReading {
   double readout_s = 0;
   double variance_s2 = 0;
   int points = 0;  ///< the point matches it was read from
+  int lines = 0;   ///< the line ends it was read from
 };
 
-/// The reading of `current` against `reference`, both as read, from their matched points
-/// (`point_matches`: reference index, current index), the estimated pose T_curr_ref and each
-/// frame's velocity as it moved (camera frame). nullopt with fewer than 12 points inside the
-/// residuals' gate or without information on the readout (a camera at rest).
+/// The reading of `current` against `reference`, both as read, from their matched points and
+/// lines (`matches`: reference index, current index; a line by its two ends' distances to the
+/// observed line), the estimated pose T_curr_ref and each frame's velocity as it moved (camera
+/// frame). Each family is read with its own pose and the two readings combined by information;
+/// a family needs 12 points or 24 line ends inside its residuals' gate. nullopt when neither
+/// has them or neither holds information on the readout (a camera at rest).
 std::optional<ReadoutReading> readReadout(const FrameFeatures& reference,
                                           const FrameFeatures& current,
-                                          const std::vector<std::pair<int, int>>& point_matches,
-                                          const Pose3& T_curr_ref,
+                                          const FeatureMatches& matches, const Pose3& T_curr_ref,
                                           const CameraVelocity& reference_velocity,
                                           const CameraVelocity& current_velocity);
 
