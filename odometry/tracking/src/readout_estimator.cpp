@@ -39,34 +39,48 @@ struct ReadoutRows {
   Eigen::Matrix<double, D, 7> jacobian;
 };
 
-/// One family's reading: the readout fitted with the 6 pose parameters to its rows, gated at
-/// three times the median residual (1 px at least: mismatches and moving objects out).
-/// nullopt with fewer than `min_groups` inside the gate or without information on the readout
-/// (a camera at rest).
+/// One family's reading: the readout fitted with the 6 pose parameters to its rows, gated (twice)
+/// at three times the median residual (1 px at least: mismatches and moving objects out). nullopt
+/// with fewer than `min_groups` inside the gate or without information on the readout (a camera at
+/// rest).
 template <int D>
 std::optional<ReadoutReading> readFamily(const std::vector<ReadoutRows<D>>& groups,
                                          int min_groups) {
   if (static_cast<int>(groups.size()) < min_groups) return std::nullopt;
+  // Gated twice: on the residuals at the pose given, which still hold the shear (largest
+  // where it is: a fast roll's corners), then on the fit's own residuals, so that what the
+  // readout explains is not cut as if it were a mismatch.
   std::vector<double> norms;
   norms.reserve(groups.size());
   for (const ReadoutRows<D>& g : groups) norms.push_back(g.residual.norm());
-  std::vector<double> sorted = norms;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double gate = std::max(3.0 * sorted[sorted.size() / 2], 1.0);
-  Eigen::Matrix<double, 7, 7> H = Eigen::Matrix<double, 7, 7>::Zero();
-  Eigen::Matrix<double, 7, 1> b = Eigen::Matrix<double, 7, 1>::Zero();
+  double gate = 0;
   int used = 0;
-  for (size_t k = 0; k < groups.size(); ++k) {
-    if (norms[k] > gate) continue;
-    H += groups[k].jacobian.transpose() * groups[k].jacobian;
-    b += groups[k].jacobian.transpose() * groups[k].residual;
-    ++used;
+  Eigen::Matrix<double, 7, 1> x = Eigen::Matrix<double, 7, 1>::Zero();
+  Eigen::Matrix<double, 7, 7> H_inv;
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass > 0) {
+      for (size_t k = 0; k < groups.size(); ++k) {
+        norms[k] = (groups[k].residual - groups[k].jacobian * x).norm();
+      }
+    }
+    std::vector<double> sorted = norms;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    gate = std::max(3.0 * sorted[sorted.size() / 2], 1.0);
+    Eigen::Matrix<double, 7, 7> H = Eigen::Matrix<double, 7, 7>::Zero();
+    Eigen::Matrix<double, 7, 1> b = Eigen::Matrix<double, 7, 1>::Zero();
+    used = 0;
+    for (size_t k = 0; k < groups.size(); ++k) {
+      if (norms[k] > gate) continue;
+      H += groups[k].jacobian.transpose() * groups[k].jacobian;
+      b += groups[k].jacobian.transpose() * groups[k].residual;
+      ++used;
+    }
+    if (used < min_groups || !(H(6, 6) > 0)) return std::nullopt;  // at rest: nothing sheared
+    const Eigen::LDLT<Eigen::Matrix<double, 7, 7>> ldlt(H);
+    if (ldlt.info() != Eigen::Success) return std::nullopt;
+    x = ldlt.solve(b);
+    H_inv = ldlt.solve(Eigen::Matrix<double, 7, 7>::Identity());
   }
-  if (used < min_groups || !(H(6, 6) > 0)) return std::nullopt;  // at rest: nothing sheared
-  const Eigen::LDLT<Eigen::Matrix<double, 7, 7>> ldlt(H);
-  if (ldlt.info() != Eigen::Success) return std::nullopt;
-  const Eigen::Matrix<double, 7, 1> x = ldlt.solve(b);
-  const Eigen::Matrix<double, 7, 7> H_inv = ldlt.solve(Eigen::Matrix<double, 7, 7>::Identity());
   double squared = 0;
   for (size_t k = 0; k < groups.size(); ++k) {
     if (norms[k] <= gate) squared += (groups[k].residual - groups[k].jacobian * x).squaredNorm();
