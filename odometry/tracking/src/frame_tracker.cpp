@@ -72,6 +72,7 @@ estimator::MotionChainOutput FrameTracker::initialise(const FrameFeatures& first
   resetKeyframes(first.seq, KeyframeReason::kStart);
   keyframes_.forgetRetired();
   mapper_.reset();
+  map_at_stamp_.reset();
   tracked_from_keyframe_.reset();
   last_posed_stamp_ = {first.seq, first.utime};
   return tracker_.initialise(first.seq);
@@ -85,6 +86,7 @@ estimator::MotionChainOutput FrameTracker::restart(const FrameFeatures& current)
   resetKeyframes(current.seq, KeyframeReason::kStart);
   keyframes_.forgetRetired();
   mapper_.reset();  // its landmarks are not related to the frames after a restart
+  map_at_stamp_.reset();
   tracked_from_keyframe_.reset();
   last_posed_stamp_ = {current.seq, current.utime};
   estimator::MotionChainOutput out = tracker_.initialise(current.seq, T_w_c);
@@ -284,21 +286,27 @@ double FrameTracker::readoutOf(const PinholeCamera& camera) const {
 }
 
 bool FrameTracker::readsReadout(const PinholeCamera& camera) const {
-  // Against the keyframe only: the local map's reference mixes keyframes (and frame to frame
-  // has no unfused reference kept).
+  // Against a keyframe as it arrived (the local map's newest keyframe too); frame to frame, a
+  // frame moves as its predecessor did and is sheared as it was, so the pair reads nothing.
   return options_.readout_from_frames && !(camera.readout_s > 0) &&
-         options_.reference == TrackingReference::kKeyframe;
+         options_.reference != TrackingReference::kFrame;
 }
 
 void FrameTracker::readReadoutAgainst(const Keyframe& keyframe, const FrameFeatures& current,
                                       const Pose3& T_curr_kf, const Pose3& T_prev_kf,
                                       const FeatureMatches& matches) {
   pending_reading_.reset();
+  // The local map's reference holds the landmarks of several keyframes: the frame is matched
+  // again against its newest keyframe's own features, at the tracked pose. The keyframe
+  // default tracks against those very features, and its matches serve.
+  const bool tracked_against_own_features = options_.reference == TrackingReference::kKeyframe;
   if (current_as_read_ == nullptr || current_as_read_->seq != current.seq ||
       !readsReadout(current.camera) || !keyframe_as_read_ ||
       keyframe_as_read_->seq != keyframe.seq() ||
-      keyframe_as_read_->points.size() != keyframe.landmarks.points.size() ||
-      keyframe_as_read_->lines.size() != keyframe.landmarks.lines.size() || !last_posed_stamp_) {
+      (tracked_against_own_features &&
+       (keyframe_as_read_->points.size() != keyframe.landmarks.points.size() ||
+        keyframe_as_read_->lines.size() != keyframe.landmarks.lines.size())) ||
+      !last_posed_stamp_) {
     return;
   }
   if (!keyframe_velocity_) keyframe_velocity_ = centredVelocity(keyframe.seq());
@@ -308,8 +316,12 @@ void FrameTracker::readReadoutAgainst(const Keyframe& keyframe, const FrameFeatu
   // smoothed one the compensation uses lags, and its lag would be read as readout).
   const CameraVelocity current_velocity =
       cameraVelocity(T_curr_kf * T_prev_kf.inverse(), interval_s);
+  const FeatureMatches own_matches =
+      tracked_against_own_features
+          ? matches
+          : match(*keyframe_as_read_, *current_as_read_, T_curr_kf, options_.tracker.estimator);
   if (const std::optional<ReadoutReading> reading =
-          readReadout(*keyframe_as_read_, *current_as_read_, matches, T_curr_kf,
+          readReadout(*keyframe_as_read_, *current_as_read_, own_matches, T_curr_kf,
                       *keyframe_velocity_, current_velocity)) {
     pending_reading_ = {current.seq, *reading};
   }
@@ -458,6 +470,14 @@ TrackingStep FrameTracker::stepAtStamp(const FrameFeatures& current) {
         tracked = tracked_from_keyframe_->second;
         tracked->covariance += estimator::frameErrorCovariance(tracker_.frameError());
       }
+      if (map_at_stamp_ && *map_at_stamp_ != at_stamp) {
+        // The compensation switched on (the first velocity, or a readout read from the
+        // frames): landmarks lifted as read are sheared where these are not, and associating
+        // and adjusting the two together moves the keyframe by the shear. The map starts again.
+        mapper_.reset();
+        tracked.reset();
+      }
+      map_at_stamp_ = at_stamp;
       KeyframeInsertion inserted =
           mapper_.insert(*previous, tracker_.T_w_c(), structureMotion(*previous), tracked);
       // The adjustment moved the keyframe, which is the last posed frame: the next motion is

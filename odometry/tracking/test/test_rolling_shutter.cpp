@@ -184,9 +184,10 @@ std::vector<Pose3> trackingErrors(const std::vector<Pose3>& truth,
                                   const std::vector<CameraVelocity>& velocity,
                                   double sensor_readout_s, double model_readout_s,
                                   uint64_t world_seed, bool read_readout = false,
-                                  ReadoutEstimator* readout = nullptr) {
+                                  ReadoutEstimator* readout = nullptr,
+                                  TrackingReference reference_mode = TrackingReference::kKeyframe) {
   testing::LandmarkWorld world(world_seed);
-  TrackingOptions options = testing::pointsOnly(TrackingReference::kKeyframe);
+  TrackingOptions options = testing::pointsOnly(reference_mode);
   options.readout_from_frames = read_readout;
   FrameTracker tracker(options);
   FrameFeatures reference;
@@ -308,6 +309,58 @@ TEST(RollingShutter, TheReadoutReadFromTheFramesOnAFastTurn) {
   EXPECT_NEAR(*readout.readout_s(), kReadout, 0.006);
   // Measured 44.6 / 18.2 / 24.5 mm: nearer the calibrated readout's than the global model's.
   EXPECT_LT(read_m - rolling_m, 0.5 * (global_m - rolling_m));
+}
+
+TEST(RollingShutter, TheLocalMapStartsAgainWhenTheCompensationSwitchesOn) {
+  // The readout in the calibration, tracked against the local map: the first keyframe is
+  // lifted as read (no velocity yet), the next ones at their stamps. Associated and adjusted
+  // together, the two kinds of landmark moved the second keyframe by the shear (54 mm at
+  // frame 10); the map now starts again with the first keyframe at its stamp.
+  std::vector<Pose3> truth;
+  std::vector<CameraVelocity> velocity;
+  longTurn(truth, velocity);
+  auto worst = [](const std::vector<Pose3>& errors) {
+    double m = 0;
+    for (const Pose3& e : errors) m = std::max(m, e.translation().norm());
+    return m;
+  };
+  const TrackingReference map = TrackingReference::kLocalMap;
+  const double global_m =
+      worst(trackingErrors(truth, velocity, kReadout, 0.0, 5, false, nullptr, map));
+  const double rolling_m =
+      worst(trackingErrors(truth, velocity, kReadout, kReadout, 5, false, nullptr, map));
+  std::printf(
+      "local map, worst error: global-shutter model %.1f mm, readout in the "
+      "calibration %.1f mm\n",
+      1e3 * global_m, 1e3 * rolling_m);
+  EXPECT_LT(rolling_m, 0.5 * global_m);
+}
+
+TEST(RollingShutter, TheLocalMapReadsTheReadoutAgainstItsNewestKeyframe) {
+  // The same turn with the readout in neither the calibration nor the model: the local map's
+  // reference mixes several keyframes' landmarks, so each frame is matched again against the
+  // newest keyframe as it arrived, and the readout is read and used there too.
+  std::vector<Pose3> truth;
+  std::vector<CameraVelocity> velocity;
+  longTurn(truth, velocity);
+  auto lastDrift = [](const std::vector<Pose3>& errors) {
+    const size_t n = errors.size();
+    return (errors[n - 61].inverse() * errors[n - 1]).translation().norm();
+  };
+  const TrackingReference map = TrackingReference::kLocalMap;
+  const double global_m =
+      lastDrift(trackingErrors(truth, velocity, kReadout, 0.0, 5, false, nullptr, map));
+  ReadoutEstimator readout;
+  const double read_m =
+      lastDrift(trackingErrors(truth, velocity, kReadout, 0.0, 5, true, &readout, map));
+  std::printf(
+      "local map: readout read %.1f ms (standard error %.1f ms, %d readings, %d references); "
+      "drift over the last 2 s: global-shutter model %.1f mm, read from the frames %.1f mm\n",
+      1e3 * readout.mean_s(), 1e3 * readout.standardError_s(), readout.readings(),
+      readout.references(), 1e3 * global_m, 1e3 * read_m);
+  ASSERT_TRUE(readout.readout_s().has_value());
+  EXPECT_NEAR(*readout.readout_s(), kReadout, 0.006);
+  EXPECT_LT(read_m, global_m);
 }
 
 TEST(RollingShutter, AGlobalShutterReadsNoReadout) {

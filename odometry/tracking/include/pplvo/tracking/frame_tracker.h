@@ -65,8 +65,8 @@ struct TrackingOptions {
   /// not depend on it.
   bool depth_alignment_error = true;
   /// Read the colour camera's rolling-shutter readout from the frames when the calibration
-  /// gives none (readout_estimator.h; reference: keyframe), and compensate with it once it
-  /// stands clear of zero.
+  /// gives none (readout_estimator.h; reference: keyframe or local_map, against the newest
+  /// keyframe), and compensate with it once it stands clear of zero.
   bool readout_from_frames = true;
 };
 
@@ -103,8 +103,8 @@ void visit(V& v, TrackingOptions& o) {
           "through the share of the pose its planes carry); the poses do not depend on it");
   v.field("readout_from_frames", o.readout_from_frames,
           "read the colour camera's rolling-shutter readout from the frames when the "
-          "calibration gives none (reference: keyframe; docs/estimator.md), and compensate "
-          "with it once it stands five standard errors clear of zero");
+          "calibration gives none (reference: keyframe or local_map; docs/estimator.md), and "
+          "compensate with it once it stands five standard errors clear of zero");
 }
 
 /// What happened to one frame.
@@ -207,7 +207,8 @@ class FrameTracker {
   /// Whether frames of `camera` are read for their readout.
   bool readsReadout(const PinholeCamera& camera) const;
   /// Reads the readout of `current` (tracked against `keyframe` at T_curr_kf, the previous
-  /// frame at T_prev_kf) from both frames as read, into pending_reading_.
+  /// frame at T_prev_kf) from both frames as read, into pending_reading_. `matches` are the
+  /// tracking's, used when it tracked against the keyframe's own features.
   void readReadoutAgainst(const Keyframe& keyframe, const FrameFeatures& current,
                           const Pose3& T_curr_kf, const Pose3& T_prev_kf,
                           const FeatureMatches& matches);
@@ -289,6 +290,9 @@ class FrameTracker {
 
   KeyframeStore keyframes_;
   LocalMapper mapper_;
+  /// Whether the local map's keyframes were lifted at their stamps (the rolling shutter
+  /// compensated) or as read; unset while the map is empty.
+  std::optional<bool> map_at_stamp_;
   LiftedStageBuffer lifted_;
   std::optional<PendingKeyframe> pending_keyframe_;
   /// The frame whose estimate against the keyframe was rejected while it waited for the
