@@ -286,8 +286,9 @@ double FrameTracker::readoutOf(const PinholeCamera& camera) const {
 }
 
 bool FrameTracker::readsReadout(const PinholeCamera& camera) const {
-  // Against a keyframe as it arrived (the local map's newest keyframe too); frame to frame, a
-  // frame moves as its predecessor did and is sheared as it was, so the pair reads nothing.
+  // Against a keyframe as it arrived (the local map's newest keyframe too). Not frame to frame:
+  // consecutive frames move nearly alike and are sheared nearly alike, and only the change of
+  // the velocity between them would show.
   return options_.readout_from_frames && !(camera.readout_s > 0) &&
          options_.reference != TrackingReference::kFrame;
 }
