@@ -56,7 +56,7 @@ std::optional<ReadoutReading> readFamily(const std::vector<ReadoutRows<D>>& grou
   double gate = 0;
   int used = 0;
   Eigen::Matrix<double, 7, 1> x = Eigen::Matrix<double, 7, 1>::Zero();
-  Eigen::Matrix<double, 7, 7> H_inv;
+  Eigen::LDLT<Eigen::Matrix<double, 7, 7>> ldlt;
   for (int pass = 0; pass < 2; ++pass) {
     if (pass > 0) {
       for (size_t k = 0; k < groups.size(); ++k) {
@@ -76,11 +76,11 @@ std::optional<ReadoutReading> readFamily(const std::vector<ReadoutRows<D>>& grou
       ++used;
     }
     if (used < min_groups || !(H(6, 6) > 0)) return std::nullopt;  // at rest: nothing sheared
-    const Eigen::LDLT<Eigen::Matrix<double, 7, 7>> ldlt(H);
+    ldlt.compute(H);
     if (ldlt.info() != Eigen::Success) return std::nullopt;
     x = ldlt.solve(b);
-    H_inv = ldlt.solve(Eigen::Matrix<double, 7, 7>::Identity());
   }
+  const Eigen::Matrix<double, 7, 7> H_inv = ldlt.solve(Eigen::Matrix<double, 7, 7>::Identity());
   double squared = 0;
   for (size_t k = 0; k < groups.size(); ++k) {
     if (norms[k] <= gate) squared += (groups[k].residual - groups[k].jacobian * x).squaredNorm();

@@ -175,6 +175,13 @@ TEST(RollingShutter, CorrespondencesOfA2DStageTakeTheTranslation) {
   EXPECT_EQ(global.points[0].px_curr, c.points[0].px_curr);
 }
 
+/// The drift over the last two seconds (60 frames at 30 Hz) of per-frame pose errors, by when
+/// a readout read from the frames is read and used.
+double driftOverTheLastTwoSeconds(const std::vector<Pose3>& errors) {
+  const size_t n = errors.size();
+  return (errors[n - 61].inverse() * errors[n - 1]).translation().norm();
+}
+
 /// Tracks `truth` (30 Hz) observed by a landmark world's rolling shutter (`sensor_readout_s`)
 /// while the camera moves at `velocity[k]` (its own frame), with `model_readout_s` in the
 /// calibration and, when that is 0, the readout read from the frames if `read_readout`;
@@ -289,16 +296,13 @@ TEST(RollingShutter, TheReadoutReadFromTheFramesOnAFastTurn) {
   std::vector<Pose3> truth;
   std::vector<CameraVelocity> velocity;
   longTurn(truth, velocity);
-  // The drift over the last two seconds, by when the readout is read and used.
-  auto lastDrift = [](const std::vector<Pose3>& errors) {
-    const size_t n = errors.size();
-    return (errors[n - 61].inverse() * errors[n - 1]).translation().norm();
-  };
-  const double global_m = lastDrift(trackingErrors(truth, velocity, kReadout, 0.0, 5));
-  const double rolling_m = lastDrift(trackingErrors(truth, velocity, kReadout, kReadout, 5));
+  const double global_m =
+      driftOverTheLastTwoSeconds(trackingErrors(truth, velocity, kReadout, 0.0, 5));
+  const double rolling_m =
+      driftOverTheLastTwoSeconds(trackingErrors(truth, velocity, kReadout, kReadout, 5));
   ReadoutEstimator readout;
   const double read_m =
-      lastDrift(trackingErrors(truth, velocity, kReadout, 0.0, 5, true, &readout));
+      driftOverTheLastTwoSeconds(trackingErrors(truth, velocity, kReadout, 0.0, 5, true, &readout));
   std::printf(
       "readout read from the frames: %.1f ms (standard error %.1f ms, %d readings, %d "
       "references); drift over the last 2 s: global-shutter model %.1f mm, readout in "
@@ -343,16 +347,12 @@ TEST(RollingShutter, TheLocalMapReadsTheReadoutAgainstItsNewestKeyframe) {
   std::vector<Pose3> truth;
   std::vector<CameraVelocity> velocity;
   longTurn(truth, velocity);
-  auto lastDrift = [](const std::vector<Pose3>& errors) {
-    const size_t n = errors.size();
-    return (errors[n - 61].inverse() * errors[n - 1]).translation().norm();
-  };
   const TrackingReference map = TrackingReference::kLocalMap;
-  const double global_m =
-      lastDrift(trackingErrors(truth, velocity, kReadout, 0.0, 5, false, nullptr, map));
+  const double global_m = driftOverTheLastTwoSeconds(
+      trackingErrors(truth, velocity, kReadout, 0.0, 5, false, nullptr, map));
   ReadoutEstimator readout;
-  const double read_m =
-      lastDrift(trackingErrors(truth, velocity, kReadout, 0.0, 5, true, &readout, map));
+  const double read_m = driftOverTheLastTwoSeconds(
+      trackingErrors(truth, velocity, kReadout, 0.0, 5, true, &readout, map));
   std::printf(
       "local map: readout read %.1f ms (standard error %.1f ms, %d readings, %d references); "
       "drift over the last 2 s: global-shutter model %.1f mm, read from the frames %.1f mm\n",
